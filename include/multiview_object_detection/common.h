@@ -1,0 +1,59 @@
+// Basic types shared by every stage of the core library. No ROS and no PCL here: PCL stays inside the
+// .cpp files of the stages that need it, so this header is cheap to include.
+#pragma once
+
+#include <cmath>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mvod {
+
+// A point cloud is a plain vector of 3D points; the frame is carried by the variable name
+// (points_C: camera optical frame, points_W: world frame). Eigen::Vector3f is not a vectorisable
+// fixed-size type, so no aligned allocator is needed.
+using PointCloud = std::vector<Eigen::Vector3f>;
+
+// Result of an operation that can fail on bad input. The core never logs: it returns a Status and the
+// caller (offline runner, ROS node) reports it.
+class Status {
+ public:
+  Status() = default;
+  static Status Ok() { return Status(); }
+  static Status Error(std::string message) { return Status(std::move(message)); }
+  bool ok() const { return ok_; }
+  explicit operator bool() const { return ok_; }
+  const std::string& message() const { return message_; }
+
+ private:
+  explicit Status(std::string message) : ok_(false), message_(std::move(message)) {}
+  bool ok_ = true;
+  std::string message_;
+};
+
+// Pinhole intrinsics of one camera (pixels). width/height of 0 mean "unknown".
+struct CameraIntrinsics {
+  double fx = 0.0;
+  double fy = 0.0;
+  double cx = 0.0;
+  double cy = 0.0;
+  int width = 0;
+  int height = 0;
+
+  bool isValid() const { return fx > 0.0 && fy > 0.0 && std::isfinite(cx) && std::isfinite(cy); }
+  Eigen::Matrix3d K() const {
+    Eigen::Matrix3d k;
+    k << fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0;
+    return k;
+  }
+};
+
+// Transform a cloud: points_B = T_B_A * points_A.
+PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T_B_A);
+
+// True if every element of the matrix is finite and its rotation part is orthonormal within tol.
+bool isValidPose(const Eigen::Isometry3d& T, double tol = 1e-3);
+
+}  // namespace mvod

@@ -1,0 +1,41 @@
+// Sec. 3.2 pre-processing: voxel grid, pass-through on depth range, statistical outlier removal.
+#pragma once
+
+#include "multiview_object_detection/common.h"
+
+namespace mvod {
+
+class PointCloudFilter {
+ public:
+  struct Config {
+    bool enable = true;                // false = Table 3's "-Filter" ablation (all three off)
+    double voxel_leaf_size_m = 0.01;   // the paper's 0.01 m point-cloud resolution
+    double min_depth_m = 0.3;          // pass-through on camera depth (z of the camera frame)
+    double max_depth_m = 4.5;
+    int sor_mean_k = 20;               // statistical outlier removal: neighbours
+    double sor_stddev_mul = 1.5;       // ... and the std-dev multiplier
+    Status isValid() const;
+    std::string print() const;
+  };
+
+  PointCloudFilter() = default;
+  explicit PointCloudFilter(const Config& config) : config_(config) {}
+  const Config& config() const { return config_; }
+
+  // Single view, camera frame: pass-through on z, voxel grid, statistical outlier removal.
+  PointCloud filterCameraFrame(const PointCloud& points_C) const;
+  // Fused multi-view cloud, world frame (Eq. 7): voxel grid and statistical outlier removal.
+  PointCloud filterFused(const PointCloud& points_W) const;
+
+  // Voxel grid: one point (the centroid) per occupied voxel. Hash-based, no PCL, no index overflow.
+  static PointCloud voxelize(const PointCloud& points, double leaf_size_m);
+  static PointCloud passThroughDepth(const PointCloud& points_C, double min_depth_m,
+                                     double max_depth_m);
+  static PointCloud removeStatisticalOutliers(const PointCloud& points, int mean_k,
+                                              double stddev_mul);
+
+ private:
+  Config config_;
+};
+
+}  // namespace mvod
