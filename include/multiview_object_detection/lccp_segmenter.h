@@ -9,7 +9,9 @@ class LccpSegmenter {
  public:
   struct Config {
     bool enable = true;                  // false = Table 3's "-LCCP" ablation (cloud passes through)
-    double voxel_resolution_m = 0.01;    // supervoxel octree leaf
+    // Supervoxel octree leaf, coarser than the 0.01 m filter grid: Kinect rows on surfaces seen
+    // at a grazing angle (box tops) lie ~2 cm apart at 2 m and must still be adjacent voxels.
+    double voxel_resolution_m = 0.015;
     double seed_resolution_m = 0.05;     // supervoxel seed spacing
     double spatial_importance = 1.0;
     double normal_importance = 4.0;
@@ -19,7 +21,9 @@ class LccpSegmenter {
     bool log_depth_transform = true;
     double concavity_tolerance_deg = 10.0;
     double smoothness_threshold = 0.1;
-    int min_segment_size = 3;            // supervoxels; smaller segments are merged
+    // Segments of at most this many supervoxels are merged into a neighbour; small, so that a
+    // cup's few supervoxels do not swallow bits of the table around it.
+    int min_segment_size = 1;
     bool use_extended_convexity = false;
     bool use_sanity_criterion = true;
     int min_points = 30;                 // fewer input points: no segmentation, cloud passes through
@@ -39,6 +43,10 @@ class LccpSegmenter {
 
   // points_in_camera_frame: true when `points` are a single view in its optical frame (z = depth > 0), which
   // enables the log-depth transform; false for fused world-frame clouds (already voxelised to uniform density).
+  // Supervoxel normals are flipped towards the origin of the points' frame (PCL's convention)
+  // and convexity depends on that: give world-frame clouds relative to a camera centre
+  // (points_W - t_W_C, add it back to the segment) when the world origin may lie below or
+  // inside the object.
   Status segment(const PointCloud& points, bool points_in_camera_frame, Result* result) const;
 
  private:

@@ -13,7 +13,9 @@ class PointCloudFilter {
     double min_depth_m = 0.3;          // pass-through on camera depth (z of the camera frame)
     double max_depth_m = 4.5;
     int sor_mean_k = 20;               // statistical outlier removal: neighbours
-    double sor_stddev_mul = 1.5;       // ... and the std-dev multiplier
+    // ... and the std-dev multiplier: loose enough that surfaces seen at a grazing angle (sparser
+    // than the rest of a single view, e.g. a box top) survive; isolated points still go.
+    double sor_stddev_mul = 2.5;
     Status isValid() const;
     std::string print() const;
   };

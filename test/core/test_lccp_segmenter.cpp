@@ -1,0 +1,339 @@
+// LccpSegmenter (Sec. 3.2, Eq. 2): a box cut out of the floor and wall that a bleeding 2D mask
+// brought along, on a depth view ray-cast in the test.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+
+#include "multiview_object_detection/lccp_segmenter.h"
+#include "multiview_object_detection/point_cloud_filter.h"
+
+namespace mvod {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// The mask's rectangle grows by this fraction of the box's image size on every side: floor and wall
+// together then hold more points than the box, each of them alone fewer (Eq. 2 keeps the largest).
+constexpr double kMaskMargin = 0.15;
+
+enum class Surface { kNone, kFloor, kWall, kBox };
+
+// World: z up, floor z = 0, a wall at y = wall_y_m, one box yawed about z standing on the floor.
+struct LccpTestScene {
+  Eigen::Vector3d box_center = Eigen::Vector3d(0.0, 2.0, 0.25);
+  Eigen::Vector3d box_half_size = Eigen::Vector3d(0.25, 0.2, 0.25);  // 0.5 x 0.4 x 0.5 m
+  double box_yaw_rad = 30.0 * kPi / 180.0;
+  double wall_y_m = 2.5;
+
+  Eigen::Matrix3d boxRotation() const {
+    return Eigen::AngleAxisd(box_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  }
+
+  std::vector<Eigen::Vector3d> boxCorners() const {
+    std::vector<Eigen::Vector3d> corners;
+    for (int i = 0; i < 8; ++i) {
+      const Eigen::Vector3d sign((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1);
+      corners.push_back(box_center + boxRotation() * sign.cwiseProduct(box_half_size));
+    }
+    return corners;
+  }
+
+  // Distance along the ray (o + t d) to the nearest surface, and which surface it is.
+  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, Surface* surface) const {
+    double best = std::numeric_limits<double>::infinity();
+    *surface = Surface::kNone;
+    if (d.z() < -1e-9) {
+      best = -o.z() / d.z();
+      *surface = Surface::kFloor;
+    }
+    if (d.y() > 1e-9 && (wall_y_m - o.y()) / d.y() < best) {
+      best = (wall_y_m - o.y()) / d.y();
+      *surface = Surface::kWall;
+    }
+    // Slab test in the box frame.
+    const Eigen::Matrix3d R = boxRotation();
+    const Eigen::Vector3d o_B = R.transpose() * (o - box_center);
+    const Eigen::Vector3d d_B = R.transpose() * d;
+    double t_near = -std::numeric_limits<double>::infinity();
+    double t_far = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(d_B[i]) < 1e-12) {
+        if (std::abs(o_B[i]) > box_half_size[i]) return best;
+        continue;
+      }
+      double t1 = (-box_half_size[i] - o_B[i]) / d_B[i];
+      double t2 = (box_half_size[i] - o_B[i]) / d_B[i];
+      if (t1 > t2) std::swap(t1, t2);
+      t_near = std::max(t_near, t1);
+      t_far = std::min(t_far, t2);
+    }
+    if (t_near <= t_far && t_near > 0.0 && t_near < best) {
+      best = t_near;
+      *surface = Surface::kBox;
+    }
+    return best;
+  }
+};
+
+// Camera optical frame (x right, y down, z forward) at `position`, looking along world +y, pitched
+// down by pitch_deg.
+Eigen::Isometry3d lccpCameraPose(const Eigen::Vector3d& position, double pitch_deg) {
+  const double p = pitch_deg * kPi / 180.0;
+  Eigen::Matrix3d R;
+  R.col(0) = Eigen::Vector3d(1, 0, 0);
+  R.col(1) = Eigen::Vector3d(0, -std::sin(p), -std::cos(p));
+  R.col(2) = Eigen::Vector3d(0, std::cos(p), -std::sin(p));
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.linear() = R;
+  T_W_C.translation() = position;
+  return T_W_C;
+}
+
+struct LabeledCloud {
+  PointCloud points_C;
+  std::vector<Surface> surfaces;
+};
+
+// The view a 2D detector's mask gives: every pixel in the box's image rectangle grown by
+// `mask_margin` on each side (so floor and wall bleed in), Kinect-like depth noise, then the 0.01 m
+// grid of the pipeline (per surface, so that every point keeps its true label).
+LabeledCloud renderMaskedView(const LccpTestScene& scene, const Eigen::Isometry3d& T_W_C,
+                              double mask_margin, double noise_scale) {
+  const double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  const int width = 640, height = 480;
+  const Eigen::Isometry3d T_C_W = T_W_C.inverse();
+  double u_min = width, u_max = 0, v_min = height, v_max = 0;
+  for (const Eigen::Vector3d& corner_W : scene.boxCorners()) {
+    const Eigen::Vector3d c = T_C_W * corner_W;
+    u_min = std::min(u_min, fx * c.x() / c.z() + cx);
+    u_max = std::max(u_max, fx * c.x() / c.z() + cx);
+    v_min = std::min(v_min, fy * c.y() / c.z() + cy);
+    v_max = std::max(v_max, fy * c.y() / c.z() + cy);
+  }
+  const double du = mask_margin * (u_max - u_min), dv = mask_margin * (v_max - v_min);
+  const int u0 = std::max(0, static_cast<int>(u_min - du));
+  const int u1 = std::min(width - 1, static_cast<int>(u_max + du));
+  const int v0 = std::max(0, static_cast<int>(v_min - dv));
+  const int v1 = std::min(height - 1, static_cast<int>(v_max + dv));
+
+  std::mt19937 rng(3);
+  std::normal_distribution<double> unit_noise(0.0, 1.0);
+  std::map<Surface, PointCloud> by_surface;
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
+      const Eigen::Vector3d ray_C((u - cx) / fx, (v - cy) / fy, 1.0);  // z = 1: t is the depth
+      Surface surface;
+      const double depth = scene.cast(T_W_C.translation(), T_W_C.linear() * ray_C, &surface);
+      if (surface == Surface::kNone || !(depth > 0.3 && depth < 4.5)) continue;
+      // Kinect v1 axial noise grows with depth squared (Khoshelham & Elberink 2012).
+      const double sigma_m = noise_scale * (0.0012 + 0.0019 * (depth - 0.4) * (depth - 0.4));
+      const double noisy_depth = depth + sigma_m * unit_noise(rng);
+      by_surface[surface].push_back((noisy_depth * ray_C).cast<float>());
+    }
+  }
+  LabeledCloud cloud;
+  for (const auto& entry : by_surface) {
+    const PointCloud voxels = PointCloudFilter::voxelize(entry.second, 0.01);
+    cloud.points_C.insert(cloud.points_C.end(), voxels.begin(), voxels.end());
+    cloud.surfaces.insert(cloud.surfaces.end(), voxels.size(), entry.first);
+  }
+  return cloud;
+}
+
+struct SegmentStats {
+  int box_in_cloud = 0;
+  int box_in_segment = 0;
+  int background_in_segment = 0;
+  double boxRecall() const { return box_in_cloud > 0 ? double(box_in_segment) / box_in_cloud : 0; }
+  double contamination() const {
+    const int n = box_in_segment + background_in_segment;
+    return n > 0 ? double(background_in_segment) / n : 1.0;
+  }
+};
+
+// Segment points are the caller's points, bit for bit, so their labels can be looked up exactly.
+SegmentStats segmentStats(const LabeledCloud& cloud, const PointCloud& segment) {
+  std::map<std::array<float, 3>, Surface> label_of;
+  for (std::size_t i = 0; i < cloud.points_C.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points_C[i];
+    label_of[{p.x(), p.y(), p.z()}] = cloud.surfaces[i];
+  }
+  SegmentStats stats;
+  stats.box_in_cloud =
+      static_cast<int>(std::count(cloud.surfaces.begin(), cloud.surfaces.end(), Surface::kBox));
+  for (const Eigen::Vector3f& p : segment) {
+    const auto it = label_of.find({p.x(), p.y(), p.z()});
+    EXPECT_TRUE(it != label_of.end()) << "segment point not from the input";
+    if (it == label_of.end()) continue;
+    if (it->second == Surface::kBox) {
+      ++stats.box_in_segment;
+    } else {
+      ++stats.background_in_segment;
+    }
+  }
+  return stats;
+}
+
+class LccpSegmenterBoxScene : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    T_W_C_ = lccpCameraPose(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
+    cloud_ = renderMaskedView(scene_, T_W_C_, kMaskMargin, 1.0);
+  }
+  LccpTestScene scene_;
+  Eigen::Isometry3d T_W_C_;
+  LabeledCloud cloud_;
+};
+
+}  // namespace
+
+TEST_F(LccpSegmenterBoxScene, MaskedViewHoldsBoxFloorAndWall) {
+  // The premise of the test: the mask brought plenty of background along.
+  const auto count = [&](Surface s) {
+    return std::count(cloud_.surfaces.begin(), cloud_.surfaces.end(), s);
+  };
+  EXPECT_GT(count(Surface::kBox), 1000);
+  EXPECT_GT(count(Surface::kFloor), 0.3 * count(Surface::kBox));
+  EXPECT_GT(count(Surface::kWall), 0.3 * count(Surface::kBox));
+  // Passing the cloud through would fail the segment checks below.
+  EXPECT_GT(count(Surface::kFloor) + count(Surface::kWall), count(Surface::kBox));
+}
+
+TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallWithLogDepth) {
+  const LccpSegmenter segmenter;  // defaults, as for a single Kinect view
+  LccpSegmenter::Result result;
+  ASSERT_TRUE(segmenter.segment(cloud_.points_C, true, &result).ok());
+  const SegmentStats stats = segmentStats(cloud_, result.largest_segment);
+  EXPECT_GE(stats.boxRecall(), 0.8) << "contamination " << stats.contamination();
+  EXPECT_LE(stats.contamination(), 0.1) << "box recall " << stats.boxRecall();
+  EXPECT_GT(result.num_supervoxels, 1);
+  EXPECT_GE(result.num_segments, 2);
+}
+
+TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallInWorldFrame) {
+  // The fused path: gravity-aligned world frame, no log-depth transform. Its origin is a camera
+  // centre, as in ORB-SLAM2's map (normals are flipped towards the origin).
+  Eigen::Isometry3d R_W_C = T_W_C_;
+  R_W_C.translation().setZero();
+  const PointCloud points_W = transformCloud(cloud_.points_C, R_W_C);
+  LabeledCloud cloud_W{points_W, cloud_.surfaces};
+  const LccpSegmenter segmenter;
+  LccpSegmenter::Result result;
+  ASSERT_TRUE(segmenter.segment(points_W, false, &result).ok());
+  const SegmentStats stats = segmentStats(cloud_W, result.largest_segment);
+  EXPECT_GE(stats.boxRecall(), 0.8) << "contamination " << stats.contamination();
+  EXPECT_LE(stats.contamination(), 0.1) << "box recall " << stats.boxRecall();
+}
+
+TEST_F(LccpSegmenterBoxScene, CutsBoxStandingAgainstWall) {
+  // Box square to the camera with its back touching the wall: only concave edges separate them.
+  scene_.box_yaw_rad = 0.0;
+  scene_.wall_y_m = scene_.box_center.y() + scene_.box_half_size.y();
+  const LabeledCloud cloud = renderMaskedView(scene_, T_W_C_, kMaskMargin, 1.0);
+  LccpSegmenter::Result result;
+  ASSERT_TRUE(LccpSegmenter().segment(cloud.points_C, true, &result).ok());
+  const SegmentStats stats = segmentStats(cloud, result.largest_segment);
+  EXPECT_GE(stats.boxRecall(), 0.8) << "contamination " << stats.contamination();
+  EXPECT_LE(stats.contamination(), 0.1) << "box recall " << stats.boxRecall();
+}
+
+TEST_F(LccpSegmenterBoxScene, LogTransformFlagChangesSupervoxels) {
+  // With the flag on and off the camera-frame cloud is clustered differently (the transform runs).
+  LccpSegmenter::Config config;
+  config.log_depth_transform = true;
+  LccpSegmenter::Result with_log;
+  ASSERT_TRUE(LccpSegmenter(config).segment(cloud_.points_C, true, &with_log).ok());
+  config.log_depth_transform = false;
+  LccpSegmenter::Result without_log;
+  ASSERT_TRUE(LccpSegmenter(config).segment(cloud_.points_C, true, &without_log).ok());
+  EXPECT_FALSE(with_log.largest_segment.empty());
+  EXPECT_FALSE(without_log.largest_segment.empty());
+  EXPECT_NE(with_log.num_supervoxels, without_log.num_supervoxels);
+  // Points behind the camera make the transform undefined: it is skipped, not a crash.
+  PointCloud behind = cloud_.points_C;
+  behind.emplace_back(0.0f, 0.0f, -1.0f);
+  LccpSegmenter::Result result;
+  EXPECT_TRUE(LccpSegmenter().segment(behind, true, &result).ok());
+  EXPECT_FALSE(result.largest_segment.empty());
+}
+
+TEST(LccpSegmenterPassThrough, DisabledKeepsWholeCloud) {
+  LccpSegmenter::Config config;
+  config.enable = false;
+  const LccpTestScene scene;
+  const LabeledCloud cloud = renderMaskedView(
+      scene, lccpCameraPose(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0), kMaskMargin, 1.0);
+  LccpSegmenter::Result result;
+  ASSERT_TRUE(LccpSegmenter(config).segment(cloud.points_C, true, &result).ok());
+  ASSERT_EQ(result.largest_segment.size(), cloud.points_C.size());
+  for (std::size_t i = 0; i < cloud.points_C.size(); ++i) {
+    EXPECT_EQ(result.largest_segment[i], cloud.points_C[i]);
+  }
+}
+
+TEST(LccpSegmenterPassThrough, TinyCloudKeptWhole) {
+  PointCloud points;
+  for (int i = 0; i < 10; ++i) points.emplace_back(0.01f * i, 0.0f, 1.0f);
+  LccpSegmenter::Result result;
+  ASSERT_TRUE(LccpSegmenter().segment(points, true, &result).ok());
+  EXPECT_EQ(result.largest_segment, points);
+  EXPECT_EQ(result.num_supervoxels, 0);
+}
+
+TEST(LccpSegmenterBadInput, EmptyAndNonFinite) {
+  const LccpSegmenter segmenter;
+  LccpSegmenter::Result result;
+  EXPECT_FALSE(segmenter.segment(PointCloud(), true, &result).ok());
+  EXPECT_TRUE(result.largest_segment.empty());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(
+      segmenter.segment(PointCloud(50, Eigen::Vector3f(nan, nan, nan)), true, &result).ok());
+  EXPECT_FALSE(segmenter.segment(PointCloud(5, Eigen::Vector3f::Ones()), true, nullptr).ok());
+  // Extents PCL's 32-bit octree keys cannot hold are an error, not an assertion.
+  PointCloud huge;
+  for (int i = 0; i < 100; ++i) huge.emplace_back(1e8f * (i % 2), 0.01f * i, 1.0f);
+  EXPECT_FALSE(segmenter.segment(huge, false, &result).ok());
+  // Identical points are one supervoxel, kept whole.
+  ASSERT_TRUE(
+      segmenter.segment(PointCloud(100, Eigen::Vector3f(0.1f, 0.2f, 1.0f)), true, &result).ok());
+  EXPECT_EQ(result.largest_segment.size(), 100u);
+  // NaNs among good points are dropped, never returned.
+  PointCloud mixed;
+  for (int i = 0; i < 10; ++i) mixed.emplace_back(0.01f * i, 0.0f, 1.0f);
+  mixed.emplace_back(nan, 0.0f, 1.0f);
+  ASSERT_TRUE(segmenter.segment(mixed, true, &result).ok());
+  EXPECT_EQ(result.largest_segment.size(), 10u);
+}
+
+TEST(LccpSegmenterConfig, Validation) {
+  LccpSegmenter::Config config;
+  EXPECT_TRUE(config.isValid().ok());
+  EXPECT_NE(config.print().find("concavity_tolerance_deg: "), std::string::npos);
+  LccpSegmenter::Config bad = config;
+  bad.voxel_resolution_m = 0.0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.seed_resolution_m = 0.5 * config.voxel_resolution_m;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.concavity_tolerance_deg = -1.0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.min_segment_size = -1;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.normal_importance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(bad.isValid().ok());
+  // An invalid config is reported by segment(), not acted on.
+  LccpSegmenter::Result result;
+  bad = config;
+  bad.voxel_resolution_m = -1.0;
+  PointCloud points(100, Eigen::Vector3f(0.0f, 0.0f, 1.0f));
+  EXPECT_FALSE(LccpSegmenter(bad).segment(points, true, &result).ok());
+}
+
+}  // namespace mvod

@@ -1,0 +1,186 @@
+// PointCloudFilter: voxel grid, depth pass-through and statistical outlier removal on synthetic
+// clouds.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <random>
+
+#include "multiview_object_detection/point_cloud_filter.h"
+
+namespace mvod {
+namespace {
+
+// A dense square patch of the plane z = z0, from the origin along +x and +y, spacing_m apart, with
+// a little deterministic jitter.
+PointCloud planePatch(float z0, float size_m, float spacing_m, float jitter_m) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> noise(-jitter_m, jitter_m);
+  PointCloud points;
+  const int n = static_cast<int>(size_m / spacing_m);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const float x = (i + 0.5f) * spacing_m;  // half a spacing off grid lines
+      const float y = (j + 0.5f) * spacing_m;
+      points.emplace_back(x + noise(rng), y + noise(rng), z0 + noise(rng));
+    }
+  }
+  return points;
+}
+
+bool containsPoint(const PointCloud& points, const Eigen::Vector3f& p, float tol) {
+  return std::any_of(points.begin(), points.end(),
+                     [&](const Eigen::Vector3f& q) { return (q - p).norm() <= tol; });
+}
+
+}  // namespace
+
+TEST(PointCloudFilterVoxelize, OneCentroidPerOccupiedVoxel) {
+  // 3 x 2 x 1 voxels of 0.1 m, each holding 4 points placed symmetrically about a known centroid.
+  PointCloud points;
+  std::vector<Eigen::Vector3f> centroids;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      const Eigen::Vector3f c(0.1f * i + 0.04f, 0.1f * j + 0.06f, 0.05f);
+      centroids.push_back(c);
+      for (const float d : {-0.02f, 0.02f}) {
+        points.emplace_back(c + Eigen::Vector3f(d, 0.01f, 0.0f));
+        points.emplace_back(c + Eigen::Vector3f(d, -0.01f, 0.0f));
+      }
+    }
+  }
+  const PointCloud out = PointCloudFilter::voxelize(points, 0.1);
+  ASSERT_EQ(out.size(), 6u);
+  for (const Eigen::Vector3f& c : centroids) EXPECT_TRUE(containsPoint(out, c, 1e-5f));
+  // Deterministic: the same input in another order gives the same output.
+  PointCloud reversed(points.rbegin(), points.rend());
+  const PointCloud out_reversed = PointCloudFilter::voxelize(reversed, 0.1);
+  ASSERT_EQ(out_reversed.size(), out.size());
+  for (std::size_t i = 0; i < out.size(); ++i) EXPECT_LT((out[i] - out_reversed[i]).norm(), 1e-6f);
+}
+
+TEST(PointCloudFilterVoxelize, NegativeCoordinatesSplitAtZero) {
+  // floor(), not truncation: -0.01 and +0.01 lie in different voxels.
+  const PointCloud points = {Eigen::Vector3f(-0.01f, 0.5f, 0.5f),
+                             Eigen::Vector3f(0.01f, 0.5f, 0.5f)};
+  EXPECT_EQ(PointCloudFilter::voxelize(points, 0.1).size(), 2u);
+}
+
+TEST(PointCloudFilterVoxelize, LargeCoordinatesDoNotOverflow) {
+  // 1e5 m from the origin at 0.01 m leaves is 1e7 voxels per axis: beyond PCL's 32-bit grid index.
+  PointCloud points;
+  const Eigen::Vector3f far(1e5f, -1e5f, 1e5f);
+  points.push_back(far);
+  points.push_back(far + Eigen::Vector3f(0.03f, 0.0f, 0.0f));  // the next-but-two voxel
+  points.push_back(-far);
+  points.push_back(Eigen::Vector3f(0.0f, 0.0f, 0.0f));
+  const PointCloud out = PointCloudFilter::voxelize(points, 0.01);
+  EXPECT_EQ(out.size(), 4u);
+  EXPECT_TRUE(containsPoint(out, far, 0.01f));
+  EXPECT_TRUE(containsPoint(out, far + Eigen::Vector3f(0.03f, 0.0f, 0.0f), 0.01f));
+  EXPECT_TRUE(containsPoint(out, -far, 0.01f));
+  EXPECT_TRUE(containsPoint(out, Eigen::Vector3f::Zero(), 1e-6f));
+  // Even absurd coordinates and leaf sizes must not crash.
+  const PointCloud huge = {Eigen::Vector3f(3e38f, 0.0f, 0.0f), Eigen::Vector3f(1.0f, 1.0f, 1.0f)};
+  EXPECT_LE(PointCloudFilter::voxelize(huge, 1e-9).size(), 2u);
+}
+
+TEST(PointCloudFilterVoxelize, NonFinitePointsDropped) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const PointCloud points = {Eigen::Vector3f(nan, 0.0f, 1.0f), Eigen::Vector3f(0.0f, inf, 1.0f),
+                             Eigen::Vector3f(0.02f, 0.02f, 1.02f),
+                             Eigen::Vector3f(0.04f, 0.04f, 1.04f)};
+  const PointCloud out = PointCloudFilter::voxelize(points, 0.1);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_LT((out[0] - Eigen::Vector3f(0.03f, 0.03f, 1.03f)).norm(), 1e-5f);
+  EXPECT_TRUE(PointCloudFilter::voxelize(PointCloud(), 0.1).empty());
+  // An invalid leaf size keeps the finite points rather than crashing.
+  EXPECT_EQ(PointCloudFilter::voxelize(points, 0.0).size(), 2u);
+}
+
+TEST(PointCloudFilterPassThrough, KeepsDepthRangeInclusive) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const PointCloud points = {Eigen::Vector3f(0, 0, 0.2f),  Eigen::Vector3f(0, 0, 0.5f),
+                             Eigen::Vector3f(1, 1, 1.0f),  Eigen::Vector3f(0, 0, 4.0f),
+                             Eigen::Vector3f(0, 0, 4.5f),  Eigen::Vector3f(0, 0, -1.0f),
+                             Eigen::Vector3f(nan, 0, 1.0f)};
+  const PointCloud out = PointCloudFilter::passThroughDepth(points, 0.5, 4.0);
+  ASSERT_EQ(out.size(), 3u);
+  for (const Eigen::Vector3f& p : out) {
+    EXPECT_GE(p.z(), 0.5f);
+    EXPECT_LE(p.z(), 4.0f);
+  }
+}
+
+TEST(PointCloudFilterOutliers, RemovesIsolatedPointsKeepsPlane) {
+  PointCloud points = planePatch(1.0f, 0.5f, 0.01f, 0.001f);
+  const std::size_t plane_size = points.size();
+  const std::vector<Eigen::Vector3f> outliers = {Eigen::Vector3f(0.25f, 0.25f, 1.5f),
+                                                 Eigen::Vector3f(-0.4f, 0.1f, 0.7f),
+                                                 Eigen::Vector3f(1.0f, 1.0f, 1.0f)};
+  points.insert(points.end(), outliers.begin(), outliers.end());
+  const PointCloud out = PointCloudFilter::removeStatisticalOutliers(points, 20, 1.5);
+  for (const Eigen::Vector3f& o : outliers) EXPECT_FALSE(containsPoint(out, o, 1e-6f));
+  // The plane stays: only a thin fringe (patch corners) may go.
+  EXPECT_GE(out.size(), static_cast<std::size_t>(0.95 * plane_size));
+  for (const Eigen::Vector3f& p : out) EXPECT_NEAR(p.z(), 1.0f, 0.002f);
+}
+
+TEST(PointCloudFilterOutliers, TooFewPointsPassThrough) {
+  const PointCloud points = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0.01f, 1),
+                             Eigen::Vector3f(5, 5, 5)};
+  EXPECT_EQ(PointCloudFilter::removeStatisticalOutliers(points, 20, 1.0).size(), points.size());
+  EXPECT_TRUE(PointCloudFilter::removeStatisticalOutliers(PointCloud(), 20, 1.0).empty());
+}
+
+TEST(PointCloudFilterPipeline, CameraFrameAndFusedChains) {
+  PointCloudFilter::Config config;
+  config.voxel_leaf_size_m = 0.02;
+  config.min_depth_m = 0.5;
+  config.max_depth_m = 3.0;
+  PointCloud points = planePatch(1.01f, 0.6f, 0.005f, 0.0005f);  // mid-voxel, 16 points a voxel
+  points.emplace_back(0.3f, 0.3f, 3.5f);                         // beyond max depth
+  points.emplace_back(0.3f, 0.3f, 2.0f);                         // in range but isolated
+  const PointCloudFilter filter(config);
+  const PointCloud filtered = filter.filterCameraFrame(points);
+  EXPECT_FALSE(containsPoint(filtered, Eigen::Vector3f(0.3f, 0.3f, 3.5f), 0.05f));
+  EXPECT_FALSE(containsPoint(filtered, Eigen::Vector3f(0.3f, 0.3f, 2.0f), 0.05f));
+  // 0.6 m / 0.02 m = 30 voxels per side, a 900-voxel plane before outlier removal.
+  EXPECT_GT(filtered.size(), 800u);
+  EXPECT_LE(filtered.size(), 900u);
+  // The fused chain has no depth range, so only the isolated points go.
+  const PointCloud fused = filter.filterFused(points);
+  EXPECT_GT(fused.size(), 800u);
+  EXPECT_LE(fused.size(), 900u);
+  // enable = false is the "-Filter" ablation: the cloud passes through.
+  config.enable = false;
+  EXPECT_EQ(PointCloudFilter(config).filterCameraFrame(points).size(), points.size());
+  EXPECT_EQ(PointCloudFilter(config).filterFused(points).size(), points.size());
+}
+
+TEST(PointCloudFilterConfig, Validation) {
+  PointCloudFilter::Config config;
+  EXPECT_TRUE(config.isValid().ok());
+  EXPECT_NE(config.print().find("voxel_leaf_size_m: 0.01"), std::string::npos);
+  PointCloudFilter::Config bad = config;
+  bad.voxel_leaf_size_m = 0.0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.voxel_leaf_size_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.max_depth_m = bad.min_depth_m;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.min_depth_m = -1.0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.sor_mean_k = 0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.sor_stddev_mul = -1.0;
+  EXPECT_FALSE(bad.isValid().ok());
+}
+
+}  // namespace mvod
