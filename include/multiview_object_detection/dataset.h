@@ -1,7 +1,12 @@
 // A dataset folder in the 7-Scenes layout:
-//   frame-NNNNNN.color.{jpg,png}, frame-NNNNNN.depth.png (16-bit mm), frame-NNNNNN.pose.txt (4x4 camera to
-//   world, row-major), camera-intrinsics.txt (3x3 depth K), optional color-intrinsics.txt (3x3; present =
-//   colour not registered to depth), optional gravity-direction.txt (world gravity, pointing down).
+//   frame-NNNNNN.color.{jpg,png}, frame-NNNNNN.depth.png (16-bit mm), frame-NNNNNN.pose.txt (4x4
+//   camera to world, row-major), camera-intrinsics.txt (3x3 depth K), optional color-intrinsics.txt
+//   (3x3; present = colour not registered to depth), optional depth-to-color.txt (4x4 depth camera
+//   -> colour camera, row-major, T_C_D; only with color-intrinsics.txt; identity when absent),
+//   optional gravity-direction.txt (3 numbers: world gravity, pointing down; normalised on
+//   reading).
+// A frame is listed when its frame-NNNNNN.depth.png exists; its colour image (.png or .jpg) and
+// pose are checked by load(). Time stamps are index / 30 s (7-Scenes is 30 Hz).
 #pragma once
 
 #include <string>
@@ -26,10 +31,14 @@ class SevenScenesDataset {
   const CameraIntrinsics& depthIntrinsics() const { return K_depth_; }
   const CameraIntrinsics& colorIntrinsics() const { return K_color_; }
   bool registered() const { return registered_; }
+  // Depth camera -> colour camera (identity when registered or without depth-to-color.txt).
+  const Eigen::Isometry3d& depthToColor() const { return T_C_D_; }
   bool hasGravity() const { return has_gravity_; }
   Eigen::Vector3d gravityDown_W() const { return gravity_down_W_; }
 
-  // File parsers, public for tests.
+  // File parsers, public for tests. readMatrix3: exactly 9 finite numbers. readPose: exactly 16
+  // finite numbers, last row 0 0 0 1 (within 1e-3), a rigid transform within 1e-2; the rotation is
+  // then re-orthonormalised. The message names the file.
   static Status readMatrix3(const std::string& path, Eigen::Matrix3d* K);
   static Status readPose(const std::string& path, Eigen::Isometry3d* T_W_C);
 
@@ -39,6 +48,7 @@ class SevenScenesDataset {
   CameraIntrinsics K_depth_;
   CameraIntrinsics K_color_;
   bool registered_ = true;
+  Eigen::Isometry3d T_C_D_ = Eigen::Isometry3d::Identity();
   bool has_gravity_ = false;
   Eigen::Vector3d gravity_down_W_ = Eigen::Vector3d(0, 0, -1);
 };

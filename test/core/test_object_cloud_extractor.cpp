@@ -1,0 +1,432 @@
+// ObjectCloudExtractor (Eq. 1) and RgbdFrame::validate on small depth images made in the test:
+// exact back-projection, invalid depth values, registered and unregistered (two-camera) mask
+// lookups against a brute-force projection, and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "multiview_object_detection/object_cloud_extractor.h"
+
+namespace mvod {
+namespace {
+
+constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
+
+RgbdFrame makeRegisteredFrame(const cv::Mat& depth, const CameraIntrinsics& K) {
+  RgbdFrame frame;
+  frame.index = 3;
+  frame.name = "frame-000003";
+  frame.depth = depth;
+  frame.color_bgr = cv::Mat(depth.size(), CV_8UC3, cv::Scalar(40, 80, 120));
+  frame.K_depth = K;
+  frame.K_color = K;
+  frame.registered = true;
+  return frame;
+}
+
+Detection2D maskDetection(const cv::Mat& mask, const std::string& class_name = "chair") {
+  Detection2D detection;
+  detection.class_name = class_name;
+  detection.score = 0.9f;
+  detection.mask = mask;
+  if (mask.type() == CV_8UC1) detection.box_px = cv::boundingRect(mask);
+  return detection;
+}
+
+// A smooth depth field in millimetres (every pixel valid, 0.8 .. 2.2 m).
+cv::Mat smoothDepthMm(int width, int height) {
+  cv::Mat depth(height, width, CV_16UC1);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      depth.at<uint16_t>(v, u) =
+          static_cast<uint16_t>(1500.0 + 500.0 * std::sin(u / 9.0) * std::cos(v / 13.0) +
+                                200.0 * std::sin(u * v / 300.0));
+    }
+  }
+  return depth;
+}
+
+bool samePoint(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float tol = 0.f) {
+  return (a - b).cwiseAbs().maxCoeff() <= tol;
+}
+
+TEST(ObjectCloudExtractorTest, BackProjectionMatchesHandComputedPoints) {
+  // fx 100, fy 200, cx 1.5, cy 1: x = (u - 1.5) z / 100, y = (v - 1) z / 200.
+  const CameraIntrinsics K{100.0, 200.0, 1.5, 1.0, 4, 3};
+  cv::Mat depth = cv::Mat::zeros(3, 4, CV_16UC1);
+  depth.at<uint16_t>(0, 0) = 1000;   // (u, v) = (0, 0), 1 m
+  depth.at<uint16_t>(2, 3) = 2500;   // (3, 2), 2.5 m
+  depth.at<uint16_t>(1, 2) = 65535;  // invalid marker
+  depth.at<uint16_t>(0, 1) = 50;     // 5 cm: below min_valid_depth_m = 0.1
+  depth.at<uint16_t>(1, 0) = 20000;  // 20 m: above max_valid_depth_m = 10
+
+  const PointCloud points = ObjectCloudExtractor::backProjectDepth(depth, K, 1, 0.1, 10.0);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_TRUE(samePoint(points[0], Eigen::Vector3f(-0.015f, -0.005f, 1.0f), 1e-6f))
+      << points[0].transpose();
+  EXPECT_TRUE(samePoint(points[1], Eigen::Vector3f(0.0375f, 0.0125f, 2.5f), 1e-6f))
+      << points[1].transpose();
+
+  EXPECT_FLOAT_EQ(ObjectCloudExtractor::depthAt(depth, 3, 2, 0.1, 10.0), 2.5f);
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 1, 1, 0.1, 10.0)));  // 0
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 2, 1, 0.1, 10.0)));  // 65535
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 1, 0, 0.1, 10.0)));  // too near
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 0, 1, 0.1, 10.0)));  // too far
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 4, 0, 0.1, 10.0)));  // outside
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth, 0, -1, 0.1, 10.0)));
+  // A wider range admits them.
+  EXPECT_FLOAT_EQ(ObjectCloudExtractor::depthAt(depth, 1, 0, 0.01, 30.0), 0.05f);
+  EXPECT_FLOAT_EQ(ObjectCloudExtractor::depthAt(depth, 0, 1, 0.01, 30.0), 20.0f);
+
+  // extract() with a full mask returns exactly the same points.
+  const RgbdFrame frame = makeRegisteredFrame(depth, K);
+  ObjectCloudExtractor extractor;
+  std::vector<PointCloud> clouds;
+  const Status status =
+      extractor.extract(frame, {maskDetection(cv::Mat(3, 4, CV_8UC1, cv::Scalar(255)))}, &clouds);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clouds.size(), 1u);
+  ASSERT_EQ(clouds[0].size(), 2u);
+  EXPECT_TRUE(samePoint(clouds[0][0], points[0]));
+  EXPECT_TRUE(samePoint(clouds[0][1], points[1]));
+}
+
+TEST(ObjectCloudExtractorTest, FloatDepthInvalidValuesAndSameCloudAsMillimetres) {
+  const CameraIntrinsics K{50.0, 50.0, 15.5, 11.5, 32, 24};
+  const cv::Mat depth_mm = smoothDepthMm(32, 24);
+  cv::Mat depth_m;
+  depth_mm.convertTo(depth_m, CV_32FC1, 0.001);
+  const PointCloud from_mm = ObjectCloudExtractor::backProjectDepth(depth_mm, K, 1, 0.1, 10.0);
+  const PointCloud from_m = ObjectCloudExtractor::backProjectDepth(depth_m, K, 1, 0.1, 10.0);
+  ASSERT_EQ(from_mm.size(), 32u * 24u);
+  ASSERT_EQ(from_m.size(), from_mm.size());
+  for (size_t i = 0; i < from_mm.size(); ++i) {
+    ASSERT_TRUE(samePoint(from_mm[i], from_m[i], 1e-5f)) << i;
+  }
+
+  // NaN, +-inf, 0, negative and out-of-range metres give no point.
+  cv::Mat bad = depth_m.clone();
+  bad.at<float>(0, 0) = kNaNf;
+  bad.at<float>(0, 1) = std::numeric_limits<float>::infinity();
+  bad.at<float>(0, 2) = -std::numeric_limits<float>::infinity();
+  bad.at<float>(0, 3) = 0.f;
+  bad.at<float>(0, 4) = -1.f;
+  bad.at<float>(0, 5) = 0.05f;
+  bad.at<float>(0, 6) = 12.f;
+  EXPECT_EQ(ObjectCloudExtractor::backProjectDepth(bad, K, 1, 0.1, 10.0).size(), from_m.size() - 7);
+  for (int u = 0; u < 7; ++u) {
+    EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(bad, u, 0, 0.1, 10.0))) << u;
+  }
+
+  // extract() on both types selects the same points.
+  cv::Mat mask = cv::Mat::zeros(24, 32, CV_8UC1);
+  cv::circle(mask, cv::Point(12, 10), 7, cv::Scalar(255), cv::FILLED);
+  ObjectCloudExtractor extractor;
+  std::vector<PointCloud> clouds_mm, clouds_m;
+  ASSERT_TRUE(
+      extractor.extract(makeRegisteredFrame(depth_mm, K), {maskDetection(mask)}, &clouds_mm).ok());
+  ASSERT_TRUE(
+      extractor.extract(makeRegisteredFrame(depth_m, K), {maskDetection(mask)}, &clouds_m).ok());
+  ASSERT_EQ(clouds_mm[0].size(), static_cast<size_t>(cv::countNonZero(mask)));
+  ASSERT_EQ(clouds_m[0].size(), clouds_mm[0].size());
+  for (size_t i = 0; i < clouds_mm[0].size(); ++i) {
+    ASSERT_TRUE(samePoint(clouds_mm[0][i], clouds_m[0][i], 1e-5f)) << i;
+  }
+
+  // Unsupported types give nothing rather than garbage.
+  cv::Mat depth_8u(24, 32, CV_8UC1, cv::Scalar(100));
+  EXPECT_TRUE(ObjectCloudExtractor::backProjectDepth(depth_8u, K, 1, 0.1, 10.0).empty());
+  EXPECT_TRUE(std::isnan(ObjectCloudExtractor::depthAt(depth_8u, 1, 1, 0.1, 10.0)));
+  EXPECT_TRUE(ObjectCloudExtractor::backProjectDepth(cv::Mat(), K, 1, 0.1, 10.0).empty());
+}
+
+// Registered frame: masks are read at the depth pixel itself; overlapping masks share points; the
+// pixel stride applies to depth pixels (grid anchored at 0 as in backProjectDepth).
+TEST(ObjectCloudExtractorTest, RegisteredOverlappingMasksAndStride) {
+  const CameraIntrinsics K{60.0, 60.0, 19.5, 14.5, 40, 30};
+  cv::Mat depth = smoothDepthMm(40, 30);
+  depth.at<uint16_t>(12, 12) = 0;  // a hole inside both masks
+  const RgbdFrame frame = makeRegisteredFrame(depth, K);
+
+  cv::Mat mask_a = cv::Mat::zeros(30, 40, CV_8UC1);
+  cv::Mat mask_b = cv::Mat::zeros(30, 40, CV_8UC1);
+  cv::rectangle(mask_a, cv::Rect(5, 5, 15, 12), cv::Scalar(255), cv::FILLED);
+  cv::circle(mask_b, cv::Point(18, 14), 8, cv::Scalar(1), cv::FILLED);  // any non-zero value
+
+  for (const int stride : {1, 2, 3}) {
+    ObjectCloudExtractor::Config config;
+    config.pixel_stride = stride;
+    ObjectCloudExtractor extractor(config);
+    std::vector<PointCloud> clouds;
+    const Status status =
+        extractor.extract(frame, {maskDetection(mask_a), maskDetection(mask_b, "cup")}, &clouds);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ASSERT_EQ(clouds.size(), 2u);
+
+    // Brute force: every stride-th pixel, in each mask, with valid depth.
+    const cv::Mat* masks[2] = {&mask_a, &mask_b};
+    size_t shared = 0;
+    for (int k = 0; k < 2; ++k) {
+      PointCloud expected;
+      for (int v = 0; v < 30; v += stride) {
+        for (int u = 0; u < 40; u += stride) {
+          if (masks[k]->at<uint8_t>(v, u) == 0 || (u == 12 && v == 12)) continue;
+          const float z = depth.at<uint16_t>(v, u) * 0.001f;
+          expected.emplace_back((u - 19.5f) * z / 60.f, (v - 14.5f) * z / 60.f, z);
+          if (k == 0 && mask_b.at<uint8_t>(v, u) != 0) ++shared;
+        }
+      }
+      ASSERT_EQ(clouds[k].size(), expected.size()) << "stride " << stride << " mask " << k;
+      for (size_t i = 0; i < expected.size(); ++i) {
+        ASSERT_TRUE(samePoint(clouds[k][i], expected[i], 1e-5f)) << "stride " << stride;
+      }
+    }
+    EXPECT_GT(shared, 0u);  // the overlap is in both clouds
+    if (stride == 1) {
+      EXPECT_GT(clouds[0].size(), 150u);
+    }
+  }
+}
+
+// Two cameras (7-Scenes, Kinect without registration): colour at another resolution and focal
+// length, offset by T_C_D. The extractor must select exactly the depth points whose projection into
+// the colour image lands in the mask.
+TEST(ObjectCloudExtractorTest, UnregisteredFrameUsesColourProjection) {
+  const CameraIntrinsics K_d{80.0, 82.0, 39.5, 29.5, 80, 60};
+  const CameraIntrinsics K_c{150.0, 148.0, 61.3, 47.7, 120, 96};
+  const cv::Mat depth = smoothDepthMm(80, 60);
+
+  RgbdFrame frame;
+  frame.name = "two-cameras";
+  frame.depth = depth;
+  frame.color_bgr = cv::Mat(96, 120, CV_8UC3, cv::Scalar(1, 2, 3));
+  frame.K_depth = K_d;
+  frame.K_color = K_c;
+  frame.registered = false;
+  frame.T_C_D = Eigen::Translation3d(0.052, -0.013, 0.008) *
+                Eigen::AngleAxisd(0.03, Eigen::Vector3d(0.2, 1.0, -0.1).normalized());
+  ASSERT_TRUE(frame.validate().ok()) << frame.validate().message();
+
+  cv::Mat mask_a = cv::Mat::zeros(96, 120, CV_8UC1);
+  cv::Mat mask_b = cv::Mat::zeros(96, 120, CV_8UC1);
+  cv::ellipse(mask_a, cv::Point(50, 40), cv::Size(25, 18), 20.0, 0.0, 360.0, cv::Scalar(255),
+              cv::FILLED);
+  cv::rectangle(mask_b, cv::Rect(60, 30, 45, 50), cv::Scalar(255), cv::FILLED);
+  // The colour image's right border: depth points that project outside it must not be selected.
+  cv::Mat mask_edge = cv::Mat::zeros(96, 120, CV_8UC1);
+  mask_edge.colRange(110, 120).setTo(255);
+
+  ObjectCloudExtractor extractor;
+  std::vector<PointCloud> clouds;
+  const Status status = extractor.extract(
+      frame, {maskDetection(mask_a), maskDetection(mask_b, "tv"), maskDetection(mask_edge, "cup")},
+      &clouds);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clouds.size(), 3u);
+
+  const cv::Mat* masks[3] = {&mask_a, &mask_b, &mask_edge};
+  for (int k = 0; k < 3; ++k) {
+    PointCloud expected;      // brute force: project each depth point into the colour camera
+    PointCloud same_uv;       // the wrong method: the mask at the depth pixel's own (u, v)
+    int near_pixel_edge = 0;  // projections within 1e-6 px of a rounding boundary (none expected)
+    for (int v = 0; v < 60; ++v) {
+      for (int u = 0; u < 80; ++u) {
+        const double z = depth.at<uint16_t>(v, u) * 0.001;
+        const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
+        const Eigen::Vector3d p_C = frame.T_C_D * p_D;
+        const double uc = K_c.fx * p_C.x() / p_C.z() + K_c.cx;
+        const double vc = K_c.fy * p_C.y() / p_C.z() + K_c.cy;
+        for (const double c : {uc, vc}) {
+          if (std::abs(c - std::floor(c) - 0.5) < 1e-6) ++near_pixel_edge;
+        }
+        const int ui = static_cast<int>(std::lround(uc));
+        const int vi = static_cast<int>(std::lround(vc));
+        if (ui >= 0 && vi >= 0 && ui < 120 && vi < 96 && masks[k]->at<uint8_t>(vi, ui) != 0) {
+          expected.push_back(p_D.cast<float>());
+        }
+        if (masks[k]->at<uint8_t>(v, u) != 0) same_uv.push_back(p_D.cast<float>());
+      }
+    }
+    ASSERT_EQ(near_pixel_edge, 0);
+    ASSERT_GT(expected.size(), 50u) << "mask " << k;
+    ASSERT_EQ(clouds[k].size(), expected.size()) << "mask " << k;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      ASSERT_TRUE(samePoint(clouds[k][i], expected[i], 1e-6f)) << "mask " << k << " point " << i;
+    }
+    // And it is not what a pixel-by-pixel lookup would give.
+    size_t common = 0;
+    for (const Eigen::Vector3f& p : same_uv) {
+      for (const Eigen::Vector3f& q : expected) {
+        if (samePoint(p, q)) {
+          ++common;
+          break;
+        }
+      }
+    }
+    EXPECT_LT(static_cast<double>(common), 0.8 * std::max(expected.size(), same_uv.size()))
+        << "mask " << k << ": the colour projection should differ from a same-(u, v) lookup";
+  }
+}
+
+TEST(ObjectCloudExtractorTest, MasksOfTheWrongSizeOrTypeAreErrors) {
+  const CameraIntrinsics K{30.0, 30.0, 7.5, 5.5, 16, 12};
+  const RgbdFrame frame = makeRegisteredFrame(smoothDepthMm(16, 12), K);
+  ObjectCloudExtractor extractor;
+  const cv::Mat good(12, 16, CV_8UC1, cv::Scalar(255));
+
+  std::vector<PointCloud> clouds;
+  Status status = extractor.extract(
+      frame, {maskDetection(good), maskDetection(cv::Mat(12, 15, CV_8UC1))}, &clouds);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("detection 1"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("15x12"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("frame-000003"), std::string::npos) << status.message();
+
+  status =
+      extractor.extract(frame, {maskDetection(cv::Mat(12, 16, CV_32FC1, cv::Scalar(1)))}, &clouds);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("detection 0"), std::string::npos) << status.message();
+
+  // An empty mask is no error: an empty cloud.
+  Detection2D empty_mask;
+  empty_mask.class_name = "cup";
+  status = extractor.extract(frame, {empty_mask, maskDetection(good)}, &clouds);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(clouds.size(), 2u);
+  EXPECT_TRUE(clouds[0].empty());
+  EXPECT_EQ(clouds[1].size(), 16u * 12u);
+
+  // No detections: no clouds.
+  ASSERT_TRUE(extractor.extract(frame, {}, &clouds).ok());
+  EXPECT_TRUE(clouds.empty());
+  EXPECT_FALSE(extractor.extract(frame, {}, nullptr).ok());
+}
+
+TEST(ObjectCloudExtractorTest, MaskErosionShrinksTheMask) {
+  const CameraIntrinsics K{30.0, 30.0, 9.5, 9.5, 20, 20};
+  const RgbdFrame frame = makeRegisteredFrame(smoothDepthMm(20, 20), K);
+  cv::Mat mask = cv::Mat::zeros(20, 20, CV_8UC1);
+  cv::rectangle(mask, cv::Rect(5, 5, 9, 9), cv::Scalar(255), cv::FILLED);
+  for (const int erosion : {0, 1, 2}) {
+    ObjectCloudExtractor::Config config;
+    config.mask_erosion_px = erosion;
+    std::vector<PointCloud> clouds;
+    ASSERT_TRUE(ObjectCloudExtractor(config).extract(frame, {maskDetection(mask)}, &clouds).ok());
+    const size_t side = 9 - 2 * erosion;
+    EXPECT_EQ(clouds[0].size(), side * side) << "erosion " << erosion;
+  }
+}
+
+TEST(ObjectCloudExtractorTest, InvalidFramesAreRejectedWithTheFrameName) {
+  const CameraIntrinsics K{30.0, 30.0, 7.5, 5.5, 16, 12};
+  const RgbdFrame good = makeRegisteredFrame(smoothDepthMm(16, 12), K);
+  ASSERT_TRUE(good.validate().ok()) << good.validate().message();
+  const std::vector<Detection2D> detections = {
+      maskDetection(cv::Mat(12, 16, CV_8UC1, cv::Scalar(255)))};
+  ObjectCloudExtractor extractor;
+
+  auto expectError = [&](const RgbdFrame& frame, const std::string& fragment) {
+    const Status valid = frame.validate();
+    EXPECT_FALSE(valid.ok()) << fragment;
+    EXPECT_NE(valid.message().find(fragment), std::string::npos) << valid.message();
+    const std::string label =
+        frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
+    EXPECT_EQ(valid.message().rfind(label, 0), 0u) << valid.message();
+    std::vector<PointCloud> clouds;
+    const Status extracted = extractor.extract(frame, detections, &clouds);
+    EXPECT_FALSE(extracted.ok()) << fragment;
+    EXPECT_EQ(extracted.message(), valid.message());
+  };
+
+  RgbdFrame frame = good;
+  frame.depth = cv::Mat(12, 16, CV_8UC1, cv::Scalar(10));
+  expectError(frame, "depth is 8UC1, expected 16UC1 (mm) or 32FC1 (m)");
+
+  frame = good;
+  frame.depth = smoothDepthMm(8, 6);
+  frame.K_depth.width = 8;
+  frame.K_depth.height = 6;
+  expectError(frame, "colour 16x12 but depth 8x6");
+
+  frame = good;
+  frame.K_depth.width = 20;
+  expectError(frame, "depth intrinsics are for 20x12");
+
+  frame = good;
+  frame.T_W_D.translation().x() = std::nan("");
+  expectError(frame, "T_W_D");
+
+  frame = good;
+  frame.T_W_D.linear() *= 2.0;  // not a rotation
+  expectError(frame, "T_W_D");
+
+  frame = good;
+  frame.K_depth.fx = 0.0;
+  expectError(frame, "invalid depth intrinsics");
+
+  frame = good;
+  frame.color_bgr = cv::Mat(12, 16, CV_8UC1, cv::Scalar(1));
+  expectError(frame, "colour is 8UC1");
+
+  frame = good;
+  frame.color_bgr = cv::Mat();
+  expectError(frame, "colour image is empty");
+
+  frame = good;
+  frame.depth = cv::Mat();
+  expectError(frame, "depth image is empty");
+
+  // Unregistered: colour intrinsics and T_C_D must be valid; sizes may differ.
+  frame = good;
+  frame.name.clear();
+  frame.index = 7;
+  frame.registered = false;
+  frame.color_bgr = cv::Mat(24, 32, CV_8UC3, cv::Scalar(0, 0, 0));
+  frame.K_color = CameraIntrinsics{60.0, 60.0, 15.5, 11.5, 32, 24};
+  EXPECT_TRUE(frame.validate().ok()) << frame.validate().message();
+  RgbdFrame bad = frame;
+  bad.T_C_D.translation().y() = std::numeric_limits<double>::infinity();
+  expectError(bad, "T_C_D");
+  bad = frame;
+  bad.K_color = CameraIntrinsics();
+  expectError(bad, "invalid colour intrinsics");
+  bad = frame;
+  bad.K_color.height = 12;
+  expectError(bad, "colour intrinsics are for 32x12");
+}
+
+TEST(ObjectCloudExtractorTest, ConfigValidationAndPrint) {
+  ObjectCloudExtractor::Config config;
+  EXPECT_TRUE(config.isValid().ok());
+  const std::string printed = config.print();
+  for (const char* key : {"min_valid_depth_m: 0.1\n", "max_valid_depth_m: 10\n",
+                          "mask_erosion_px: 0\n", "pixel_stride: 1\n"}) {
+    EXPECT_NE(printed.find(key), std::string::npos) << printed;
+  }
+
+  ObjectCloudExtractor::Config bad = config;
+  bad.pixel_stride = 0;
+  EXPECT_NE(bad.isValid().message().find("pixel_stride"), std::string::npos);
+  bad = config;
+  bad.mask_erosion_px = -1;
+  EXPECT_NE(bad.isValid().message().find("mask_erosion_px"), std::string::npos);
+  bad = config;
+  bad.max_valid_depth_m = 0.05;
+  EXPECT_NE(bad.isValid().message().find("max_valid_depth_m"), std::string::npos);
+  bad = config;
+  bad.min_valid_depth_m = std::nan("");
+  EXPECT_NE(bad.isValid().message().find("min_valid_depth_m"), std::string::npos);
+
+  // extract() refuses to run with an invalid config.
+  const RgbdFrame frame =
+      makeRegisteredFrame(smoothDepthMm(8, 6), CameraIntrinsics{10, 10, 3.5, 2.5, 8, 6});
+  std::vector<PointCloud> clouds;
+  bad = config;
+  bad.pixel_stride = 0;
+  EXPECT_FALSE(ObjectCloudExtractor(bad).extract(frame, {}, &clouds).ok());
+}
+
+}  // namespace
+}  // namespace mvod
