@@ -31,7 +31,7 @@ build: deps $(WS)/src/$(PKG)
 test: build
 	@rm -rf $(WS)/build/test_results
 	@cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(WS)/run_tests.log \
-		| grep -E '^\[ *(RUN|OK|FAILED|PASSED|SKIPPED) |^\[==|FAILURE|ERROR|Skipping|SKIP' || true
+		| grep -E '^\[ *(RUN|OK|FAILED|PASSED|SKIPPED) |^\[==|FAILURE|ERROR|Skipping|SKIP|error:|Error [0-9]|undefined reference' || true
 	@catkin_test_results $(WS)/build/test_results || true
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 

@@ -1,5 +1,5 @@
-// The whole per-keyframe pipeline (Sec. 3.1-3.5) behind one class: the offline runner, the ROS node and the
-// tests all drive it.
+// The whole per-keyframe pipeline (Sec. 3.1-3.5) behind one class: the offline runner, the ROS node
+// and the tests all drive it.
 #pragma once
 
 #include <map>
@@ -30,22 +30,24 @@ struct StageTimes {
 
 // What happened to one keyframe (Table 4's counts, per keyframe).
 struct KeyframeReport {
-  int detections = 0;             // given to processKeyframe
-  int above_threshold = 0;        // ψ >= λ (Eq. 5)
-  int with_box = 0;               // survived extraction, filters, LCCP and got a box
+  int detections = 0;       // given to processKeyframe
+  int above_threshold = 0;  // ψ >= λ (Eq. 5)
+  int with_box = 0;         // survived extraction, filters, LCCP and got a box
   int inserted = 0;
   int fused = 0;
-  std::vector<std::string> warnings;  // per-detection problems (empty mask, no depth, unknown class ...)
+  bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
+  std::vector<std::string>
+      warnings;  // per-detection problems (empty mask, no depth, unknown class ...)
   StageTimes times;
 };
 
 class ObjectMapper {
  public:
   struct Config {
-    double min_probability = 0.5;   // λ
+    double min_probability = 0.5;  // λ
     // World gravity, pointing down. Zero vector = estimate it from the dominant horizontal plane.
     Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
-    int min_object_points = 50;     // fewer points after filtering: the detection is dropped
+    int min_object_points = 50;  // fewer points after filtering: the detection is dropped
     ObjectCloudExtractor::Config extractor;
     PointCloudFilter::Config filter;
     LccpSegmenter::Config lccp;
@@ -67,28 +69,38 @@ class ObjectMapper {
   ObjectMapper(const Config& config, const ClassPriors& priors);
   const Config& config() const { return config_; }
 
-  // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes nothing;
-  // problems with single detections are warnings in the report.
+  // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes
+  // nothing; problems with single detections are warnings in the report. Warnings name the frame.
+  // Until gravity is known (configured or estimated) detections are skipped with a "waiting for
+  // gravity" warning.
   Status processKeyframe(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
                          KeyframeReport* report);
   // Sec. 3.5: removes atypical and intersecting objects from the database.
   RefinementReport refine();
 
-  // Single-view processing of one object cloud in the depth camera frame: filter, LCCP, box. Used by
-  // processKeyframe; public for tests and the single-frame baseline.
+  // Single-view processing of one object cloud in the depth camera frame: filter, LCCP, box. Used
+  // by processKeyframe; public for tests and the single-frame baseline.
   bool processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                          ObjectObservation* observation, StageTimes* times) const;
 
   const ObjectDatabase& database() const { return database_; }
   ObjectDatabase& mutableDatabase() { return database_; }
+  // The configured gravity, else the estimate, else the default (0, 0, -1) until one exists.
   GravityFrame gravity() const;
   bool hasGravity() const;
   int keyframesProcessed() const { return keyframes_; }
+  // Empties the database and forgets the gravity estimate; ids keep counting (never reused).
   void reset();
 
  private:
   bool processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
                     double* yaw_rad, StageTimes* times) const;
+  // processSingleView with the reason a detection was dropped.
+  Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                       ObjectObservation* observation, StageTimes* times) const;
+  // Updates the gravity estimate from the frame's depth when none is configured; false while
+  // unknown.
+  bool updateGravity(const RgbdFrame& frame);
 
   Config config_;
   ObjectCloudExtractor extractor_;

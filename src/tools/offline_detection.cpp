@@ -1,0 +1,513 @@
+// offline_detection: the whole pipeline over a dataset folder in the 7-Scenes layout, no ROS master
+// needed. Every N-th frame is a keyframe: load -> detect -> ObjectMapper::processKeyframe; at the
+// end the database is refined (Sec. 3.5), printed, and written to objects.json.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "multiview_object_detection/class_priors.h"
+#include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/json_io.h"
+#include "multiview_object_detection/object_mapper.h"
+#include "multiview_object_detection/segmenter_factory.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;  // the dataset (or another input) cannot be opened or written
+constexpr int kExitUsage = 2;    // bad arguments
+
+const char* const kUsage =
+    "usage: offline_detection --dataset DIR [options]\n"
+    "\n"
+    "Runs the multi-view 3D object detection pipeline over a folder in the 7-Scenes layout\n"
+    "(frame-NNNNNN.{color.jpg|color.png,depth.png,pose.txt}, camera-intrinsics.txt, optional\n"
+    "color-intrinsics.txt and gravity-direction.txt). No ROS master is needed.\n"
+    "\n"
+    "options:\n"
+    "  --dataset DIR          dataset folder (required)\n"
+    "  --detector NAME        files | fastestdet | maskrcnn (default: files)\n"
+    "  --detections DIR       folder of frame-NNNNNN.json detections (needed by 'files')\n"
+    "  --model-dir DIR        folder of the DNN model files (default: $MVOD_MODEL_DIR)\n"
+    "  --score-threshold S    detector score below which detections are not reported (default: "
+    "0.5)\n"
+    "  --backend NAME         cpu | cuda: where OpenCV DNN runs the detector (default: cpu)\n"
+    "  --every N              every N-th frame is a keyframe (default: 10)\n"
+    "  --first N, --last N    only frames with index in [first, last]\n"
+    "  --output FILE          objects.json to write (default: objects.json)\n"
+    "  --save-clouds DIR      one ASCII PLY per object: fused cloud and LCCP segment\n"
+    "  --overlays DIR         detections drawn on each keyframe's colour image (PNG)\n"
+    "  --min-probability P    lambda of Eq. 5 (default: 0.5)\n"
+    "  --priors FILE          class priors YAML (default: config/class_priors.yaml of the "
+    "package)\n"
+    "  --no-filter            ablation: no voxel/pass-through/outlier filters\n"
+    "  --no-lccp              ablation: no LCCP segmentation\n"
+    "  --single-frame         baseline: no fusion across keyframes (each detection a new object)\n"
+    "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
+    "  --help                 this text\n"
+    "\n"
+    "exit status: 0 ok, 1 dataset or another input cannot be opened, 2 bad arguments\n";
+
+struct Options {
+  std::string dataset;
+  std::string detections;
+  std::string detector = "files";
+  std::string model_dir;
+  double score_threshold = 0.5;
+  std::string backend = "cpu";
+  int every = 10;
+  int first = std::numeric_limits<int>::min();
+  int last = std::numeric_limits<int>::max();
+  std::string output = "objects.json";
+  std::string save_clouds;
+  std::string overlays;
+  double min_probability = 0.5;
+  std::string priors;
+  bool no_filter = false;
+  bool no_lccp = false;
+  bool single_frame = false;
+  bool quiet = false;
+  bool help = false;
+};
+
+bool parseInt(const std::string& text, int* value) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno != 0 || v < std::numeric_limits<int>::min() ||
+      v > std::numeric_limits<int>::max()) {
+    return false;
+  }
+  *value = static_cast<int>(v);
+  return true;
+}
+
+bool parseDouble(const std::string& text, double* value) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) return false;
+  *value = v;
+  return true;
+}
+
+// Returns an empty string on success, else what is wrong.
+std::string parseArguments(int argc, char** argv, Options* options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&](std::string* out) {
+      if (i + 1 >= argc) return false;
+      *out = argv[++i];
+      return true;
+    };
+    std::string text;
+    if (arg == "--help" || arg == "-h") {
+      options->help = true;
+    } else if (arg == "--no-filter") {
+      options->no_filter = true;
+    } else if (arg == "--no-lccp") {
+      options->no_lccp = true;
+    } else if (arg == "--single-frame") {
+      options->single_frame = true;
+    } else if (arg == "--quiet") {
+      options->quiet = true;
+    } else if (arg == "--dataset" || arg == "--detections" || arg == "--detector" ||
+               arg == "--model-dir" || arg == "--output" || arg == "--save-clouds" ||
+               arg == "--overlays" || arg == "--priors" || arg == "--backend") {
+      if (!value(&text) || text.empty()) return arg + " needs a value";
+      if (arg == "--dataset") options->dataset = text;
+      if (arg == "--detections") options->detections = text;
+      if (arg == "--detector") options->detector = text;
+      if (arg == "--model-dir") options->model_dir = text;
+      if (arg == "--output") options->output = text;
+      if (arg == "--save-clouds") options->save_clouds = text;
+      if (arg == "--overlays") options->overlays = text;
+      if (arg == "--priors") options->priors = text;
+      if (arg == "--backend") options->backend = text;
+    } else if (arg == "--every" || arg == "--first" || arg == "--last") {
+      int number = 0;
+      if (!value(&text) || !parseInt(text, &number)) return arg + " needs an integer";
+      if (arg == "--every") {
+        if (number < 1) return "--every must be >= 1";
+        options->every = number;
+      }
+      if (arg == "--first") options->first = number;
+      if (arg == "--last") options->last = number;
+    } else if (arg == "--score-threshold") {
+      if (!value(&text) || !parseDouble(text, &options->score_threshold)) {
+        return "--score-threshold needs a number";
+      }
+    } else if (arg == "--min-probability") {
+      if (!value(&text) || !parseDouble(text, &options->min_probability)) {
+        return "--min-probability needs a number";
+      }
+      if (options->min_probability < 0.0 || options->min_probability > 1.0) {
+        return "--min-probability must be in [0, 1]";
+      }
+    } else {
+      return "unknown argument '" + arg + "'";
+    }
+  }
+  if (options->help) return "";
+  if (options->dataset.empty()) return "--dataset is required";
+  if (options->first > options->last) return "--first is after --last";
+  if (options->detector == "files" && options->detections.empty()) {
+    return "--detector files needs --detections DIR";
+  }
+  return "";
+}
+
+// config/class_priors.yaml of the package: next to the sources (catkin devel space: the workspace's
+// src/<package>), or installed under share/<package>.
+std::string findDefaultPriors(const char* argv0) {
+  std::error_code error;
+  fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  if (error) exe = fs::absolute(argv0, error);
+  const char* kPackage = "multiview_object_detection";
+  for (fs::path dir = exe.parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    const fs::path candidates[] = {
+        dir / "config" / "class_priors.yaml",
+        dir / "src" / kPackage / "config" / "class_priors.yaml",
+        dir / "share" / kPackage / "config" / "class_priors.yaml",
+    };
+    for (const fs::path& candidate : candidates) {
+      if (fs::is_regular_file(candidate, error)) return candidate.string();
+    }
+    if (dir == dir.root_path()) break;
+  }
+  return "";
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  double m = values[mid];
+  if (values.size() % 2 == 0) {
+    m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
+  }
+  return m;
+}
+
+std::string formatDuration(double seconds) {
+  const int s = static_cast<int>(std::max(0.0, seconds) + 0.5);
+  char text[32];
+  std::snprintf(text, sizeof(text), "%d:%02d", s / 60, s % 60);
+  return text;
+}
+
+// A progress line on stderr: redrawn in place on a terminal, one line per 10% otherwise.
+class Progress {
+ public:
+  Progress(size_t total, bool enabled)
+      : total_(total),
+        enabled_(enabled),
+        tty_(::isatty(STDERR_FILENO) != 0),
+        start_(std::chrono::steady_clock::now()) {}
+
+  void update(size_t done, int keyframes, size_t objects) {
+    if (!enabled_ || total_ == 0) return;
+    const int decile = static_cast<int>(10 * done / total_);
+    if (!tty_ && decile == last_decile_) return;
+    last_decile_ = decile;
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double eta_s = done > 0 ? elapsed_s * static_cast<double>(total_ - done) / done : 0.0;
+    const int width = 30;
+    const int filled = static_cast<int>(width * done / total_);
+    std::string bar(filled, '#');
+    bar.resize(width, '.');
+    char line[256];
+    std::snprintf(line, sizeof(line), "[%s] frame %zu/%zu  keyframes %d  objects %zu  ETA %s",
+                  bar.c_str(), done, total_, keyframes, objects, formatDuration(eta_s).c_str());
+    if (tty_) {
+      std::fprintf(stderr, "\r%s\033[K", line);
+      drawn_ = true;
+    } else {
+      std::fprintf(stderr, "%s\n", line);
+    }
+    std::fflush(stderr);
+  }
+  // Ends the in-place line before other output goes to stderr.
+  void breakLine() {
+    if (drawn_) std::fprintf(stderr, "\n");
+    drawn_ = false;
+  }
+
+ private:
+  size_t total_;
+  bool enabled_;
+  bool tty_;
+  std::chrono::steady_clock::time_point start_;
+  int last_decile_ = -1;
+  bool drawn_ = false;
+};
+
+std::string fileSafe(std::string name) {
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  }
+  return name;
+}
+
+std::string plyText(const mvod::PointCloud& points) {
+  std::ostringstream out;
+  out << "ply\nformat ascii 1.0\nelement vertex " << points.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  char line[96];
+  for (const Eigen::Vector3f& p : points) {
+    std::snprintf(line, sizeof(line), "%.4f %.4f %.4f\n", p.x(), p.y(), p.z());
+    out << line;
+  }
+  return out.str();
+}
+
+void printTable(const std::vector<mvod::MapObject>& objects) {
+  std::printf("%4s  %-16s %5s %4s  %-26s %-22s %8s\n", "id", "class", "prob", "obs", "centre (m)",
+              "size (m)", "yaw (deg)");
+  for (const mvod::MapObject& o : objects) {
+    const Eigen::Vector3d& c = o.box.center_m;
+    const Eigen::Vector3d& s = o.box.size_m;
+    std::printf("%4d  %-16s %5.2f %4d  (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)  %8.1f\n",
+                o.id, o.class_name.c_str(), o.probability, o.observations, c.x(), c.y(), c.z(),
+                s.x(), s.y(), s.z(), o.yaw_rad * 180.0 / M_PI);
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  const std::string bad_arguments = parseArguments(argc, argv, &options);
+  if (options.help) {
+    std::cout << kUsage;
+    return kExitOk;
+  }
+  if (!bad_arguments.empty()) {
+    std::cerr << "offline_detection: " << bad_arguments << "\n\n" << kUsage;
+    return kExitUsage;
+  }
+
+  // Bad options are usage errors (exit 2), found before any file is touched.
+  mvod::SegmenterOptions segmenter_options;
+  segmenter_options.detector = options.detector;
+  segmenter_options.detections_dir = options.detections;
+  segmenter_options.model_dir = options.model_dir;
+  segmenter_options.score_threshold = static_cast<float>(options.score_threshold);
+  segmenter_options.backend = options.backend;
+  const mvod::Status segmenter_options_valid = segmenter_options.isValid();
+  if (!segmenter_options_valid) {
+    std::cerr << "offline_detection: " << segmenter_options_valid.message() << "\n";
+    return kExitUsage;
+  }
+
+  mvod::SevenScenesDataset dataset;
+  const mvod::Status opened = mvod::SevenScenesDataset::open(options.dataset, &dataset);
+  if (!opened) {
+    std::cerr << "offline_detection: cannot open dataset " << options.dataset << ": "
+              << opened.message() << "\n";
+    return kExitFailure;
+  }
+
+  if (options.priors.empty()) {
+    options.priors = findDefaultPriors(argv[0]);
+    if (options.priors.empty()) {
+      std::cerr << "offline_detection: config/class_priors.yaml not found next to the package's "
+                   "sources or install space; give it with --priors FILE\n";
+      return kExitFailure;
+    }
+  }
+  mvod::ClassPriors priors;
+  const mvod::Status priors_loaded = mvod::ClassPriors::loadYaml(options.priors, &priors);
+  if (!priors_loaded) {
+    std::cerr << "offline_detection: " << priors_loaded.message() << "\n";
+    return kExitFailure;
+  }
+
+  std::unique_ptr<mvod::InstanceSegmenter> segmenter;
+  const mvod::Status created = mvod::createInstanceSegmenter(segmenter_options, &segmenter);
+  if (!created) {
+    std::cerr << "offline_detection: " << created.message() << "\n";
+    return kExitFailure;
+  }
+
+  mvod::ObjectMapper::Config config;
+  config.min_probability = options.min_probability;
+  config.filter.enable = !options.no_filter;
+  config.lccp.enable = !options.no_lccp;
+  config.database.disable_fusion = options.single_frame;
+  // The dataset's gravity when it has one; else estimated from the first frames' dominant plane.
+  config.gravity_down_W = dataset.hasGravity() ? dataset.gravityDown_W() : Eigen::Vector3d::Zero();
+  const mvod::Status config_valid = config.isValid();
+  if (!config_valid) {
+    std::cerr << "offline_detection: invalid configuration: " << config_valid.message() << "\n";
+    return kExitUsage;
+  }
+  mvod::ObjectMapper mapper(config, priors);
+
+  for (const std::string& dir : {options.save_clouds, options.overlays}) {
+    std::error_code error;
+    if (!dir.empty() && !fs::create_directories(dir, error) && error) {
+      std::cerr << "offline_detection: cannot create " << dir << ": " << error.message() << "\n";
+      return kExitFailure;
+    }
+  }
+
+  std::vector<int> frames;
+  for (const int index : dataset.frameIndices()) {
+    if (index >= options.first && index <= options.last) frames.push_back(index);
+  }
+  if (frames.empty()) {
+    std::cerr << "offline_detection: no frames in " << options.dataset << " within the range\n";
+  }
+
+  Progress progress(frames.size(), !options.quiet);
+  std::vector<mvod::StageTimes> stage_times;  // keyframes that had detections to process
+  std::vector<double> detection_ms;
+  int keyframes = 0;
+  int errors = 0;
+  auto report_line = [&](const std::string& line, bool is_error) {
+    if (options.quiet && !is_error) return;
+    progress.breakLine();
+    std::cerr << line << "\n";
+  };
+
+  for (size_t i = 0; i < frames.size(); ++i) {
+    if (i % static_cast<size_t>(options.every) != 0) {
+      progress.update(i + 1, keyframes, mapper.database().size());
+      continue;
+    }
+    const std::string name = mvod::SevenScenesDataset::frameName(frames[i]);
+    mvod::RgbdFrame frame;
+    const mvod::Status loaded = dataset.load(frames[i], &frame);
+    if (!loaded) {
+      ++errors;
+      report_line(name + ": error: " + loaded.message(), true);
+      progress.update(i + 1, keyframes, mapper.database().size());
+      continue;
+    }
+    if (frame.name.empty()) frame.name = name;
+
+    std::vector<mvod::Detection2D> detections;
+    std::vector<std::string> detector_warnings;
+    const auto t0 = std::chrono::steady_clock::now();
+    const mvod::Status detected =
+        segmenter->detect(frame.color_bgr, frame.name, &detections, &detector_warnings);
+    detection_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    for (const std::string& warning : detector_warnings) {
+      report_line(name + ": warning: " + warning, false);
+    }
+    if (!detected) {
+      ++errors;
+      report_line(name + ": error: detection failed: " + detected.message(), true);
+      progress.update(i + 1, keyframes, mapper.database().size());
+      continue;
+    }
+
+    if (!options.overlays.empty()) {
+      const std::string path = options.overlays + "/" + name + ".overlay.png";
+      try {
+        if (!cv::imwrite(path, mvod::drawDetections(frame.color_bgr, detections))) {
+          report_line(name + ": warning: cannot write " + path, false);
+        }
+      } catch (const cv::Exception& e) {
+        report_line(name + ": warning: cannot write " + path + ": " + e.what(), false);
+      }
+    }
+
+    mvod::KeyframeReport report;
+    const mvod::Status processed = mapper.processKeyframe(frame, detections, &report);
+    if (!processed) {
+      ++errors;
+      report_line(name + ": error: " + processed.message(), true);
+    } else {
+      ++keyframes;
+      if (report.above_threshold > 0 && !report.waiting_for_gravity) {
+        stage_times.push_back(report.times);
+      }
+    }
+    for (const std::string& warning : report.warnings) report_line("warning: " + warning, false);
+    progress.update(i + 1, keyframes, mapper.database().size());
+  }
+  progress.breakLine();
+
+  const mvod::ObjectMapper::RefinementReport refinement = mapper.refine();
+
+  // Table 5's split as medians per keyframe (over the keyframes that had detections to process).
+  mvod::MapSummary summary;
+  summary.frames = static_cast<int>(frames.size());
+  summary.keyframes = keyframes;
+  summary.removed_atypical = static_cast<int>(refinement.atypical_ids.size());
+  summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
+  summary.gravity_down_W = -mapper.gravity().up;
+  auto stage_median = [&](double mvod::StageTimes::*field) {
+    std::vector<double> values;
+    for (const mvod::StageTimes& t : stage_times) values.push_back(t.*field);
+    return median(values);
+  };
+  mvod::StageTimes& med = summary.stage_ms_median;
+  med.extraction_ms = stage_median(&mvod::StageTimes::extraction_ms);
+  med.filter_ms = stage_median(&mvod::StageTimes::filter_ms);
+  med.lccp_ms = stage_median(&mvod::StageTimes::lccp_ms);
+  med.manhattan_ms = stage_median(&mvod::StageTimes::manhattan_ms);
+  med.fusion_ms = stage_median(&mvod::StageTimes::fusion_ms);
+  med.total_ms = stage_median(&mvod::StageTimes::total_ms);
+  med.refinement_ms = refinement.time_ms;
+
+  const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper.database());
+  printTable(objects);
+
+  int exit_code = kExitOk;
+  const mvod::Status written =
+      mvod::writeFileAtomic(options.output, mvod::objectsToJson(objects, summary, false));
+  if (!written) {
+    std::cerr << "offline_detection: " << written.message() << "\n";
+    exit_code = kExitFailure;
+  }
+  if (!options.save_clouds.empty()) {
+    for (const mvod::MapObject& object : objects) {
+      const std::string stem = options.save_clouds + "/object_" + std::to_string(object.id) + "_" +
+                               fileSafe(object.class_name);
+      for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
+                               std::make_pair("_segment.ply", &object.segment_W)}) {
+        const mvod::Status saved = mvod::writeFileAtomic(stem + part.first, plyText(*part.second));
+        if (!saved) {
+          std::cerr << "offline_detection: " << saved.message() << "\n";
+          exit_code = kExitFailure;
+        }
+      }
+    }
+  }
+
+  if (!options.quiet) {
+    std::fprintf(stderr,
+                 "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
+                 "(removed: %zu atypical, %zu intersecting)\n"
+                 "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
+                 "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n",
+                 frames.size(), keyframes, stage_times.size(), errors, objects.size(),
+                 refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
+                 median(detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
+                 med.manhattan_ms, med.fusion_ms, med.total_ms, med.refinement_ms);
+    if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
+  }
+  return exit_code;
+}

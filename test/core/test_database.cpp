@@ -1,0 +1,323 @@
+// ObjectDatabase: Eq. 5-8 (insert, same-class nearest-centre fusion, fused clouds, probability
+// mean).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "multiview_object_detection/object_database.h"
+
+namespace mvod {
+namespace {
+
+class ObjectDatabaseTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ClassPrior chair;
+    chair.class_name = "chair";
+    chair.has_size = true;
+    chair.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
+    chair.fusion_distance_m = 0.4;
+    priors_.set(chair);
+    ClassPrior cup;
+    cup.class_name = "cup";
+    cup.fusion_distance_m = 0.1;
+    priors_.set(cup);
+    priors_.default_fusion_distance_m = 0.5;
+  }
+
+  // A 0.2 m square patch of points (1 cm spacing) centred on `center`, with a box around it.
+  static ObjectObservation observation(const std::string& class_name, const Eigen::Vector3d& center,
+                                       double probability, int keyframe) {
+    ObjectObservation obs;
+    obs.class_name = class_name;
+    obs.class_id = class_name == "chair" ? 56 : 41;
+    obs.probability = probability;
+    obs.keyframe = keyframe;
+    obs.stamp_s = keyframe * 0.5;
+    for (int i = 0; i < 20; ++i) {
+      for (int j = 0; j < 20; ++j) {
+        obs.points_W.push_back(
+            (center + Eigen::Vector3d(-0.095 + 0.01 * i, -0.095 + 0.01 * j, 0.0)).cast<float>());
+      }
+    }
+    obs.segment_W = obs.points_W;
+    obs.box.center_m = center;
+    obs.box.size_m = Eigen::Vector3d(0.2, 0.2, 0.01);
+    obs.yaw_rad = 0.1;
+    return obs;
+  }
+
+  // A processor that accepts the fused cloud: box centre = centroid, segment = the cloud.
+  static FusedCloudProcessor centroidProcessor(int* calls) {
+    return [calls](const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
+                   double* yaw_rad) {
+      ++*calls;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const auto& p : points_W) sum += p.cast<double>();
+      box->center_m = sum / static_cast<double>(points_W.size());
+      box->size_m = Eigen::Vector3d(0.3, 0.3, 0.3);
+      *segment_W = points_W;
+      *yaw_rad = 0.2;
+      return true;
+    };
+  }
+
+  ClassPriors priors_;
+};
+
+TEST_F(ObjectDatabaseTest, InsertsWhenNoObjectOfTheClassExists) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const auto result = database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0),
+                                            centroidProcessor(&calls));
+  EXPECT_EQ(result.decision, ObjectDatabase::Decision::kInserted);
+  EXPECT_TRUE(std::isinf(result.distance_m));
+  EXPECT_EQ(calls, 0);
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject* object = database.find(result.object_id);
+  ASSERT_NE(object, nullptr);
+  EXPECT_EQ(object->class_name, "chair");
+  EXPECT_EQ(object->class_id, 56);
+  EXPECT_DOUBLE_EQ(object->probability, 0.8);
+  EXPECT_EQ(object->observations, 1);
+  EXPECT_EQ(object->first_keyframe, 0);
+  EXPECT_EQ(object->last_keyframe, 0);
+  EXPECT_NEAR(object->box.center_m.x(), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(object->yaw_rad, 0.1);
+  // Inserted clouds are voxelised too: a 1 cm grid at 1 cm stays at about 400 points.
+  EXPECT_GE(object->points_W.size(), 300u);
+  EXPECT_LE(object->points_W.size(), 441u);
+}
+
+TEST_F(ObjectDatabaseTest, FusesWithinTheClassThreshold) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const auto first = database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0),
+                                           centroidProcessor(&calls));
+  const auto second = database.fuseOrInsert(observation("chair", {1.3, 2.0, 0.5}, 0.6, 1),
+                                            centroidProcessor(&calls));
+  EXPECT_EQ(second.decision, ObjectDatabase::Decision::kFused);
+  EXPECT_EQ(second.object_id, first.object_id);
+  EXPECT_NEAR(second.distance_m, 0.3, 1e-9);
+  EXPECT_EQ(calls, 1);
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject* object = database.find(first.object_id);
+  EXPECT_EQ(object->observations, 2);
+  EXPECT_EQ(object->first_keyframe, 0);
+  EXPECT_EQ(object->last_keyframe, 1);
+  EXPECT_DOUBLE_EQ(object->last_seen_s, 0.5);
+  // The processor's box is taken: the centroid of both patches.
+  EXPECT_NEAR(object->box.center_m.x(), 1.15, 0.01);
+  EXPECT_DOUBLE_EQ(object->yaw_rad, 0.2);
+  // Eq. 7: both patches are in the fused cloud.
+  EXPECT_GE(object->points_W.size(), 700u);
+}
+
+TEST_F(ObjectDatabaseTest, InsertsBeyondTheClassThreshold) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(&calls));
+  const auto result = database.fuseOrInsert(observation("chair", {1.45, 2.0, 0.5}, 0.8, 1),
+                                            centroidProcessor(&calls));
+  EXPECT_EQ(result.decision, ObjectDatabase::Decision::kInserted);
+  EXPECT_NEAR(result.distance_m, 0.45, 1e-9);
+  EXPECT_EQ(database.size(), 2u);
+  EXPECT_EQ(calls, 0);
+  // The class threshold is per class: cups fuse only within 0.1 m.
+  database.fuseOrInsert(observation("cup", {0.0, 0.0, 0.8}, 0.8, 1), centroidProcessor(&calls));
+  const auto cup = database.fuseOrInsert(observation("cup", {0.15, 0.0, 0.8}, 0.8, 2),
+                                         centroidProcessor(&calls));
+  EXPECT_EQ(cup.decision, ObjectDatabase::Decision::kInserted);
+  EXPECT_EQ(database.findByClass("cup").size(), 2u);
+  EXPECT_EQ(database.findByClass("chair").size(), 2u);
+}
+
+TEST_F(ObjectDatabaseTest, FusesWithTheNearestOfSeveralCandidates) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const auto a = database.fuseOrInsert(observation("chair", {0.0, 0.0, 0.5}, 0.8, 0),
+                                       centroidProcessor(&calls));
+  const auto b = database.fuseOrInsert(observation("chair", {0.6, 0.0, 0.5}, 0.8, 0),
+                                       centroidProcessor(&calls));
+  ASSERT_NE(a.object_id, b.object_id);
+  const auto result = database.fuseOrInsert(observation("chair", {0.4, 0.0, 0.5}, 0.8, 1),
+                                            centroidProcessor(&calls));
+  EXPECT_EQ(result.decision, ObjectDatabase::Decision::kFused);
+  EXPECT_EQ(result.object_id, b.object_id);
+  EXPECT_NEAR(result.distance_m, 0.2, 1e-9);
+}
+
+TEST_F(ObjectDatabaseTest, DifferentClassesNeverFuse) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(&calls));
+  const auto result =
+      database.fuseOrInsert(observation("cup", {1.0, 2.0, 0.5}, 0.8, 1), centroidProcessor(&calls));
+  EXPECT_EQ(result.decision, ObjectDatabase::Decision::kInserted);
+  EXPECT_TRUE(std::isinf(result.distance_m));
+  EXPECT_EQ(database.size(), 2u);
+  EXPECT_EQ(calls, 0);
+}
+
+TEST_F(ObjectDatabaseTest, DetectionsOfOneKeyframeDoNotFuseWithEachOther) {
+  int calls = 0;
+  {
+    ObjectDatabase database(ObjectDatabase::Config(), priors_);
+    database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 3), centroidProcessor(&calls));
+    const auto same_keyframe = database.fuseOrInsert(observation("chair", {1.1, 2.0, 0.5}, 0.8, 3),
+                                                     centroidProcessor(&calls));
+    EXPECT_EQ(same_keyframe.decision, ObjectDatabase::Decision::kInserted);
+    EXPECT_EQ(database.size(), 2u);
+    // In the next keyframe both are candidates again.
+    const auto next = database.fuseOrInsert(observation("chair", {1.1, 2.0, 0.5}, 0.8, 4),
+                                            centroidProcessor(&calls));
+    EXPECT_EQ(next.decision, ObjectDatabase::Decision::kFused);
+    EXPECT_EQ(next.object_id, same_keyframe.object_id);
+  }
+  {
+    ObjectDatabase::Config config;
+    config.no_fusion_within_keyframe = false;
+    ObjectDatabase database(config, priors_);
+    database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 3), centroidProcessor(&calls));
+    const auto same_keyframe = database.fuseOrInsert(observation("chair", {1.1, 2.0, 0.5}, 0.8, 3),
+                                                     centroidProcessor(&calls));
+    EXPECT_EQ(same_keyframe.decision, ObjectDatabase::Decision::kFused);
+  }
+}
+
+TEST_F(ObjectDatabaseTest, SingleFrameBaselineNeverFuses) {
+  ObjectDatabase::Config config;
+  config.disable_fusion = true;
+  ObjectDatabase database(config, priors_);
+  int calls = 0;
+  for (int k = 0; k < 5; ++k) {
+    const auto result = database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, k),
+                                              centroidProcessor(&calls));
+    EXPECT_EQ(result.decision, ObjectDatabase::Decision::kInserted);
+  }
+  EXPECT_EQ(database.size(), 5u);
+  EXPECT_EQ(calls, 0);
+}
+
+TEST_F(ObjectDatabaseTest, ProbabilityIsTheMeanOfNewAndStored) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const auto first = database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.9, 0),
+                                           centroidProcessor(&calls));
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.5, 1), centroidProcessor(&calls));
+  EXPECT_NEAR(database.find(first.object_id)->probability, 0.7, 1e-12);
+  // Eq. 8 is pairwise: (0.3 + 0.7) / 2, not the mean of all three views.
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.3, 2), centroidProcessor(&calls));
+  EXPECT_NEAR(database.find(first.object_id)->probability, 0.5, 1e-12);
+  EXPECT_EQ(database.find(first.object_id)->observations, 3);
+}
+
+TEST_F(ObjectDatabaseTest, FusedCloudStaysBoundedWhenTheSameSurfaceIsSeenAgain) {
+  ObjectDatabase::Config config;
+  config.fusion_voxel_size_m = 0.01;
+  ObjectDatabase database(config, priors_);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> coordinate(0.0f, 0.5f);
+  std::normal_distribution<float> noise(0.0f, 0.002f);
+  int calls = 0;
+  int id = 0;
+  for (int k = 0; k < 200; ++k) {
+    // A new random sampling of the same 0.5 m x 0.5 m table top each view.
+    ObjectObservation obs = observation("chair", {0.25, 0.25, 0.7}, 0.8, k);
+    obs.points_W.clear();
+    for (int i = 0; i < 3000; ++i) {
+      obs.points_W.emplace_back(coordinate(rng), coordinate(rng), 0.7f + noise(rng));
+    }
+    const auto result = database.fuseOrInsert(obs, centroidProcessor(&calls));
+    if (k == 0) id = result.object_id;
+    ASSERT_EQ(result.object_id, id);
+  }
+  const MapObject* object = database.find(id);
+  ASSERT_NE(object, nullptr);
+  EXPECT_EQ(object->observations, 200);
+  // 51 x 51 cells in the plane, a noise band of at most 3 cells: far below 200 x 3000 points.
+  EXPECT_LE(object->points_W.size(), 51u * 51u * 3u);
+  EXPECT_GE(object->points_W.size(), 2000u);
+  for (const auto& p : object->points_W) {
+    EXPECT_GE(p.x(), -0.01f);
+    EXPECT_LE(p.x(), 0.51f);
+  }
+}
+
+TEST_F(ObjectDatabaseTest, FailedReprocessingKeepsThePreviousBox) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const ObjectObservation first_obs = observation("chair", {1.0, 2.0, 0.5}, 0.8, 0);
+  const auto first = database.fuseOrInsert(first_obs, centroidProcessor(&calls));
+  int failed_calls = 0;
+  const FusedCloudProcessor failing = [&failed_calls](const PointCloud&, PointCloud*,
+                                                      OrientedBox* box, double*) {
+    ++failed_calls;
+    box->center_m = Eigen::Vector3d(9, 9, 9);  // must be ignored
+    return false;
+  };
+  const auto second = database.fuseOrInsert(observation("chair", {1.2, 2.0, 0.5}, 0.4, 1), failing);
+  EXPECT_EQ(second.decision, ObjectDatabase::Decision::kFused);
+  EXPECT_EQ(failed_calls, 1);
+  const MapObject* object = database.find(first.object_id);
+  EXPECT_TRUE(object->box.center_m.isApprox(first_obs.box.center_m));
+  EXPECT_TRUE(object->box.size_m.isApprox(first_obs.box.size_m));
+  EXPECT_EQ(object->segment_W.size(), first_obs.segment_W.size());
+  EXPECT_DOUBLE_EQ(object->yaw_rad, first_obs.yaw_rad);
+  // The rest of the fusion still happens.
+  EXPECT_NEAR(object->probability, 0.6, 1e-12);
+  EXPECT_EQ(object->observations, 2);
+  EXPECT_GT(object->points_W.size(), first_obs.points_W.size());
+}
+
+TEST_F(ObjectDatabaseTest, IdsAreNeverReused) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  std::vector<int> ids;
+  for (int k = 0; k < 3; ++k) {
+    ids.push_back(database
+                      .fuseOrInsert(observation("chair", {2.0 * k, 0.0, 0.5}, 0.8, 0),
+                                    centroidProcessor(&calls))
+                      .object_id);
+  }
+  EXPECT_EQ(ids, (std::vector<int>{1, 2, 3}));
+  EXPECT_TRUE(database.remove(3));
+  EXPECT_FALSE(database.remove(3));
+  EXPECT_EQ(database.find(3), nullptr);
+  const int after_remove =
+      database
+          .fuseOrInsert(observation("chair", {10.0, 0.0, 0.5}, 0.8, 1), centroidProcessor(&calls))
+          .object_id;
+  EXPECT_EQ(after_remove, 4);
+  database.clear();
+  EXPECT_EQ(database.size(), 0u);
+  const int after_clear =
+      database
+          .fuseOrInsert(observation("chair", {10.0, 0.0, 0.5}, 0.8, 2), centroidProcessor(&calls))
+          .object_id;
+  EXPECT_EQ(after_clear, 5);
+
+  // Loading a map: ids continue after the largest loaded id.
+  MapObject loaded;
+  loaded.id = 42;
+  loaded.class_name = "cup";
+  database.setObjects({loaded});
+  EXPECT_EQ(database.size(), 1u);
+  EXPECT_NE(database.find(42), nullptr);
+  EXPECT_EQ(database.nextId(), 43);
+}
+
+TEST_F(ObjectDatabaseTest, ConfigValidation) {
+  ObjectDatabase::Config config;
+  EXPECT_TRUE(config.isValid().ok());
+  config.fusion_voxel_size_m = 0.0;
+  EXPECT_FALSE(config.isValid().ok());
+  EXPECT_NE(config.isValid().message().find("fusion_voxel_size_m"), std::string::npos);
+  config.fusion_voxel_size_m = std::nan("");
+  EXPECT_FALSE(config.isValid().ok());
+  EXPECT_NE(ObjectDatabase::Config().print().find("fusion_voxel_size_m: 0.01"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mvod

@@ -1,0 +1,342 @@
+// ObjectMapper: the per-keyframe pipeline on small frames ray-cast in the test (a box on the floor
+// in front of a wall, perfect masks).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "multiview_object_detection/object_mapper.h"
+
+namespace mvod {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kRows = 480;
+constexpr int kCols = 640;
+
+// World: z up, floor z = 0, a wall at y = wall_y_m; one axis-aligned box.
+struct TestScene {
+  Eigen::Vector3d box_min = Eigen::Vector3d(-0.25, 1.8, 0.0);
+  Eigen::Vector3d box_max = Eigen::Vector3d(0.25, 2.2, 0.5);
+  double wall_y_m = 3.0;
+  bool with_box = true;
+
+  // Nearest hit along a ray; *on_box tells whether it is the box.
+  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, bool* on_box) const {
+    double best = std::numeric_limits<double>::infinity();
+    *on_box = false;
+    if (d.z() < -1e-9) best = std::min(best, -o.z() / d.z());
+    if (d.y() > 1e-9) best = std::min(best, (wall_y_m - o.y()) / d.y());
+    if (with_box) {
+      double t_near = -std::numeric_limits<double>::infinity();
+      double t_far = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3; ++i) {
+        if (std::abs(d[i]) < 1e-12) {
+          if (o[i] < box_min[i] || o[i] > box_max[i])
+            t_near = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        double t1 = (box_min[i] - o[i]) / d[i];
+        double t2 = (box_max[i] - o[i]) / d[i];
+        if (t1 > t2) std::swap(t1, t2);
+        t_near = std::max(t_near, t1);
+        t_far = std::min(t_far, t2);
+      }
+      if (t_near <= t_far && t_near > 0.0 && t_near < best) {
+        best = t_near;
+        *on_box = true;
+      }
+    }
+    return best;
+  }
+};
+
+// Camera at `position`, looking along world +y, pitched down by pitch_deg.
+Eigen::Isometry3d cameraPose(const Eigen::Vector3d& position, double pitch_deg) {
+  const double p = pitch_deg * kPi / 180.0;
+  Eigen::Matrix3d R;
+  R.col(0) = Eigen::Vector3d(1, 0, 0);
+  R.col(1) = Eigen::Vector3d(0, -std::sin(p), -std::cos(p));
+  R.col(2) = Eigen::Vector3d(0, std::cos(p), -std::sin(p));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = position;
+  return T;
+}
+
+// Renders a 640x480 frame (16-bit mm depth, Kinect-like intrinsics) and the perfect mask of the
+// box. (At 320x240 the grazing-angle box top is sampled too sparsely for 1-2 cm supervoxels.)
+RgbdFrame renderFrame(const TestScene& scene, const Eigen::Isometry3d& T_W_D, int index,
+                      cv::Mat* mask) {
+  RgbdFrame frame;
+  frame.index = index;
+  frame.name = "frame-" + std::to_string(index);
+  frame.stamp_s = 0.1 * index;
+  frame.K_depth = CameraIntrinsics{520.0, 520.0, 319.5, 239.5, 640, 480};
+  frame.K_color = frame.K_depth;
+  frame.registered = true;
+  frame.T_W_D = T_W_D;
+  frame.depth = cv::Mat(kRows, kCols, CV_16UC1, cv::Scalar(0));
+  frame.color_bgr = cv::Mat(kRows, kCols, CV_8UC3, cv::Scalar(90, 120, 150));
+  *mask = cv::Mat(kRows, kCols, CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < kRows; ++v) {
+    for (int u = 0; u < kCols; ++u) {
+      const Eigen::Vector3d ray_D((u - frame.K_depth.cx) / frame.K_depth.fx,
+                                  (v - frame.K_depth.cy) / frame.K_depth.fy, 1.0);
+      bool on_box = false;
+      const double t = scene.cast(T_W_D.translation(), T_W_D.linear() * ray_D, &on_box);
+      if (!std::isfinite(t) || t > 10.0) continue;
+      frame.depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(t * 1000.0));
+      if (on_box) {
+        mask->at<uint8_t>(v, u) = 255;
+        frame.color_bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(20, 40, 200);
+      }
+    }
+  }
+  return frame;
+}
+
+Detection2D detectionFromMask(const cv::Mat& mask, const std::string& class_name, float score) {
+  Detection2D detection;
+  detection.class_name = class_name;
+  detection.class_id = cocoClassId(class_name);
+  detection.score = score;
+  detection.mask = mask.clone();
+  detection.box_px = cv::boundingRect(mask);
+  return detection;
+}
+
+bool anyWarningContains(const KeyframeReport& report, const std::string& text) {
+  return std::any_of(report.warnings.begin(), report.warnings.end(),
+                     [&](const std::string& w) { return w.find(text) != std::string::npos; });
+}
+
+class ObjectMapperTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ClassPrior chair;
+    chair.class_name = "chair";
+    chair.has_size = true;
+    chair.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
+    chair.fusion_distance_m = 0.4;
+    priors_.set(chair);
+    ClassPrior cup;
+    cup.class_name = "cup";
+    cup.has_size = true;
+    cup.size_m = Eigen::Vector3d(0.08, 0.08, 0.1);
+    cup.fusion_distance_m = 0.1;
+    priors_.set(cup);
+    config_.gravity_down_W = Eigen::Vector3d(0, 0, -1);
+    pose_ = cameraPose(Eigen::Vector3d(0.0, 0.0, 1.0), 20.0);
+    frame_ = renderFrame(scene_, pose_, 1, &mask_);
+  }
+
+  // Compares with the true box; the horizontal axes may come out in either order.
+  void expectNearTruth(const OrientedBox& box) {
+    const Eigen::Vector3d true_center = 0.5 * (scene_.box_min + scene_.box_max);
+    const Eigen::Vector3d true_size = scene_.box_max - scene_.box_min;
+    EXPECT_LT((box.center_m - true_center).norm(), 0.05) << "centre " << box.center_m.transpose();
+    EXPECT_NEAR(box.size_m.z(), true_size.z(), 0.05);
+    const double a = std::max(box.size_m.x(), box.size_m.y());
+    const double b = std::min(box.size_m.x(), box.size_m.y());
+    EXPECT_NEAR(a, 0.5, 0.05) << "size " << box.size_m.transpose();
+    EXPECT_NEAR(b, 0.4, 0.05) << "size " << box.size_m.transpose();
+    // Gravity-aligned: the third column is up.
+    EXPECT_GT(box.rotation.col(2).dot(Eigen::Vector3d::UnitZ()), 0.999);
+  }
+
+  ClassPriors priors_;
+  ObjectMapper::Config config_;
+  TestScene scene_;
+  Eigen::Isometry3d pose_;
+  RgbdFrame frame_;
+  cv::Mat mask_;
+};
+
+TEST_F(ObjectMapperTest, OneDetectionGivesOneObjectNearTheTruth) {
+  ASSERT_TRUE(config_.isValid().ok()) << config_.isValid().message();
+  ASSERT_GT(cv::countNonZero(mask_), 2000);
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  const Status status =
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  ASSERT_TRUE(status.ok()) << status.message();
+  for (const auto& w : report.warnings) ADD_FAILURE() << "unexpected warning: " << w;
+  EXPECT_EQ(report.detections, 1);
+  EXPECT_EQ(report.above_threshold, 1);
+  EXPECT_EQ(report.with_box, 1);
+  EXPECT_EQ(report.inserted, 1);
+  EXPECT_EQ(report.fused, 0);
+  EXPECT_GT(report.times.total_ms, 0.0);
+  EXPECT_GE(report.times.total_ms, report.times.extraction_ms);
+  ASSERT_EQ(mapper.database().size(), 1u);
+  const MapObject& object = mapper.database().objects().begin()->second;
+  EXPECT_EQ(object.class_name, "chair");
+  EXPECT_FLOAT_EQ(object.probability, 0.9f);
+  EXPECT_GT(object.points_W.size(), 500u);
+  EXPECT_FALSE(object.segment_W.empty());
+  expectNearTruth(object.box);
+  EXPECT_EQ(mapper.keyframesProcessed(), 1);
+}
+
+TEST_F(ObjectMapperTest, SecondViewFusesIntoTheSameObject) {
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
+  cv::Mat mask2;
+  const RgbdFrame second =
+      renderFrame(scene_, cameraPose(Eigen::Vector3d(0.4, 0.1, 1.0), 25.0), 2, &mask2);
+  ASSERT_TRUE(
+      mapper.processKeyframe(second, {detectionFromMask(mask2, "chair", 0.7f)}, &report).ok());
+  EXPECT_EQ(report.fused, 1);
+  EXPECT_EQ(report.inserted, 0);
+  ASSERT_EQ(mapper.database().size(), 1u);
+  const MapObject& object = mapper.database().objects().begin()->second;
+  EXPECT_EQ(object.observations, 2);
+  EXPECT_NEAR(object.probability, 0.8, 1e-6);
+  EXPECT_EQ(object.first_keyframe, 0);
+  EXPECT_EQ(object.last_keyframe, 1);
+  expectNearTruth(object.box);
+  EXPECT_GT(report.times.fusion_ms, 0.0);
+}
+
+TEST_F(ObjectMapperTest, DetectionBelowTheThresholdIsDropped) {
+  config_.min_probability = 0.5;
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.3f)}, &report).ok());
+  EXPECT_EQ(report.detections, 1);
+  EXPECT_EQ(report.above_threshold, 0);
+  EXPECT_EQ(report.with_box, 0);
+  EXPECT_EQ(mapper.database().size(), 0u);
+}
+
+TEST_F(ObjectMapperTest, UnknownClassIsAWarning) {
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  Detection2D detection = detectionFromMask(mask_, "spaceship", 0.9f);
+  ASSERT_EQ(detection.class_id, -1);
+  ASSERT_TRUE(mapper.processKeyframe(frame_, {detection}, &report).ok());
+  EXPECT_TRUE(anyWarningContains(report, "unknown class")) << report.warnings.size();
+  EXPECT_TRUE(anyWarningContains(report, frame_.name));
+  EXPECT_EQ(mapper.database().size(), 0u);
+  // A COCO name without an id is fine: the id is looked up.
+  detection.class_name = "chair";
+  ASSERT_TRUE(mapper.processKeyframe(frame_, {detection}, &report).ok());
+  ASSERT_EQ(mapper.database().size(), 1u);
+  EXPECT_EQ(mapper.database().objects().begin()->second.class_id, cocoClassId("chair"));
+}
+
+TEST_F(ObjectMapperTest, BadFrameIsAnErrorAndChangesNothing) {
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
+  const OrientedBox box_before = mapper.database().objects().begin()->second.box;
+
+  RgbdFrame bad = frame_;
+  bad.depth = cv::Mat(kRows, kCols, CV_8UC1, cv::Scalar(1));
+  Status status = mapper.processKeyframe(bad, {detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  EXPECT_FALSE(status.ok());
+  EXPECT_FALSE(status.message().empty());
+
+  RgbdFrame bad_pose = frame_;
+  bad_pose.T_W_D.matrix()(0, 0) = std::nan("");
+  status = mapper.processKeyframe(bad_pose, {detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  EXPECT_FALSE(status.ok());
+
+  ASSERT_EQ(mapper.database().size(), 1u);
+  const MapObject& object = mapper.database().objects().begin()->second;
+  EXPECT_EQ(object.observations, 1);
+  EXPECT_TRUE(object.box.center_m.isApprox(box_before.center_m));
+  EXPECT_EQ(mapper.keyframesProcessed(), 1);
+}
+
+TEST_F(ObjectMapperTest, EmptyAndBrokenMasksAreWarningsNotErrors) {
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  Detection2D empty = detectionFromMask(cv::Mat::zeros(kRows, kCols, CV_8UC1), "cup", 0.9f);
+  empty.box_px = cv::Rect(0, 0, 1, 1);
+  Detection2D wrong_size = detectionFromMask(mask_, "couch", 0.9f);
+  cv::resize(mask_, wrong_size.mask, cv::Size(100, 50), 0, 0, cv::INTER_NEAREST);
+  const Status status = mapper.processKeyframe(
+      frame_, {empty, wrong_size, detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_GE(report.warnings.size(), 1u);
+  EXPECT_EQ(report.above_threshold, 3);
+  ASSERT_EQ(mapper.database().findByClass("chair").size(), 1u);
+  EXPECT_EQ(mapper.database().findByClass("cup").size(), 0u);
+}
+
+TEST_F(ObjectMapperTest, RefineRemovesAnAtypicalObject) {
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  // The same 0.5 m box once as a chair (plausible) and, from another keyframe, as a cup (far too
+  // big).
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "cup", 0.9f)}, &report).ok());
+  ASSERT_EQ(mapper.database().size(), 2u);
+  const int cup_id = mapper.database().findByClass("cup").front()->id;
+  const int chair_id = mapper.database().findByClass("chair").front()->id;
+  const ObjectMapper::RefinementReport refined = mapper.refine();
+  EXPECT_EQ(refined.atypical_ids, std::vector<int>{cup_id});
+  EXPECT_TRUE(refined.intersecting_ids.empty());
+  EXPECT_GE(refined.time_ms, 0.0);
+  ASSERT_EQ(mapper.database().size(), 1u);
+  EXPECT_NE(mapper.database().find(chair_id), nullptr);
+  EXPECT_EQ(mapper.database().find(cup_id), nullptr);
+}
+
+TEST_F(ObjectMapperTest, WaitsForGravityWhenNoneIsConfigured) {
+  config_.gravity_down_W = Eigen::Vector3d::Zero();
+  ObjectMapper mapper(config_, priors_);
+  EXPECT_FALSE(mapper.hasGravity());
+  // Facing the wall from 1 m, level: no horizontal plane in view.
+  TestScene wall_only = scene_;
+  wall_only.with_box = false;
+  cv::Mat unused;
+  const RgbdFrame wall =
+      renderFrame(wall_only, cameraPose(Eigen::Vector3d(0, 2.0, 1.0), 0.0), 0, &unused);
+  KeyframeReport report;
+  ASSERT_TRUE(
+      mapper.processKeyframe(wall, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
+  EXPECT_TRUE(report.waiting_for_gravity);
+  EXPECT_TRUE(anyWarningContains(report, "waiting for gravity"));
+  EXPECT_EQ(mapper.database().size(), 0u);
+
+  // The floor is in this view: gravity is estimated and the detection processed.
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
+  ASSERT_TRUE(mapper.hasGravity());
+  EXPECT_FALSE(report.waiting_for_gravity);
+  EXPECT_GT(mapper.gravity().up.dot(Eigen::Vector3d::UnitZ()), std::cos(5.0 * kPi / 180.0));
+  EXPECT_EQ(mapper.database().size(), 1u);
+
+  mapper.reset();
+  EXPECT_FALSE(mapper.hasGravity());
+  EXPECT_EQ(mapper.database().size(), 0u);
+  EXPECT_EQ(mapper.keyframesProcessed(), 0);
+}
+
+TEST_F(ObjectMapperTest, ConfigValidationNamesTheSection) {
+  ObjectMapper::Config config;
+  EXPECT_TRUE(config.isValid().ok()) << config.isValid().message();
+  config.min_probability = 1.5;
+  EXPECT_NE(config.isValid().message().find("min_probability"), std::string::npos);
+  config = ObjectMapper::Config();
+  config.database.fusion_voxel_size_m = -1.0;
+  EXPECT_FALSE(config.isValid().ok());
+  EXPECT_EQ(config.isValid().message().rfind("database.", 0), 0u) << config.isValid().message();
+  const std::string printed = ObjectMapper::Config().print();
+  EXPECT_NE(printed.find("min_probability: 0.5"), std::string::npos);
+  EXPECT_NE(printed.find("database.fusion_voxel_size_m: 0.01"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mvod
