@@ -3,13 +3,15 @@
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
+#include "multiview_object_detection/dnn_instance_segmenter.h"
 #include "multiview_object_detection/file_instance_segmenter.h"
 
 namespace mvod {
 
 Status SegmenterOptions::isValid() const {
   if (detector != "files" && detector != "fastestdet" && detector != "maskrcnn") {
-    return Status::Error("detector '" + detector + "' is unknown (use files, fastestdet or maskrcnn)");
+    return Status::Error("detector '" + detector +
+                         "' is unknown (use files, fastestdet or maskrcnn)");
   }
   if (detector == "files" && detections_dir.empty()) {
     return Status::Error("detector 'files' needs a detections folder");
@@ -49,7 +51,26 @@ Status createInstanceSegmenter(const SegmenterOptions& options,
     *segmenter = std::make_unique<FileInstanceSegmenter>(options.detections_dir);
     return Status::Ok();
   }
-  return Status::Error("detector '" + options.detector + "' is not built into this version");
+  DnnModelOptions dnn;
+  dnn.backend = options.backend;
+  dnn.decode.score_threshold = options.score_threshold;
+  dnn.decode.nms_threshold = options.nms_threshold;
+  dnn.decode.mask_threshold = options.mask_threshold;
+  DnnInstanceSegmenter::Model model = DnnInstanceSegmenter::Model::kFastestDet;
+  if (options.detector == "fastestdet") {
+    dnn.model_path = resolveModelPath(options, options.fastestdet_model);
+    dnn.labels_path = resolveModelPath(options, options.fastestdet_labels);
+  } else {
+    model = DnnInstanceSegmenter::Model::kMaskRcnn;
+    dnn.model_path = resolveModelPath(options, options.maskrcnn_weights);
+    dnn.config_path = resolveModelPath(options, options.maskrcnn_graph);
+    dnn.labels_path = resolveModelPath(options, options.maskrcnn_labels);
+  }
+  std::unique_ptr<DnnInstanceSegmenter> dnn_segmenter;
+  const Status created = DnnInstanceSegmenter::create(model, dnn, &dnn_segmenter);
+  if (!created) return created;
+  *segmenter = std::move(dnn_segmenter);
+  return Status::Ok();
 }
 
 cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections) {
@@ -75,8 +96,8 @@ cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>&
     int baseline = 0;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.5, 1, &baseline);
     const cv::Point origin(det.box_px.x, std::max(size.height + 2, det.box_px.y - 2));
-    cv::rectangle(canvas, origin + cv::Point(0, baseline), origin + cv::Point(size.width, -size.height - 2),
-                  colour, cv::FILLED);
+    cv::rectangle(canvas, origin + cv::Point(0, baseline),
+                  origin + cv::Point(size.width, -size.height - 2), colour, cv::FILLED);
     cv::putText(canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1);
   }
   return canvas;
