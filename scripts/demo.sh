@@ -29,10 +29,12 @@ echo "ground truth (dataset/ground_truth.json):"
 /usr/bin/python3 - "$out/dataset/ground_truth.json" <<'PY'
 import json, sys
 gt = json.load(open(sys.argv[1]))
-print("%-16s %-26s %s" % ("class", "centre (m)", "size (m)"))
+import math
+print("%-16s %-26s %-22s %s" % ("class", "centre (m)", "size (m)", "yaw (deg)"))
 for o in gt["objects"]:
     c, s = o["center"], o["size"]
-    print("%-16s (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)" % (o["class_name"], *c, *s))
+    print("%-16s (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)  %8.1f"
+          % (o["class_name"], *c, *s, math.degrees(o["yaw"])))
 PY
 echo
 echo "wrote $out/objects.json, object clouds in $out/clouds, keyframe overlays in $out/overlays"
