@@ -399,31 +399,6 @@ bool hasHorizontalStructure(const std::vector<Eigen::Vector3d>& normals,
   return inliers >= kMinHorizontalInliers && inliers >= kMinPeakToMeanRatio * mean_inliers;
 }
 
-double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
-// Counter-clockwise convex hull (Andrew's monotone chain).
-std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
-  std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
-  points.erase(std::unique(points.begin(), points.end()), points.end());
-  if (points.size() < 3) return points;
-  std::vector<Eigen::Vector2d> hull(2 * points.size());
-  size_t k = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    while (k >= 2 && cross2(hull[k - 1] - hull[k - 2], points[i] - hull[k - 2]) <= 0.0) --k;
-    hull[k++] = points[i];
-  }
-  for (size_t i = points.size() - 1, t = k + 1; i > 0; --i) {
-    while (k >= t && cross2(hull[k - 1] - hull[k - 2], points[i - 1] - hull[k - 2]) <= 0.0) --k;
-    hull[k++] = points[i - 1];
-  }
-  hull.resize(k - 1);
-  return hull;
-}
-
 // Fallback when the normals carry no Manhattan structure: the yaw of the minimum-area rectangle
 // around the footprint (the optimal rectangle has a side on a convex hull edge, so every edge
 // direction is tried).

@@ -65,11 +65,13 @@ double polygonArea(const std::vector<Eigen::Vector2d>& polygon) {
   return 0.5 * twice;
 }
 
-// Counter-clockwise convex hull (Andrew's monotone chain).
+}  // namespace
+
 std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
   std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
   });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
   if (points.size() < 3) return points;
   std::vector<Eigen::Vector2d> hull(2 * points.size());
   size_t k = 0;
@@ -84,8 +86,6 @@ std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
   hull.resize(k - 1);
   return hull;
 }
-
-}  // namespace
 
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,
                                      const std::vector<Eigen::Vector2d>& b) {

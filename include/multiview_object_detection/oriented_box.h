@@ -1,14 +1,14 @@
-// Gravity-aligned oriented 3D boxes (Sec. 3.3) and the exact intersection volume the intersection filter
-// (Eq. 10, 11) needs.
+// Gravity-aligned oriented 3D boxes (Sec. 3.3) and the exact intersection volume the intersection
+// filter (Eq. 10, 11) needs.
 #pragma once
 
 #include "multiview_object_detection/common.h"
 
 namespace mvod {
 
-// A box in the world frame. rotation's columns are the box axes in world coordinates; size_m[i] is the
-// full extent along column i. For boxes made by BoxEstimator, column 2 is "up" (minus gravity), so the box is
-// gravity-aligned and only its yaw about the vertical is free.
+// A box in the world frame. rotation's columns are the box axes in world coordinates; size_m[i] is
+// the full extent along column i. For boxes made by BoxEstimator, column 2 is "up" (minus gravity),
+// so the box is gravity-aligned and only its yaw about the vertical is free.
 struct OrientedBox {
   Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
@@ -20,8 +20,9 @@ struct OrientedBox {
   bool contains(const Eigen::Vector3d& p_W, double margin_m = 0.0) const;
 };
 
-// The gravity frame of the world: up = -gravity (unit), and a horizontal reference axis x_h (world X
-// projected on the horizontal plane, or world Y when X is near vertical). Yaw is measured from x_h about up.
+// The gravity frame of the world: up = -gravity (unit), and a horizontal reference axis x_h (world
+// X projected on the horizontal plane, or world Y when X is near vertical). Yaw is measured from
+// x_h about up.
 struct GravityFrame {
   explicit GravityFrame(const Eigen::Vector3d& gravity_down_W = Eigen::Vector3d(0, 0, -1));
   Eigen::Vector3d up;
@@ -33,11 +34,15 @@ struct GravityFrame {
   double yawOf(const Eigen::Vector3d& direction_W) const;
 };
 
-// Exact volume of the intersection of two boxes that share the vertical axis `up` as their third column:
-// the area of the intersection of their two footprint rectangles in the floor plane (convex polygon
-// clipping) times the overlap of their vertical extents. Returns 0 for disjoint boxes.
+// Exact volume of the intersection of two boxes that share the vertical axis `up` as their third
+// column: the area of the intersection of their two footprint rectangles in the floor plane (convex
+// polygon clipping) times the overlap of their vertical extents. Returns 0 for disjoint boxes.
 double gravityAlignedIntersectionVolume(const OrientedBox& a, const OrientedBox& b,
                                         const Eigen::Vector3d& up);
+
+// Counter-clockwise convex hull of 2D points (Andrew's monotone chain); duplicates removed, fewer
+// than three distinct points are returned as they are.
+std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points);
 
 // Area of the intersection of two convex polygons given counter-clockwise (Sutherland-Hodgman).
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,

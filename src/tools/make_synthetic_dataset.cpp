@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "cli_args.h"
 #include "multiview_object_detection/synthetic_scene.h"
 
 namespace {
@@ -45,23 +46,6 @@ struct Options {
   bool help = false;
 };
 
-bool parseInt(const std::string& text, long min_value, long max_value, long* value) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno != 0 || v < min_value || v > max_value) return false;
-  *value = v;
-  return true;
-}
-
-bool parseDouble(const std::string& text, double* value) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) return false;
-  *value = v;
-  return true;
-}
-
 // Returns an empty string on success, else what is wrong.
 std::string parseArguments(int argc, char** argv, Options* options) {
   for (int i = 1; i < argc; ++i) {
@@ -83,22 +67,22 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       (arg == "--output" ? options->output : options->detections) = text;
     } else if (arg == "--frames") {
       long frames = 0;
-      if (!parseInt(text, 1, 1000000, &frames)) return "--frames needs an integer >= 1";
+      if (!mvod::cli::parseLong(text, 1, 1000000, &frames)) return "--frames needs an integer >= 1";
       options->scene.num_frames = static_cast<int>(frames);
     } else if (arg == "--seed") {
       long seed = 0;
-      if (!parseInt(text, 0, std::numeric_limits<unsigned int>::max(), &seed)) {
+      if (!mvod::cli::parseLong(text, 0, std::numeric_limits<unsigned int>::max(), &seed)) {
         return "--seed needs an integer >= 0";
       }
       options->scene.seed = static_cast<unsigned int>(seed);
     } else if (arg == "--noise") {
-      if (!parseDouble(text, &options->scene.depth_noise_m_per_m2) ||
+      if (!mvod::cli::parseDouble(text, &options->scene.depth_noise_m_per_m2) ||
           options->scene.depth_noise_m_per_m2 < 0.0) {
         return "--noise needs a number >= 0";
       }
     } else {  // --holes
-      if (!parseDouble(text, &options->scene.hole_fraction) || options->scene.hole_fraction < 0.0 ||
-          options->scene.hole_fraction >= 1.0) {
+      if (!mvod::cli::parseDouble(text, &options->scene.hole_fraction) ||
+          options->scene.hole_fraction < 0.0 || options->scene.hole_fraction >= 1.0) {
         return "--holes needs a number in [0, 1)";
       }
     }

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli_args.h"
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/dataset.h"
 #include "multiview_object_detection/json_io.h"
@@ -87,26 +88,6 @@ struct Options {
   bool help = false;
 };
 
-bool parseInt(const std::string& text, int* value) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno != 0 || v < std::numeric_limits<int>::min() ||
-      v > std::numeric_limits<int>::max()) {
-    return false;
-  }
-  *value = static_cast<int>(v);
-  return true;
-}
-
-bool parseDouble(const std::string& text, double* value) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) return false;
-  *value = v;
-  return true;
-}
-
 // Returns an empty string on success, else what is wrong.
 std::string parseArguments(int argc, char** argv, Options* options) {
   for (int i = 1; i < argc; ++i) {
@@ -141,8 +122,12 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (arg == "--priors") options->priors = text;
       if (arg == "--backend") options->backend = text;
     } else if (arg == "--every" || arg == "--first" || arg == "--last") {
-      int number = 0;
-      if (!value(&text) || !parseInt(text, &number)) return arg + " needs an integer";
+      long parsed = 0;
+      if (!value(&text) || !mvod::cli::parseLong(text, std::numeric_limits<int>::min(),
+                                                 std::numeric_limits<int>::max(), &parsed)) {
+        return arg + " needs an integer";
+      }
+      const int number = static_cast<int>(parsed);
       if (arg == "--every") {
         if (number < 1) return "--every must be >= 1";
         options->every = number;
@@ -150,11 +135,11 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (arg == "--first") options->first = number;
       if (arg == "--last") options->last = number;
     } else if (arg == "--score-threshold") {
-      if (!value(&text) || !parseDouble(text, &options->score_threshold)) {
+      if (!value(&text) || !mvod::cli::parseDouble(text, &options->score_threshold)) {
         return "--score-threshold needs a number";
       }
     } else if (arg == "--min-probability") {
-      if (!value(&text) || !parseDouble(text, &options->min_probability)) {
+      if (!value(&text) || !mvod::cli::parseDouble(text, &options->min_probability)) {
         return "--min-probability needs a number";
       }
       if (options->min_probability < 0.0 || options->min_probability > 1.0) {
