@@ -1,15 +1,17 @@
 # Two commands set up a fresh Debian bookworm machine (root, apt reachable):
-#   make test   installs the Debian packages, builds the catkin workspace under build/ws, runs every test
+#   make test   installs the Debian packages, builds the catkin workspace under build/.ws, runs every test
 #   make demo   the same build, then the main job on the embedded synthetic scene
-# Afterwards `source build/ws/devel/setup.bash` gives rosrun/roslaunch of this package.
+# Afterwards `source build/.ws/devel/setup.bash` gives rosrun/roslaunch of this package.
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
 PKG := multiview_object_detection
 ROOT := $(CURDIR)
-WS ?= $(ROOT)/build/ws
+# The workspace lies in a dot-folder: its src/ links back to this repository, and roslib's package
+# crawl (roslaunch's $$(find)) follows links but skips dot-folders, so it does not loop through it.
+WS ?= $(ROOT)/build/.ws
 JOBS ?= $(shell nproc)
 BUILD_TYPE ?= Release
-CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
+CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
 	-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON
 export CCACHE_DIR ?= $(ROOT)/build/ccache
 export PATH := /usr/bin:$(PATH)
