@@ -91,6 +91,20 @@ ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
       intersection_filter_(config.intersection_filter),
       gravity_estimator_(config.gravity) {}
 
+Status ObjectMapper::updateConfig(const Config& config) {
+  const Status valid = config.isValid();
+  if (!valid) return valid;
+  config_ = config;
+  extractor_ = ObjectCloudExtractor(config.extractor);
+  filter_ = PointCloudFilter(config.filter);
+  lccp_ = LccpSegmenter(config.lccp);
+  box_estimator_ = BoxEstimator(config.box);
+  database_.setConfig(config.database);
+  prior_filter_ = PriorSizeFilter(config.prior_filter);
+  intersection_filter_ = IntersectionFilter(config.intersection_filter);
+  return Status::Ok();
+}
+
 GravityFrame ObjectMapper::gravity() const {
   if (!config_.gravity_down_W.isZero()) return GravityFrame(config_.gravity_down_W);
   if (gravity_estimator_.hasEstimate()) return GravityFrame(gravity_estimator_.gravityDown_W());

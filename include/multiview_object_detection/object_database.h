@@ -72,6 +72,8 @@ class ObjectDatabase {
   ObjectDatabase(const Config& config, const ClassPriors& priors)
       : config_(config), priors_(priors) {}
   const Config& config() const { return config_; }
+  // New settings for the next fusions; objects and ids are kept.
+  void setConfig(const Config& config) { config_ = config; }
   const ClassPriors& priors() const { return priors_; }
 
   // Eq. 6: nearest same-class object by box-centre distance; fuse if within the class threshold

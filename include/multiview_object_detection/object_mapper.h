@@ -68,6 +68,11 @@ class ObjectMapper {
 
   ObjectMapper(const Config& config, const ClassPriors& priors);
   const Config& config() const { return config_; }
+  // Replaces the configuration at run time (the ROS node's dynamic reconfigure, gravity from TF):
+  // the stage objects are rebuilt, the database keeps its objects and ids, the gravity estimator
+  // keeps its state (new gravity settings apply from the next reset()). An invalid config returns
+  // the isValid() error and changes nothing.
+  Status updateConfig(const Config& config);
 
   // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes
   // nothing; problems with single detections are warnings in the report. Warnings name the frame.

@@ -215,6 +215,42 @@ TEST_F(ObjectMapperTest, DetectionBelowTheThresholdIsDropped) {
   EXPECT_EQ(mapper.database().size(), 0u);
 }
 
+// Live reconfiguration (the ROS node's dynamic_reconfigure): new thresholds apply to the next
+// keyframe, the map and its ids stay, an invalid config changes nothing.
+TEST_F(ObjectMapperTest, UpdateConfigKeepsTheMapAndAppliesNewThresholds) {
+  ObjectMapper mapper(config_, priors_);
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.6f)}, nullptr).ok());
+  ASSERT_EQ(mapper.database().size(), 1u);
+  const int id = mapper.database().objects().begin()->first;
+
+  ObjectMapper::Config stricter = config_;
+  stricter.min_probability = 0.7;
+  ASSERT_TRUE(mapper.updateConfig(stricter).ok());
+  EXPECT_EQ(mapper.config().min_probability, 0.7);
+  ASSERT_EQ(mapper.database().size(), 1u);
+  EXPECT_NE(mapper.database().find(id), nullptr);
+  KeyframeReport report;
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.6f)}, &report).ok());
+  EXPECT_EQ(report.above_threshold, 0) << "0.6 is under the new lambda 0.7";
+  EXPECT_EQ(mapper.database().find(id)->observations, 1);
+
+  ObjectMapper::Config invalid = stricter;
+  invalid.min_probability = 1.5;
+  EXPECT_FALSE(mapper.updateConfig(invalid).ok());
+  EXPECT_EQ(mapper.config().min_probability, 0.7);
+
+  // A lower threshold lets the same detection fuse into the kept object.
+  ObjectMapper::Config looser = stricter;
+  looser.min_probability = 0.5;
+  ASSERT_TRUE(mapper.updateConfig(looser).ok());
+  ASSERT_TRUE(
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.6f)}, &report).ok());
+  EXPECT_EQ(report.fused, 1);
+  EXPECT_EQ(mapper.database().find(id)->observations, 2);
+}
+
 TEST_F(ObjectMapperTest, UnknownClassIsAWarning) {
   ObjectMapper mapper(config_, priors_);
   KeyframeReport report;
