@@ -1,0 +1,65 @@
+// Everything ObjectDetectionRos is configured with: the node's own settings, the detector's and the
+// core's. Defaults in code; ros_params.h fills it from the parameter server, tests fill it
+// directly.
+#pragma once
+
+#include <string>
+
+#include "multiview_object_detection/keyframe_selector.h"
+#include "multiview_object_detection/object_mapper.h"
+#include "multiview_object_detection/segmenter_factory.h"
+
+namespace mvod {
+
+struct ObjectDetectionRosConfig {
+  // Frames.
+  std::string world_frame = "map";
+  std::string camera_frame;  // empty = the colour image's header.frame_id
+
+  // RGB-D input (message_filters).
+  bool depth_registered = true;  // false: depth/image_raw + depth/camera_info, T_C_D from TF
+  int queue_size = 10;
+  bool exact_sync = false;
+
+  // Camera pose: "tf" (world_frame <- camera frame at the image stamp) or "topic" (PoseStamped).
+  std::string pose_source = "tf";
+  // How long a frame waits for its pose (TF or pose topic) and, with keyframe_mode topic, for its
+  // keyframe message (s).
+  double tf_timeout_s = 0.1;
+  // pose_source topic: the nearest pose within this time of the image stamp is used (s).
+  double pose_max_time_diff_s = 0.05;
+
+  // Gravity: "param" (gravity_down_W below), "tf" (-z of gravity_frame in world_frame) or
+  // "estimate" (dominant horizontal plane).
+  std::string gravity_source = "param";
+  Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
+  std::string gravity_frame = "base_link";
+
+  KeyframeSelector::Config keyframes;
+
+  // "fastestdet" | "maskrcnn" (OpenCV DNN in this node, options in `segmenter`) | "topic"
+  // (InstanceDetections on `detections`, matched by stamp).
+  std::string detector = "fastestdet";
+  SegmenterOptions segmenter;
+  double detections_max_age_s =
+      1.0;  // detector topic: how long a keyframe waits for its detections
+
+  int processing_queue_size = 2;      // keyframes waiting for the worker; the oldest is dropped
+  int refine_every_n_keyframes = 10;  // 0 = only on ~refine and at shutdown
+  std::string priors_file;            // class priors YAML (ros_params fills in the package's)
+  bool publish_object_cloud = true;
+
+  // Every core setting; gravity_down_W in here is derived from gravity_source (see mapperConfig()).
+  ObjectMapper::Config mapper;
+
+  // The mapper's config with gravity set from gravity_source: param -> gravity_down_W (unit),
+  // estimate
+  // -> zero (the mapper estimates it), tf -> gravity_down_W until the TF lookup succeeds.
+  ObjectMapper::Config mapperConfig() const;
+  // The segmenter options with `detector` applied (meaningless for detector "topic").
+  SegmenterOptions segmenterOptions() const;
+  Status isValid() const;
+  std::string print() const;
+};
+
+}  // namespace mvod

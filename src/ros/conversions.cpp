@@ -1,0 +1,662 @@
+#include "multiview_object_detection/ros/conversions.h"
+
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "multiview_object_detection/class_priors.h"
+#include "multiview_object_detection/oriented_box.h"
+
+namespace mvod {
+namespace {
+
+namespace enc = sensor_msgs::image_encodings;
+
+constexpr double kQuaternionNormTolerance = 1e-3;
+
+std::string sizeText(uint32_t width, uint32_t height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+std::string stampText(const ros::Time& stamp) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%u.%09u", stamp.sec, stamp.nsec);
+  return text;
+}
+
+// ros::Time throws outside [0, 2^32) s; a bad value becomes 0 (unknown).
+ros::Time timeFromSeconds(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0.0 || seconds >= 4294967295.0) return ros::Time(0);
+  return ros::Time(seconds);
+}
+
+// The image's data must hold height rows of `step` bytes, each at least width * pixel size: a
+// malformed message must not make cv_bridge read past its buffer.
+Status checkImageLayout(const sensor_msgs::Image& msg, const std::string& what) {
+  if (msg.width == 0 || msg.height == 0) return Status::Error(what + ": empty image (0 pixels)");
+  int pixel_bytes = 0;
+  try {
+    pixel_bytes = enc::bitDepth(msg.encoding) / 8 * enc::numChannels(msg.encoding);
+  } catch (const std::exception&) {
+    return Status::Error(what + ": unknown encoding '" + msg.encoding + "'");
+  }
+  if (pixel_bytes <= 0) {
+    return Status::Error(what + ": encoding '" + msg.encoding + "' has no pixel size");
+  }
+  const uint64_t min_step = static_cast<uint64_t>(msg.width) * static_cast<uint64_t>(pixel_bytes);
+  if (msg.step < min_step) {
+    return Status::Error(what + ": step " + std::to_string(msg.step) + " is smaller than width " +
+                         std::to_string(msg.width) + " x " + std::to_string(pixel_bytes) +
+                         " bytes");
+  }
+  if (msg.data.size() < static_cast<uint64_t>(msg.step) * msg.height) {
+    return Status::Error(what + ": data holds " + std::to_string(msg.data.size()) +
+                         " bytes, step x height needs " +
+                         std::to_string(static_cast<uint64_t>(msg.step) * msg.height));
+  }
+  return Status::Ok();
+}
+
+bool isColorEncoding(const std::string& encoding) {
+  return encoding == enc::BGR8 || encoding == enc::RGB8;
+}
+
+bool isDepthEncoding(const std::string& encoding) {
+  return encoding == enc::TYPE_16UC1 || encoding == enc::MONO16 || encoding == enc::TYPE_32FC1;
+}
+
+Status copyImage(const sensor_msgs::Image& msg, const std::string& what,
+                 const std::string& target_encoding, cv::Mat* image) {
+  try {
+    cv_bridge::CvImagePtr copy = cv_bridge::toCvCopy(msg, target_encoding);
+    *image = copy->image;
+  } catch (const std::exception& e) {
+    return Status::Error(what + ": cv_bridge cannot convert '" + msg.encoding + "': " + e.what());
+  }
+  return Status::Ok();
+}
+
+// HSV hue -> RGB with full saturation and value 0.9.
+std_msgs::ColorRGBA colorFromHue(double hue) {
+  hue = hue - std::floor(hue);
+  const double h = hue * 6.0;
+  const int sector = static_cast<int>(h) % 6;
+  const double f = h - std::floor(h);
+  const double v = 0.9;
+  const double p = v * 0.15;
+  const double q = v * (1.0 - 0.85 * f);
+  const double t = v * (0.15 + 0.85 * f);
+  double r = v, g = t, b = p;
+  switch (sector) {
+    case 0:
+      r = v;
+      g = t;
+      b = p;
+      break;
+    case 1:
+      r = q;
+      g = v;
+      b = p;
+      break;
+    case 2:
+      r = p;
+      g = v;
+      b = t;
+      break;
+    case 3:
+      r = p;
+      g = q;
+      b = v;
+      break;
+    case 4:
+      r = t;
+      g = p;
+      b = v;
+      break;
+    default:
+      r = v;
+      g = p;
+      b = q;
+      break;
+  }
+  std_msgs::ColorRGBA color;
+  color.r = static_cast<float>(r);
+  color.g = static_cast<float>(g);
+  color.b = static_cast<float>(b);
+  color.a = 1.f;
+  return color;
+}
+
+// Golden-ratio hues: neighbouring ids and classes get clearly different colours.
+double goldenHue(int index) {
+  constexpr double kGolden = 0.618033988749895;
+  const double hue = 0.12 + kGolden * static_cast<double>(index);
+  return hue - std::floor(hue);
+}
+
+// A proper rotation (det +1) from the box axes, for quaternions.
+Eigen::Matrix3d properRotation(const Eigen::Matrix3d& axes) {
+  Eigen::Matrix3d R = axes;
+  if (R.determinant() < 0.0) R.col(1) = -R.col(1);
+  // Re-orthonormalise against rounding.
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
+std::string labelText(const MapObject& object) {
+  char probability[16];
+  std::snprintf(probability, sizeof(probability), "%.2f", object.probability);
+  return object.class_name + " #" + std::to_string(object.id) + " " + probability;
+}
+
+}  // namespace
+
+std::string describeInput(const std::string& topic, const std_msgs::Header& header) {
+  return "'" + topic + "' (frame '" + header.frame_id + "', stamp " + stampText(header.stamp) + ")";
+}
+
+Status colorImageFromMsg(const sensor_msgs::Image& msg, const std::string& topic, cv::Mat* bgr) {
+  const std::string what = describeInput(topic, msg.header);
+  if (!isColorEncoding(msg.encoding)) {
+    return Status::Error(what + ": encoding '" + msg.encoding +
+                         "' is not supported for the colour image (use bgr8 or rgb8)");
+  }
+  const Status layout = checkImageLayout(msg, what);
+  if (!layout) return layout;
+  return copyImage(msg, what, enc::BGR8, bgr);
+}
+
+Status depthImageFromMsg(const sensor_msgs::Image& msg, const std::string& topic, cv::Mat* depth) {
+  const std::string what = describeInput(topic, msg.header);
+  if (!isDepthEncoding(msg.encoding)) {
+    return Status::Error(what + ": encoding '" + msg.encoding +
+                         "' is not supported for depth (use 16UC1 in mm or 32FC1 in m)");
+  }
+  const Status layout = checkImageLayout(msg, what);
+  if (!layout) return layout;
+  const std::string target = msg.encoding == enc::TYPE_32FC1 ? enc::TYPE_32FC1 : enc::TYPE_16UC1;
+  // mono16 and 16UC1 are the same bytes; cv_bridge converts mono16 -> 16UC1 as a plain copy.
+  sensor_msgs::Image relabelled;
+  const sensor_msgs::Image* source = &msg;
+  if (msg.encoding == enc::MONO16) {
+    relabelled = msg;
+    relabelled.encoding = enc::TYPE_16UC1;
+    source = &relabelled;
+  }
+  return copyImage(*source, what, target, depth);
+}
+
+Status intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& msg, const std::string& topic,
+                                CameraIntrinsics* intrinsics) {
+  const std::string what = describeInput(topic, msg.header);
+  bool all_zero = true;
+  for (const double k : msg.K) {
+    if (!std::isfinite(k)) return Status::Error(what + ": camera_info K has a non-finite value");
+    if (k != 0.0) all_zero = false;
+  }
+  if (all_zero) {
+    return Status::Error(what + ": camera_info K is all zero (camera not calibrated)");
+  }
+  CameraIntrinsics K;
+  K.fx = msg.K[0];
+  K.fy = msg.K[4];
+  K.cx = msg.K[2];
+  K.cy = msg.K[5];
+  K.width = static_cast<int>(msg.width);
+  K.height = static_cast<int>(msg.height);
+  if (!K.isValid()) {
+    return Status::Error(what + ": camera_info K has fx " + std::to_string(K.fx) + ", fy " +
+                         std::to_string(K.fy) + " (need fx, fy > 0)");
+  }
+  *intrinsics = K;
+  return Status::Ok();
+}
+
+Status checkRgbdMessages(const RgbdMessages& msgs, const RgbdTopics& topics) {
+  if (!msgs.color || !msgs.depth || !msgs.color_info) {
+    return Status::Error("incomplete RGB-D input (colour, depth or camera_info missing)");
+  }
+  const sensor_msgs::Image& color = *msgs.color;
+  const sensor_msgs::Image& depth = *msgs.depth;
+  const std::string color_what = describeInput(topics.color, color.header);
+  const std::string depth_what = describeInput(topics.depth, depth.header);
+  if (!isColorEncoding(color.encoding)) {
+    return Status::Error(color_what + ": encoding '" + color.encoding +
+                         "' is not supported for the colour image (use bgr8 or rgb8)");
+  }
+  if (!isDepthEncoding(depth.encoding)) {
+    return Status::Error(depth_what + ": encoding '" + depth.encoding +
+                         "' is not supported for depth (use 16UC1 in mm or 32FC1 in m)");
+  }
+  Status status = checkImageLayout(color, color_what);
+  if (!status) return status;
+  if (!(status = checkImageLayout(depth, depth_what))) return status;
+
+  CameraIntrinsics K_color;
+  if (!(status = intrinsicsFromCameraInfo(*msgs.color_info, topics.color_info, &K_color))) {
+    return status;
+  }
+  if (msgs.color_info->width != 0 &&
+      (msgs.color_info->width != color.width || msgs.color_info->height != color.height)) {
+    return Status::Error(describeInput(topics.color_info, msgs.color_info->header) + ": is for " +
+                         sizeText(msgs.color_info->width, msgs.color_info->height) + " but " +
+                         color_what + " is " + sizeText(color.width, color.height));
+  }
+  if (!msgs.depth_info) {
+    if (color.width != depth.width || color.height != depth.height) {
+      return Status::Error("mismatched image sizes: " + color_what + " is " +
+                           sizeText(color.width, color.height) + " but " + depth_what + " is " +
+                           sizeText(depth.width, depth.height) +
+                           " (registered depth must have the colour image's size; for "
+                           "unregistered depth set depth_registered false)");
+    }
+    return Status::Ok();
+  }
+  CameraIntrinsics K_depth;
+  if (!(status = intrinsicsFromCameraInfo(*msgs.depth_info, topics.depth_info, &K_depth))) {
+    return status;
+  }
+  if (msgs.depth_info->width != 0 &&
+      (msgs.depth_info->width != depth.width || msgs.depth_info->height != depth.height)) {
+    return Status::Error(describeInput(topics.depth_info, msgs.depth_info->header) + ": is for " +
+                         sizeText(msgs.depth_info->width, msgs.depth_info->height) + " but " +
+                         depth_what + " is " + sizeText(depth.width, depth.height));
+  }
+  return Status::Ok();
+}
+
+Status rgbdFrameFromMsgs(const RgbdMessages& msgs, const RgbdTopics& topics,
+                         const Eigen::Isometry3d& T_W_C, const Eigen::Isometry3d& T_C_D,
+                         RgbdFrame* frame) {
+  Status status = checkRgbdMessages(msgs, topics);
+  if (!status) return status;
+  RgbdFrame out;
+  out.name = "frame at stamp " + stampText(msgs.color->header.stamp);
+  out.stamp_s = msgs.color->header.stamp.toSec();
+  if (!(status = colorImageFromMsg(*msgs.color, topics.color, &out.color_bgr))) return status;
+  if (!(status = depthImageFromMsg(*msgs.depth, topics.depth, &out.depth))) return status;
+  if (!(status = intrinsicsFromCameraInfo(*msgs.color_info, topics.color_info, &out.K_color))) {
+    return status;
+  }
+  out.registered = !msgs.depth_info;
+  if (out.registered) {
+    out.K_depth = out.K_color;
+    out.T_C_D = Eigen::Isometry3d::Identity();
+  } else {
+    if (!(status = intrinsicsFromCameraInfo(*msgs.depth_info, topics.depth_info, &out.K_depth))) {
+      return status;
+    }
+    out.T_C_D = T_C_D;
+  }
+  out.T_W_D = T_W_C * out.T_C_D;
+  if (!(status = out.validate())) return status;
+  *frame = std::move(out);
+  return Status::Ok();
+}
+
+sensor_msgs::ImagePtr colorImageToMsg(const cv::Mat& bgr, const std_msgs::Header& header) {
+  return cv_bridge::CvImage(header, enc::BGR8, bgr).toImageMsg();
+}
+
+Status poseFromMsg(const geometry_msgs::Pose& msg, Eigen::Isometry3d* T) {
+  const Eigen::Vector3d t(msg.position.x, msg.position.y, msg.position.z);
+  const Eigen::Quaterniond q(msg.orientation.w, msg.orientation.x, msg.orientation.y,
+                             msg.orientation.z);
+  if (!t.allFinite() || !q.coeffs().allFinite()) {
+    return Status::Error("pose has a NaN or infinite value");
+  }
+  const double norm = q.norm();
+  if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+    return Status::Error("pose quaternion has norm " + std::to_string(norm) + " (must be 1)");
+  }
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = q.normalized().toRotationMatrix();
+  pose.translation() = t;
+  *T = pose;
+  return Status::Ok();
+}
+
+Status transformFromMsg(const geometry_msgs::Transform& msg, Eigen::Isometry3d* T) {
+  geometry_msgs::Pose pose;
+  pose.position.x = msg.translation.x;
+  pose.position.y = msg.translation.y;
+  pose.position.z = msg.translation.z;
+  pose.orientation = msg.rotation;
+  return poseFromMsg(pose, T);
+}
+
+geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose msg;
+  msg.position.x = T.translation().x();
+  msg.position.y = T.translation().y();
+  msg.position.z = T.translation().z();
+  const Eigen::Quaterniond q(properRotation(T.linear()));
+  msg.orientation.w = q.w();
+  msg.orientation.x = q.x();
+  msg.orientation.y = q.y();
+  msg.orientation.z = q.z();
+  return msg;
+}
+
+geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T) {
+  const geometry_msgs::Pose pose = poseToMsg(T);
+  geometry_msgs::Transform msg;
+  msg.translation.x = pose.position.x;
+  msg.translation.y = pose.position.y;
+  msg.translation.z = pose.position.z;
+  msg.rotation = pose.orientation;
+  return msg;
+}
+
+Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& msg,
+                         const cv::Size& image_size, const std::string& topic,
+                         std::vector<Detection2D>* detections, std::vector<std::string>* warnings) {
+  const std::string what = describeInput(topic, msg.header);
+  const size_t n = msg.boxes.size();
+  if (msg.scores.size() != n) {
+    return Status::Error(what + ": " + std::to_string(n) + " boxes but " +
+                         std::to_string(msg.scores.size()) + " scores");
+  }
+  if (!msg.class_ids.empty() && msg.class_ids.size() != n) {
+    return Status::Error(what + ": " + std::to_string(n) + " boxes but " +
+                         std::to_string(msg.class_ids.size()) + " class_ids");
+  }
+  if (!msg.class_names.empty() && msg.class_names.size() != n) {
+    return Status::Error(what + ": " + std::to_string(n) + " boxes but " +
+                         std::to_string(msg.class_names.size()) + " class_names");
+  }
+  if (n > 0 && msg.class_ids.empty() && msg.class_names.empty()) {
+    return Status::Error(what + ": neither class_ids nor class_names are given");
+  }
+  if (!msg.masks.empty() && msg.masks.size() != n) {
+    return Status::Error(what + ": " + std::to_string(n) + " boxes but " +
+                         std::to_string(msg.masks.size()) +
+                         " masks (give one mask per box, or none)");
+  }
+  if (image_size.width <= 0 || image_size.height <= 0) {
+    return Status::Error(what + ": the image size is unknown");
+  }
+
+  const std::vector<std::string>& coco = cocoClassNames();
+  const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
+  std::vector<Detection2D> out;
+  out.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const std::string label = what + ": detection " + std::to_string(i);
+    auto warn = [&](const std::string& text) {
+      if (warnings != nullptr) warnings->push_back(label + ": " + text + ", skipped");
+    };
+    Detection2D detection;
+    detection.score = msg.scores[i];
+    if (!std::isfinite(detection.score)) {
+      warn("score is not finite");
+      continue;
+    }
+    const int id = msg.class_ids.empty() ? -1 : msg.class_ids[i];
+    const std::string name = msg.class_names.empty() ? std::string() : msg.class_names[i];
+    if (id >= 0 && id < static_cast<int>(coco.size())) {
+      detection.class_id = id;
+      detection.class_name = coco[id];
+    } else {
+      // The mapper reports names it cannot place.
+      detection.class_id = cocoClassId(name);
+      detection.class_name = name;
+    }
+    const sensor_msgs::RegionOfInterest& roi = msg.boxes[i];
+    const cv::Rect box = cv::Rect(static_cast<int>(std::min<uint32_t>(roi.x_offset, 1u << 30)),
+                                  static_cast<int>(std::min<uint32_t>(roi.y_offset, 1u << 30)),
+                                  static_cast<int>(std::min<uint32_t>(roi.width, 1u << 30)),
+                                  static_cast<int>(std::min<uint32_t>(roi.height, 1u << 30))) &
+                         image_rect;
+    if (box.area() <= 0) {
+      warn("box lies outside the " + sizeText(image_size.width, image_size.height) + " image");
+      continue;
+    }
+    detection.box_px = box;
+    if (msg.masks.empty()) {
+      detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
+      detection.mask(box).setTo(255);
+    } else {
+      const sensor_msgs::Image& mask_msg = msg.masks[i];
+      if (mask_msg.encoding != enc::MONO8 && mask_msg.encoding != enc::TYPE_8UC1) {
+        warn("mask encoding '" + mask_msg.encoding + "' (expected mono8)");
+        continue;
+      }
+      if (static_cast<int>(mask_msg.width) != image_size.width ||
+          static_cast<int>(mask_msg.height) != image_size.height) {
+        warn("mask is " + sizeText(mask_msg.width, mask_msg.height) + ", the image " +
+             sizeText(image_size.width, image_size.height));
+        continue;
+      }
+      const Status layout = checkImageLayout(mask_msg, label + " mask");
+      if (!layout) {
+        if (warnings != nullptr) warnings->push_back(layout.message() + ", skipped");
+        continue;
+      }
+      cv::Mat mask(image_size, CV_8UC1);
+      for (int r = 0; r < image_size.height; ++r) {
+        std::memcpy(mask.ptr<uint8_t>(r), &mask_msg.data[static_cast<size_t>(r) * mask_msg.step],
+                    static_cast<size_t>(image_size.width));
+      }
+      if (cv::countNonZero(mask) == 0) {
+        warn("mask is empty");
+        continue;
+      }
+      detection.mask = mask;
+    }
+    out.push_back(std::move(detection));
+  }
+  *detections = std::move(out);
+  return Status::Ok();
+}
+
+multiview_object_detection::InstanceDetections detectionsToMsg(
+    const std::vector<Detection2D>& detections, const std_msgs::Header& header,
+    bool include_masks) {
+  multiview_object_detection::InstanceDetections msg;
+  msg.header = header;
+  bool all_masks = include_masks;
+  for (const Detection2D& d : detections) {
+    if (d.mask.empty() || d.mask.type() != CV_8UC1) all_masks = false;
+  }
+  for (const Detection2D& d : detections) {
+    sensor_msgs::RegionOfInterest roi;
+    roi.x_offset = static_cast<uint32_t>(std::max(0, d.box_px.x));
+    roi.y_offset = static_cast<uint32_t>(std::max(0, d.box_px.y));
+    roi.width = static_cast<uint32_t>(std::max(0, d.box_px.width));
+    roi.height = static_cast<uint32_t>(std::max(0, d.box_px.height));
+    msg.boxes.push_back(roi);
+    msg.class_ids.push_back(d.class_id);
+    msg.class_names.push_back(d.class_name);
+    msg.scores.push_back(d.score);
+    if (all_masks) {
+      msg.masks.push_back(*cv_bridge::CvImage(header, enc::MONO8, d.mask).toImageMsg());
+    }
+  }
+  return msg;
+}
+
+multiview_object_detection::Object objectToMsg(const MapObject& object) {
+  multiview_object_detection::Object msg;
+  msg.id = object.id;
+  msg.class_id = object.class_id;
+  msg.class_name = object.class_name;
+  msg.probability = static_cast<float>(object.probability);
+  msg.observations = object.observations;
+  Eigen::Isometry3d T_W_B = Eigen::Isometry3d::Identity();
+  T_W_B.linear() = object.box.rotation;
+  T_W_B.translation() = object.box.center_m;
+  msg.pose = poseToMsg(T_W_B);
+  msg.size.x = object.box.size_m.x();
+  msg.size.y = object.box.size_m.y();
+  msg.size.z = object.box.size_m.z();
+  msg.yaw = static_cast<float>(object.yaw_rad);
+  msg.num_points = static_cast<int32_t>(object.segment_W.empty() ? object.points_W.size()
+                                                                 : object.segment_W.size());
+  msg.first_seen = timeFromSeconds(object.first_seen_s);
+  msg.last_seen = timeFromSeconds(object.last_seen_s);
+  return msg;
+}
+
+Status objectFromMsg(const multiview_object_detection::Object& msg, MapObject* object) {
+  Eigen::Isometry3d T_W_B;
+  const Status pose = poseFromMsg(msg.pose, &T_W_B);
+  if (!pose) return Status::Error("object " + std::to_string(msg.id) + ": " + pose.message());
+  const Eigen::Vector3d size(msg.size.x, msg.size.y, msg.size.z);
+  if (!size.allFinite() || (size.array() < 0.0).any()) {
+    return Status::Error("object " + std::to_string(msg.id) + ": size must be finite and >= 0");
+  }
+  MapObject out;
+  out.id = msg.id;
+  out.class_id = msg.class_id;
+  out.class_name = msg.class_name;
+  out.probability = msg.probability;
+  out.observations = msg.observations;
+  out.box.center_m = T_W_B.translation();
+  out.box.rotation = T_W_B.linear();
+  out.box.size_m = size;
+  out.yaw_rad = msg.yaw;
+  out.first_seen_s = msg.first_seen.toSec();
+  out.last_seen_s = msg.last_seen.toSec();
+  *object = std::move(out);
+  return Status::Ok();
+}
+
+multiview_object_detection::ObjectArray objectsToMsg(const std::vector<MapObject>& objects,
+                                                     const std_msgs::Header& header) {
+  multiview_object_detection::ObjectArray msg;
+  msg.header = header;
+  msg.objects.reserve(objects.size());
+  for (const MapObject& object : objects) msg.objects.push_back(objectToMsg(object));
+  return msg;
+}
+
+std_msgs::ColorRGBA classColor(int class_id) { return colorFromHue(goldenHue(class_id + 1)); }
+
+std_msgs::ColorRGBA objectColor(int object_id) {
+  // Offset from the class palette so an object's points differ from its box colour sequence.
+  return colorFromHue(goldenHue(3 * object_id + 7));
+}
+
+visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& objects,
+                                                 const std_msgs::Header& header,
+                                                 std::set<int>* published_ids) {
+  visualization_msgs::MarkerArray array;
+  std::set<int> current;
+  for (const MapObject& object : objects) {
+    if (!object.box.center_m.allFinite() || !object.box.size_m.allFinite()) continue;
+    current.insert(object.id);
+    visualization_msgs::Marker box;
+    box.header = header;
+    box.ns = "boxes";
+    box.id = object.id;
+    box.type = visualization_msgs::Marker::LINE_LIST;
+    box.action = visualization_msgs::Marker::ADD;
+    box.pose.orientation.w = 1.0;  // points are in the world frame
+    box.scale.x = 0.02;            // line width (m)
+    box.color = classColor(object.class_id);
+    const std::vector<Eigen::Vector3d> corners = object.box.corners();
+    // Corner i has sign bits (x: 1, y: 2, z: 4); the edges join corners one bit apart.
+    for (int i = 0; i < 8; ++i) {
+      for (int bit = 1; bit < 8; bit <<= 1) {
+        if (i & bit) continue;
+        for (const int c : {i, i | bit}) {
+          geometry_msgs::Point p;
+          p.x = corners[c].x();
+          p.y = corners[c].y();
+          p.z = corners[c].z();
+          box.points.push_back(p);
+        }
+      }
+    }
+    array.markers.push_back(box);
+
+    visualization_msgs::Marker label;
+    label.header = header;
+    label.ns = "labels";
+    label.id = object.id;
+    label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    label.action = visualization_msgs::Marker::ADD;
+    // Just above the box top: third box axis is up.
+    const Eigen::Vector3d up = object.box.rotation.col(2).normalized();
+    const Eigen::Vector3d position =
+        object.box.center_m + up * (0.5 * std::abs(object.box.size_m.z()) + 0.08);
+    label.pose.position.x = position.x();
+    label.pose.position.y = position.y();
+    label.pose.position.z = position.z();
+    label.pose.orientation.w = 1.0;
+    label.scale.z = 0.12;  // text height (m)
+    label.color = classColor(object.class_id);
+    label.text = labelText(object);
+    array.markers.push_back(label);
+  }
+  if (published_ids != nullptr) {
+    for (const int id : *published_ids) {
+      if (current.count(id) > 0) continue;
+      for (const char* ns : {"boxes", "labels"}) {
+        visualization_msgs::Marker erase;
+        erase.header = header;
+        erase.ns = ns;
+        erase.id = id;
+        erase.action = visualization_msgs::Marker::DELETE;
+        erase.pose.orientation.w = 1.0;
+        array.markers.push_back(erase);
+      }
+    }
+    *published_ids = std::move(current);
+  }
+  return array;
+}
+
+void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs::Header& header,
+                          sensor_msgs::PointCloud2* cloud) {
+  size_t total = 0;
+  for (const MapObject& object : objects) {
+    total += object.segment_W.empty() ? object.points_W.size() : object.segment_W.size();
+  }
+  cloud->header = header;
+  cloud->height = 1;
+  cloud->is_dense = true;
+  sensor_msgs::PointCloud2Modifier modifier(*cloud);
+  modifier.setPointCloud2Fields(
+      4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
+      sensor_msgs::PointField::FLOAT32, "rgb", 1, sensor_msgs::PointField::FLOAT32);
+  modifier.resize(total);
+  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x");
+  sensor_msgs::PointCloud2Iterator<float> y(*cloud, "y");
+  sensor_msgs::PointCloud2Iterator<float> z(*cloud, "z");
+  sensor_msgs::PointCloud2Iterator<float> rgb(*cloud, "rgb");
+  size_t written = 0;
+  for (const MapObject& object : objects) {
+    const std_msgs::ColorRGBA c = objectColor(object.id);
+    const uint32_t packed = (static_cast<uint32_t>(c.r * 255.f) << 16) |
+                            (static_cast<uint32_t>(c.g * 255.f) << 8) |
+                            static_cast<uint32_t>(c.b * 255.f);
+    float packed_float = 0.f;
+    std::memcpy(&packed_float, &packed, sizeof(float));
+    const PointCloud& points = object.segment_W.empty() ? object.points_W : object.segment_W;
+    for (const Eigen::Vector3f& p : points) {
+      if (!p.allFinite()) continue;
+      *x = p.x();
+      *y = p.y();
+      *z = p.z();
+      *rgb = packed_float;
+      ++x;
+      ++y;
+      ++z;
+      ++rgb;
+      ++written;
+    }
+  }
+  if (written != total) modifier.resize(written);  // non-finite points were skipped
+}
+
+}  // namespace mvod

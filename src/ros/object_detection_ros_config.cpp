@@ -1,0 +1,114 @@
+#include "multiview_object_detection/ros/object_detection_ros_config.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace mvod {
+
+ObjectMapper::Config ObjectDetectionRosConfig::mapperConfig() const {
+  ObjectMapper::Config config = mapper;
+  if (gravity_source == "estimate") {
+    config.gravity_down_W = Eigen::Vector3d::Zero();
+  } else if (gravity_down_W.allFinite() && gravity_down_W.norm() > 1e-9) {
+    config.gravity_down_W = gravity_down_W.normalized();
+  } else {
+    config.gravity_down_W = gravity_down_W;  // isValid() reports it
+  }
+  return config;
+}
+
+SegmenterOptions ObjectDetectionRosConfig::segmenterOptions() const {
+  SegmenterOptions options = segmenter;
+  options.detector = detector;
+  return options;
+}
+
+Status ObjectDetectionRosConfig::isValid() const {
+  if (world_frame.empty()) return Status::Error("world_frame must not be empty");
+  if (queue_size < 1) {
+    return Status::Error("queue_size must be >= 1 (got " + std::to_string(queue_size) + ")");
+  }
+  if (pose_source != "tf" && pose_source != "topic") {
+    return Status::Error("pose_source '" + pose_source + "' is unknown (use tf or topic)");
+  }
+  if (!(std::isfinite(tf_timeout_s) && tf_timeout_s >= 0.0 && tf_timeout_s <= 60.0)) {
+    return Status::Error("tf_timeout_s must be in [0, 60] (got " + std::to_string(tf_timeout_s) +
+                         ")");
+  }
+  if (!(std::isfinite(pose_max_time_diff_s) && pose_max_time_diff_s >= 0.0)) {
+    return Status::Error("pose_max_time_diff_s must be >= 0 (got " +
+                         std::to_string(pose_max_time_diff_s) + ")");
+  }
+  if (gravity_source != "param" && gravity_source != "tf" && gravity_source != "estimate") {
+    return Status::Error("gravity_source '" + gravity_source +
+                         "' is unknown (use param, tf or estimate)");
+  }
+  if (gravity_source == "param" && !(gravity_down_W.allFinite() && gravity_down_W.norm() > 1e-9)) {
+    return Status::Error("gravity_down must be a finite non-zero vector with gravity_source param");
+  }
+  if (gravity_source == "tf" && gravity_frame.empty()) {
+    return Status::Error("gravity_frame must not be empty with gravity_source tf");
+  }
+  Status status = keyframes.isValid();
+  if (!status) return status;
+  if (detector != "fastestdet" && detector != "maskrcnn" && detector != "topic") {
+    return Status::Error("detector '" + detector +
+                         "' is unknown (use fastestdet, maskrcnn or topic)");
+  }
+  if (detector != "topic") {
+    if (!(status = segmenterOptions().isValid())) return status;
+  } else if (!(segmenter.score_threshold >= 0.f && segmenter.score_threshold <= 1.f)) {
+    return Status::Error("score_threshold must be in [0, 1]");
+  }
+  if (!(std::isfinite(detections_max_age_s) && detections_max_age_s >= 0.0)) {
+    return Status::Error("detections_max_age_s must be >= 0 (got " +
+                         std::to_string(detections_max_age_s) + ")");
+  }
+  if (processing_queue_size < 1) {
+    return Status::Error("processing_queue_size must be >= 1 (got " +
+                         std::to_string(processing_queue_size) + ")");
+  }
+  if (refine_every_n_keyframes < 0) {
+    return Status::Error("refine_every_n_keyframes must be >= 0 (got " +
+                         std::to_string(refine_every_n_keyframes) + ")");
+  }
+  return mapperConfig().isValid();
+}
+
+std::string ObjectDetectionRosConfig::print() const {
+  std::ostringstream out;
+  out << "world_frame: " << world_frame << "\n"
+      << "camera_frame: " << (camera_frame.empty() ? "(image frame_id)" : camera_frame) << "\n"
+      << "depth_registered: " << (depth_registered ? "true" : "false") << "\n"
+      << "queue_size: " << queue_size << "\n"
+      << "exact_sync: " << (exact_sync ? "true" : "false") << "\n"
+      << "pose_source: " << pose_source << "\n"
+      << "tf_timeout_s: " << tf_timeout_s << "\n"
+      << "pose_max_time_diff_s: " << pose_max_time_diff_s << "\n"
+      << "gravity_source: " << gravity_source << "\n"
+      << "gravity_down: [" << gravity_down_W.x() << ", " << gravity_down_W.y() << ", "
+      << gravity_down_W.z() << "]\n"
+      << "gravity_frame: " << gravity_frame << "\n"
+      << "keyframe_mode: "
+      << (keyframes.mode == KeyframeSelector::Mode::kExternal
+              ? std::string("topic")
+              : KeyframeSelector::modeName(keyframes.mode))
+      << "\n"
+      << "keyframe_every_n: " << keyframes.every_n << "\n"
+      << "keyframe_min_translation_m: " << keyframes.min_translation_m << "\n"
+      << "keyframe_min_rotation_deg: " << keyframes.min_rotation_deg << "\n"
+      << "detector: " << detector << "\n"
+      << "model_dir: " << (segmenter.model_dir.empty() ? "($MVOD_MODEL_DIR)" : segmenter.model_dir)
+      << "\n"
+      << "score_threshold: " << segmenter.score_threshold << "\n"
+      << "detector_backend: " << segmenter.backend << "\n"
+      << "detections_max_age_s: " << detections_max_age_s << "\n"
+      << "processing_queue_size: " << processing_queue_size << "\n"
+      << "refine_every_n_keyframes: " << refine_every_n_keyframes << "\n"
+      << "priors_file: " << priors_file << "\n"
+      << "publish_object_cloud: " << (publish_object_cloud ? "true" : "false") << "\n"
+      << mapperConfig().print();
+  return out.str();
+}
+
+}  // namespace mvod

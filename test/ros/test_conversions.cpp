@@ -1,0 +1,609 @@
+// ROS <-> core conversions (ros/conversions.h) and the node's Config, without a roscore: messages
+// are built in the test, converted, and checked field by field (round trips where a reverse
+// exists).
+#include <gtest/gtest.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "multiview_object_detection/class_priors.h"
+#include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/object_detection_ros_config.h"
+
+namespace mvod {
+namespace {
+
+namespace enc = sensor_msgs::image_encodings;
+constexpr double kPi = 3.14159265358979323846;
+
+std_msgs::Header makeHeader(const std::string& frame, double stamp_s) {
+  std_msgs::Header header;
+  header.frame_id = frame;
+  header.stamp = ros::Time(stamp_s);
+  return header;
+}
+
+// A packed image message of the given encoding with bytes from `mat` (continuous).
+sensor_msgs::ImagePtr imageMsg(const cv::Mat& mat, const std::string& encoding,
+                               double stamp_s = 5.0) {
+  sensor_msgs::ImagePtr msg(new sensor_msgs::Image);
+  msg->header = makeHeader("camera_rgb_optical_frame", stamp_s);
+  msg->encoding = encoding;
+  msg->width = static_cast<uint32_t>(mat.cols);
+  msg->height = static_cast<uint32_t>(mat.rows);
+  msg->step = static_cast<uint32_t>(mat.cols * mat.elemSize());
+  msg->data.resize(static_cast<size_t>(msg->step) * msg->height);
+  for (int r = 0; r < mat.rows; ++r) {
+    std::memcpy(&msg->data[static_cast<size_t>(r) * msg->step], mat.ptr(r), msg->step);
+  }
+  return msg;
+}
+
+sensor_msgs::CameraInfoPtr cameraInfo(double fx, double fy, double cx, double cy, int width,
+                                      int height) {
+  sensor_msgs::CameraInfoPtr info(new sensor_msgs::CameraInfo);
+  info->header = makeHeader("camera_rgb_optical_frame", 5.0);
+  info->width = static_cast<uint32_t>(width);
+  info->height = static_cast<uint32_t>(height);
+  info->K = {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0};
+  return info;
+}
+
+// A gravity-aligned box rotated by yaw about z.
+MapObject makeObject(int id, const std::string& class_name, const Eigen::Vector3d& center,
+                     const Eigen::Vector3d& size, double yaw_rad) {
+  MapObject object;
+  object.id = id;
+  object.class_name = class_name;
+  object.class_id = cocoClassId(class_name);
+  object.probability = 0.87;
+  object.observations = 4;
+  object.box.center_m = center;
+  object.box.size_m = size;
+  object.box.rotation = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  object.yaw_rad = yaw_rad;
+  object.first_seen_s = 10.5;
+  object.last_seen_s = 20.25;
+  // A small cloud on the box: a grid over its top face.
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      const Eigen::Vector3d p_B((i / 4.0 - 0.5) * size.x(), (j / 3.0 - 0.5) * size.y(),
+                                0.5 * size.z());
+      object.segment_W.push_back((object.box.rotation * p_B + center).cast<float>());
+    }
+  }
+  object.points_W = object.segment_W;
+  return object;
+}
+
+Detection2D makeDetection(const std::string& class_name, float score, const cv::Rect& box,
+                          const cv::Size& image_size) {
+  Detection2D d;
+  d.class_name = class_name;
+  d.class_id = cocoClassId(class_name);
+  d.score = score;
+  d.box_px = box;
+  d.mask = cv::Mat::zeros(image_size, CV_8UC1);
+  // An ellipse inside the box: not the filled box, so a lost mask would show.
+  cv::ellipse(d.mask, cv::Point(box.x + box.width / 2, box.y + box.height / 2),
+              cv::Size(box.width / 2 - 1, box.height / 2 - 1), 0, 0, 360, cv::Scalar(255), -1);
+  return d;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+}  // namespace
+
+// ---- Images -----------------------------------------------------------------------------------
+
+TEST(RosConversionsTest, ColorRgb8IsSwappedToBgrAndBgr8Kept) {
+  cv::Mat rgb(4, 6, CV_8UC3, cv::Scalar(10, 20, 30));  // R=10 G=20 B=30
+  rgb.at<cv::Vec3b>(2, 3) = cv::Vec3b(200, 100, 50);
+  cv::Mat bgr;
+  ASSERT_TRUE(colorImageFromMsg(*imageMsg(rgb, enc::RGB8), "rgb/image_raw", &bgr).ok());
+  ASSERT_EQ(bgr.type(), CV_8UC3);
+  ASSERT_EQ(bgr.size(), cv::Size(6, 4));
+  EXPECT_EQ(bgr.at<cv::Vec3b>(0, 0), cv::Vec3b(30, 20, 10));
+  EXPECT_EQ(bgr.at<cv::Vec3b>(2, 3), cv::Vec3b(50, 100, 200));
+
+  ASSERT_TRUE(colorImageFromMsg(*imageMsg(rgb, enc::BGR8), "rgb/image_raw", &bgr).ok());
+  EXPECT_EQ(bgr.at<cv::Vec3b>(2, 3), cv::Vec3b(200, 100, 50));
+}
+
+TEST(RosConversionsTest, WrongColorEncodingNamesTopicFrameStampAndEncoding) {
+  cv::Mat mono(4, 6, CV_8UC1, cv::Scalar(7));
+  cv::Mat bgr;
+  const Status status = colorImageFromMsg(*imageMsg(mono, enc::MONO8, 12.5), "rgb/image_raw", &bgr);
+  ASSERT_FALSE(status.ok());
+  EXPECT_TRUE(contains(status.message(), "rgb/image_raw")) << status.message();
+  EXPECT_TRUE(contains(status.message(), "mono8")) << status.message();
+  EXPECT_TRUE(contains(status.message(), "camera_rgb_optical_frame")) << status.message();
+  EXPECT_TRUE(contains(status.message(), "12.5")) << status.message();
+  EXPECT_TRUE(bgr.empty());
+}
+
+TEST(RosConversionsTest, DepthEncodingsKeepValuesAndUnits) {
+  cv::Mat mm(3, 5, CV_16UC1, cv::Scalar(0));
+  mm.at<uint16_t>(1, 2) = 1234;
+  cv::Mat depth;
+  ASSERT_TRUE(depthImageFromMsg(*imageMsg(mm, enc::TYPE_16UC1), "depth", &depth).ok());
+  ASSERT_EQ(depth.type(), CV_16UC1);
+  EXPECT_EQ(depth.at<uint16_t>(1, 2), 1234);
+  ASSERT_TRUE(depthImageFromMsg(*imageMsg(mm, enc::MONO16), "depth", &depth).ok());
+  ASSERT_EQ(depth.type(), CV_16UC1);
+  EXPECT_EQ(depth.at<uint16_t>(1, 2), 1234);
+
+  cv::Mat m(3, 5, CV_32FC1, cv::Scalar(0.f));
+  m.at<float>(2, 4) = 2.5f;
+  m.at<float>(0, 0) = std::numeric_limits<float>::quiet_NaN();
+  ASSERT_TRUE(depthImageFromMsg(*imageMsg(m, enc::TYPE_32FC1), "depth", &depth).ok());
+  ASSERT_EQ(depth.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(depth.at<float>(2, 4), 2.5f);
+  EXPECT_TRUE(std::isnan(depth.at<float>(0, 0)));
+
+  const Status wrong = depthImageFromMsg(*imageMsg(cv::Mat(3, 5, CV_8UC3), enc::BGR8),
+                                         "depth_registered/image_raw", &depth);
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_TRUE(contains(wrong.message(), "depth_registered/image_raw"));
+  EXPECT_TRUE(contains(wrong.message(), "bgr8"));
+}
+
+TEST(RosConversionsTest, TruncatedOrMalformedImagesAreErrorsNotCrashes) {
+  sensor_msgs::ImagePtr msg = imageMsg(cv::Mat(8, 8, CV_8UC3, cv::Scalar(1, 2, 3)), enc::BGR8);
+  msg->data.resize(msg->data.size() / 2);
+  cv::Mat bgr;
+  EXPECT_FALSE(colorImageFromMsg(*msg, "rgb", &bgr).ok());
+
+  msg = imageMsg(cv::Mat(8, 8, CV_8UC3), enc::BGR8);
+  msg->step = 3;  // smaller than a row
+  EXPECT_FALSE(colorImageFromMsg(*msg, "rgb", &bgr).ok());
+
+  msg = imageMsg(cv::Mat(8, 8, CV_8UC3), enc::BGR8);
+  msg->width = 0;
+  EXPECT_FALSE(colorImageFromMsg(*msg, "rgb", &bgr).ok());
+
+  msg = imageMsg(cv::Mat(8, 8, CV_16UC1), "not_an_encoding");
+  cv::Mat depth;
+  EXPECT_FALSE(depthImageFromMsg(*msg, "depth", &depth).ok());
+}
+
+TEST(RosConversionsTest, CameraInfoAllZeroKIsRejected) {
+  sensor_msgs::CameraInfo info = *cameraInfo(0, 0, 0, 0, 640, 480);
+  info.K.fill(0.0);
+  CameraIntrinsics K;
+  const Status zero = intrinsicsFromCameraInfo(info, "rgb/camera_info", &K);
+  ASSERT_FALSE(zero.ok());
+  EXPECT_TRUE(contains(zero.message(), "rgb/camera_info"));
+  EXPECT_TRUE(contains(zero.message(), "all zero"));
+  EXPECT_FALSE(K.isValid());  // untouched
+
+  info.K[2] = 320;  // cx only: fx = 0
+  EXPECT_FALSE(intrinsicsFromCameraInfo(info, "rgb/camera_info", &K).ok());
+  info = *cameraInfo(525, 520, 319.5, 239.5, 640, 480);
+  info.K[4] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(intrinsicsFromCameraInfo(info, "rgb/camera_info", &K).ok());
+
+  ASSERT_TRUE(
+      intrinsicsFromCameraInfo(*cameraInfo(525, 520, 319.5, 239.5, 640, 480), "info", &K).ok());
+  EXPECT_DOUBLE_EQ(K.fx, 525);
+  EXPECT_DOUBLE_EQ(K.fy, 520);
+  EXPECT_DOUBLE_EQ(K.cx, 319.5);
+  EXPECT_DOUBLE_EQ(K.cy, 239.5);
+  EXPECT_EQ(K.width, 640);
+  EXPECT_EQ(K.height, 480);
+}
+
+TEST(RosConversionsTest, RgbdFrameRegisteredAndUnregistered) {
+  const cv::Size size(8, 6);
+  RgbdMessages msgs;
+  msgs.color = imageMsg(cv::Mat(size, CV_8UC3, cv::Scalar(1, 2, 3)), enc::BGR8, 7.25);
+  msgs.depth = imageMsg(cv::Mat(size, CV_16UC1, cv::Scalar(1500)), enc::TYPE_16UC1, 7.25);
+  msgs.color_info = cameraInfo(10, 10, 4, 3, size.width, size.height);
+  const RgbdTopics topics;
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  T_W_C.translation() = Eigen::Vector3d(1, 2, 3);
+  T_W_C.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+
+  RgbdFrame frame;
+  ASSERT_TRUE(rgbdFrameFromMsgs(msgs, topics, T_W_C, Eigen::Isometry3d::Identity(), &frame).ok());
+  EXPECT_TRUE(frame.registered);
+  EXPECT_DOUBLE_EQ(frame.stamp_s, 7.25);
+  EXPECT_DOUBLE_EQ(frame.K_depth.fx, 10);
+  EXPECT_TRUE(frame.T_W_D.isApprox(T_W_C));
+  EXPECT_EQ(frame.depth.at<uint16_t>(5, 7), 1500);
+
+  // Unregistered: a smaller depth image with its own intrinsics and a baseline.
+  const cv::Size depth_size(4, 3);
+  msgs.depth = imageMsg(cv::Mat(depth_size, CV_32FC1, cv::Scalar(2.f)), enc::TYPE_32FC1, 7.25);
+  msgs.depth_info = cameraInfo(5, 5, 2, 1.5, depth_size.width, depth_size.height);
+  Eigen::Isometry3d T_C_D = Eigen::Isometry3d::Identity();
+  T_C_D.translation() = Eigen::Vector3d(-0.025, 0, 0);
+  ASSERT_TRUE(rgbdFrameFromMsgs(msgs, topics, T_W_C, T_C_D, &frame).ok());
+  EXPECT_FALSE(frame.registered);
+  EXPECT_DOUBLE_EQ(frame.K_depth.fx, 5);
+  EXPECT_DOUBLE_EQ(frame.K_color.fx, 10);
+  EXPECT_TRUE(frame.T_C_D.isApprox(T_C_D));
+  EXPECT_TRUE(frame.T_W_D.isApprox(T_W_C * T_C_D));
+}
+
+TEST(RosConversionsTest, MismatchedSizesAndCameraInfoAreNamed) {
+  RgbdMessages msgs;
+  msgs.color = imageMsg(cv::Mat(6, 8, CV_8UC3), enc::BGR8);
+  msgs.depth = imageMsg(cv::Mat(3, 4, CV_16UC1), enc::TYPE_16UC1);
+  msgs.color_info = cameraInfo(10, 10, 4, 3, 8, 6);
+  RgbdTopics topics;
+  Status status = checkRgbdMessages(msgs, topics);
+  ASSERT_FALSE(status.ok());
+  EXPECT_TRUE(contains(status.message(), "8x6")) << status.message();
+  EXPECT_TRUE(contains(status.message(), "4x3")) << status.message();
+  EXPECT_TRUE(contains(status.message(), topics.depth)) << status.message();
+
+  // camera_info for another resolution.
+  msgs.depth = imageMsg(cv::Mat(6, 8, CV_16UC1), enc::TYPE_16UC1);
+  msgs.color_info = cameraInfo(10, 10, 4, 3, 640, 480);
+  status = checkRgbdMessages(msgs, topics);
+  ASSERT_FALSE(status.ok());
+  EXPECT_TRUE(contains(status.message(), "640x480")) << status.message();
+  EXPECT_TRUE(contains(status.message(), topics.color_info)) << status.message();
+
+  msgs.color_info = cameraInfo(10, 10, 4, 3, 8, 6);
+  EXPECT_TRUE(checkRgbdMessages(msgs, topics).ok());
+  msgs.depth = nullptr;
+  EXPECT_FALSE(checkRgbdMessages(msgs, topics).ok());
+}
+
+// ---- Poses ------------------------------------------------------------------------------------
+
+TEST(RosConversionsTest, PoseRoundTripAndInvalidPosesRejected) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized())).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(-1.5, 0.25, 2.0);
+  Eigen::Isometry3d back;
+  ASSERT_TRUE(poseFromMsg(poseToMsg(T), &back).ok());
+  EXPECT_TRUE(back.isApprox(T, 1e-12));
+  ASSERT_TRUE(transformFromMsg(transformToMsg(T), &back).ok());
+  EXPECT_TRUE(back.isApprox(T, 1e-12));
+
+  geometry_msgs::Pose nan_pose = poseToMsg(T);
+  nan_pose.position.y = std::numeric_limits<double>::quiet_NaN();
+  back = Eigen::Isometry3d::Identity();
+  const Status nan_status = poseFromMsg(nan_pose, &back);
+  EXPECT_FALSE(nan_status.ok());
+  EXPECT_TRUE(contains(nan_status.message(), "NaN"));
+  EXPECT_TRUE(back.isApprox(Eigen::Isometry3d::Identity()));  // untouched
+
+  geometry_msgs::Pose zero_q = poseToMsg(T);
+  zero_q.orientation.w = zero_q.orientation.x = zero_q.orientation.y = zero_q.orientation.z = 0;
+  EXPECT_FALSE(poseFromMsg(zero_q, &back).ok());
+  geometry_msgs::Pose long_q = poseToMsg(T);
+  long_q.orientation.w *= 2.0;
+  EXPECT_FALSE(poseFromMsg(long_q, &back).ok());
+}
+
+// ---- Objects ----------------------------------------------------------------------------------
+
+TEST(RosConversionsTest, ObjectRoundTripKeepsBoxClassAndStamps) {
+  const MapObject object = makeObject(3, "chair", Eigen::Vector3d(1.0, -2.0, 0.45),
+                                      Eigen::Vector3d(0.5, 0.6, 0.9), 0.35);
+  const multiview_object_detection::Object msg = objectToMsg(object);
+  EXPECT_EQ(msg.id, 3);
+  EXPECT_EQ(msg.class_name, "chair");
+  EXPECT_EQ(msg.class_id, cocoClassId("chair"));
+  EXPECT_NEAR(msg.probability, 0.87, 1e-6);
+  EXPECT_EQ(msg.observations, 4);
+  EXPECT_EQ(msg.num_points, 20);
+  EXPECT_NEAR(msg.yaw, 0.35, 1e-6);
+  EXPECT_NEAR(msg.size.z, 0.9, 1e-12);
+  EXPECT_NEAR(msg.first_seen.toSec(), 10.5, 1e-6);
+
+  MapObject back;
+  ASSERT_TRUE(objectFromMsg(msg, &back).ok());
+  EXPECT_EQ(back.id, object.id);
+  EXPECT_EQ(back.class_id, object.class_id);
+  EXPECT_EQ(back.class_name, object.class_name);
+  EXPECT_NEAR(back.probability, object.probability, 1e-6);
+  EXPECT_EQ(back.observations, object.observations);
+  EXPECT_TRUE(back.box.center_m.isApprox(object.box.center_m, 1e-12));
+  EXPECT_TRUE(back.box.size_m.isApprox(object.box.size_m, 1e-12));
+  EXPECT_TRUE(back.box.rotation.isApprox(object.box.rotation, 1e-9));
+  EXPECT_NEAR(back.first_seen_s, 10.5, 1e-6);
+  EXPECT_NEAR(back.last_seen_s, 20.25, 1e-6);
+  // The corners agree: the same box.
+  const std::vector<Eigen::Vector3d> a = object.box.corners();
+  const std::vector<Eigen::Vector3d> b = back.box.corners();
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].isApprox(b[i], 1e-9));
+
+  multiview_object_detection::Object bad = msg;
+  bad.size.x = -1.0;
+  EXPECT_FALSE(objectFromMsg(bad, &back).ok());
+}
+
+TEST(RosConversionsTest, ObjectWithBadStampsGivesZeroTimeNotAThrow) {
+  MapObject object = makeObject(1, "cup", Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 0);
+  object.first_seen_s = -5.0;
+  object.last_seen_s = std::numeric_limits<double>::quiet_NaN();
+  const multiview_object_detection::Object msg = objectToMsg(object);
+  EXPECT_TRUE(msg.first_seen.isZero());
+  EXPECT_TRUE(msg.last_seen.isZero());
+}
+
+TEST(RosConversionsTest, ObjectArrayKeepsHeaderAndOrder) {
+  const std::vector<MapObject> objects = {
+      makeObject(2, "chair", Eigen::Vector3d(0, 0, 0.45), Eigen::Vector3d(0.5, 0.5, 0.9), 0),
+      makeObject(7, "tv", Eigen::Vector3d(2, 0, 1.0), Eigen::Vector3d(1.0, 0.1, 0.6), 0.2)};
+  const multiview_object_detection::ObjectArray array =
+      objectsToMsg(objects, makeHeader("map", 3.0));
+  EXPECT_EQ(array.header.frame_id, "map");
+  ASSERT_EQ(array.objects.size(), 2u);
+  EXPECT_EQ(array.objects[0].id, 2);
+  EXPECT_EQ(array.objects[1].id, 7);
+  EXPECT_EQ(array.objects[1].class_name, "tv");
+}
+
+TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
+  const Eigen::Vector3d size(0.5, 0.6, 0.9);
+  std::vector<MapObject> objects = {
+      makeObject(3, "chair", Eigen::Vector3d(1, 1, 0.45), size, 0.3),
+      makeObject(5, "couch", Eigen::Vector3d(3, 1, 0.4), Eigen::Vector3d(2, 0.9, 0.8), 0)};
+  std::set<int> published;
+  visualization_msgs::MarkerArray markers =
+      objectsToMarkers(objects, makeHeader("map", 1.0), &published);
+  ASSERT_EQ(markers.markers.size(), 4u);
+  EXPECT_EQ(published, (std::set<int>{3, 5}));
+
+  std::map<std::string, int> per_ns;
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    ++per_ns[m.ns];
+    EXPECT_EQ(m.header.frame_id, "map");
+    EXPECT_EQ(m.action, visualization_msgs::Marker::ADD);
+  }
+  EXPECT_EQ(per_ns["boxes"], 2);
+  EXPECT_EQ(per_ns["labels"], 2);
+
+  const visualization_msgs::Marker& box = markers.markers[0];
+  ASSERT_EQ(box.ns, "boxes");
+  EXPECT_EQ(box.id, 3);
+  EXPECT_EQ(box.type, visualization_msgs::Marker::LINE_LIST);
+  ASSERT_EQ(box.points.size(), 24u);  // 12 edges
+  // Every edge runs along one box axis with that axis's length; 4 edges per axis.
+  const Eigen::Matrix3d& R = objects[0].box.rotation;
+  int per_axis[3] = {0, 0, 0};
+  for (size_t i = 0; i < box.points.size(); i += 2) {
+    const Eigen::Vector3d a(box.points[i].x, box.points[i].y, box.points[i].z);
+    const Eigen::Vector3d b(box.points[i + 1].x, box.points[i + 1].y, box.points[i + 1].z);
+    const Eigen::Vector3d d_B = R.transpose() * (b - a);
+    int axis = 0;
+    d_B.cwiseAbs().maxCoeff(&axis);
+    EXPECT_NEAR(d_B.norm(), size[axis], 1e-9);
+    EXPECT_TRUE(objects[0].box.contains(a, 1e-9));
+    ++per_axis[axis];
+  }
+  EXPECT_EQ(per_axis[0], 4);
+  EXPECT_EQ(per_axis[1], 4);
+  EXPECT_EQ(per_axis[2], 4);
+
+  const visualization_msgs::Marker& label = markers.markers[1];
+  ASSERT_EQ(label.ns, "labels");
+  EXPECT_EQ(label.id, 3);
+  EXPECT_EQ(label.type, visualization_msgs::Marker::TEXT_VIEW_FACING);
+  EXPECT_EQ(label.text, "chair #3 0.87");
+  EXPECT_GT(label.pose.position.z, 0.9);  // above the box top
+  // Classes get different colours.
+  const std_msgs::ColorRGBA c_chair = markers.markers[0].color;
+  const std_msgs::ColorRGBA c_couch = markers.markers[2].color;
+  EXPECT_GT(std::abs(c_chair.r - c_couch.r) + std::abs(c_chair.g - c_couch.g) +
+                std::abs(c_chair.b - c_couch.b),
+            0.1);
+
+  // Object 3 is removed: its box and label are deleted, object 5 is re-sent.
+  objects.erase(objects.begin());
+  markers = objectsToMarkers(objects, makeHeader("map", 2.0), &published);
+  EXPECT_EQ(published, (std::set<int>{5}));
+  int deletes = 0;
+  std::set<std::string> deleted_ns;
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    if (m.action == visualization_msgs::Marker::DELETE) {
+      ++deletes;
+      EXPECT_EQ(m.id, 3);
+      deleted_ns.insert(m.ns);
+    } else {
+      EXPECT_EQ(m.id, 5);
+    }
+  }
+  EXPECT_EQ(deletes, 2);
+  EXPECT_EQ(deleted_ns, (std::set<std::string>{"boxes", "labels"}));
+
+  // Nothing removed since: no deletes.
+  markers = objectsToMarkers(objects, makeHeader("map", 3.0), &published);
+  for (const visualization_msgs::Marker& m : markers.markers) {
+    EXPECT_NE(m.action, visualization_msgs::Marker::DELETE);
+  }
+}
+
+TEST(RosConversionsTest, PointCloud2HoldsEveryObjectPointColouredPerObject) {
+  std::vector<MapObject> objects = {
+      makeObject(1, "chair", Eigen::Vector3d(1, 1, 0.45), Eigen::Vector3d(0.5, 0.6, 0.9), 0.3),
+      makeObject(2, "chair", Eigen::Vector3d(3, 1, 0.45), Eigen::Vector3d(0.5, 0.6, 0.9), 0.0)};
+  objects[1].segment_W.push_back(
+      Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f));  // skipped
+  sensor_msgs::PointCloud2 cloud;
+  objectsToPointCloud2(objects, makeHeader("map", 4.0), &cloud);
+  EXPECT_EQ(cloud.header.frame_id, "map");
+  ASSERT_EQ(cloud.width * cloud.height, 40u);
+  ASSERT_EQ(cloud.fields.size(), 4u);
+  EXPECT_EQ(cloud.fields[3].name, "rgb");
+
+  sensor_msgs::PointCloud2ConstIterator<float> x(cloud, "x");
+  sensor_msgs::PointCloud2ConstIterator<float> y(cloud, "y");
+  sensor_msgs::PointCloud2ConstIterator<float> z(cloud, "z");
+  sensor_msgs::PointCloud2ConstIterator<uint8_t> rgb(cloud, "rgb");
+  std::set<uint32_t> colors_first;
+  std::set<uint32_t> colors_second;
+  for (size_t i = 0; i < 40; ++i, ++x, ++y, ++z, ++rgb) {
+    const MapObject& object = objects[i / 20];
+    const Eigen::Vector3f& expected = object.segment_W[i % 20];
+    EXPECT_FLOAT_EQ(*x, expected.x());
+    EXPECT_FLOAT_EQ(*y, expected.y());
+    EXPECT_FLOAT_EQ(*z, expected.z());
+    // PCL's packing: bytes b, g, r, (pad) in memory on little-endian machines.
+    const uint32_t packed =
+        (static_cast<uint32_t>(rgb[2]) << 16) | (static_cast<uint32_t>(rgb[1]) << 8) | rgb[0];
+    (i < 20 ? colors_first : colors_second).insert(packed);
+  }
+  ASSERT_EQ(colors_first.size(), 1u);
+  ASSERT_EQ(colors_second.size(), 1u);
+  EXPECT_NE(*colors_first.begin(), *colors_second.begin());
+  EXPECT_NE(*colors_first.begin(), 0u);
+}
+
+// ---- Detections -------------------------------------------------------------------------------
+
+TEST(RosConversionsTest, DetectionsRoundTripWithMasks) {
+  const cv::Size size(64, 48);
+  const std::vector<Detection2D> detections = {
+      makeDetection("chair", 0.9f, cv::Rect(4, 6, 20, 30), size),
+      makeDetection("cup", 0.55f, cv::Rect(40, 10, 12, 12), size)};
+  const multiview_object_detection::InstanceDetections msg =
+      detectionsToMsg(detections, makeHeader("camera", 8.0));
+  ASSERT_EQ(msg.masks.size(), 2u);
+  EXPECT_EQ(msg.masks[0].encoding, enc::MONO8);
+
+  std::vector<Detection2D> back;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(detectionsFromMsg(msg, size, "detections", &back, &warnings).ok());
+  EXPECT_TRUE(warnings.empty());
+  ASSERT_EQ(back.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back[i].class_id, detections[i].class_id);
+    EXPECT_EQ(back[i].class_name, detections[i].class_name);
+    EXPECT_FLOAT_EQ(back[i].score, detections[i].score);
+    EXPECT_EQ(back[i].box_px, detections[i].box_px);
+    ASSERT_EQ(back[i].mask.size(), size);
+    EXPECT_EQ(cv::countNonZero(back[i].mask != detections[i].mask), 0);
+  }
+}
+
+TEST(RosConversionsTest, DetectionsWithoutMasksUseTheBoxAndNamesDecideUnknownIds) {
+  const cv::Size size(64, 48);
+  multiview_object_detection::InstanceDetections msg;
+  msg.header = makeHeader("camera", 8.0);
+  sensor_msgs::RegionOfInterest roi;
+  roi.x_offset = 10;
+  roi.y_offset = 5;
+  roi.width = 20;
+  roi.height = 10;
+  msg.boxes = {roi, roi};
+  msg.class_ids = {-1, -1};
+  msg.class_names = {"chair", "unicorn"};
+  msg.scores = {0.8f, 0.7f};
+  std::vector<Detection2D> detections;
+  ASSERT_TRUE(detectionsFromMsg(msg, size, "detections", &detections).ok());
+  ASSERT_EQ(detections.size(), 2u);
+  EXPECT_EQ(detections[0].class_id, cocoClassId("chair"));
+  EXPECT_EQ(detections[1].class_id, -1);  // the mapper reports it as an unknown class
+  EXPECT_EQ(detections[1].class_name, "unicorn");
+  EXPECT_EQ(cv::countNonZero(detections[0].mask), 200);
+  EXPECT_EQ(cv::countNonZero(detections[0].mask(cv::Rect(10, 5, 20, 10))), 200);
+
+  // A class id wins over a differing name.
+  msg.class_ids = {cocoClassId("tv"), -1};
+  ASSERT_TRUE(detectionsFromMsg(msg, size, "detections", &detections).ok());
+  EXPECT_EQ(detections[0].class_name, "tv");
+
+  // A box reaching past the border is clipped; one entirely outside is dropped with a warning.
+  msg.boxes[0].x_offset = 50;
+  msg.boxes[1].x_offset = 100;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(detectionsFromMsg(msg, size, "detections", &detections, &warnings).ok());
+  ASSERT_EQ(detections.size(), 1u);
+  EXPECT_EQ(detections[0].box_px, cv::Rect(50, 5, 14, 10));
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "detection 1"));
+}
+
+TEST(RosConversionsTest, DetectionsWithInconsistentArraysOrMasksAreRefused) {
+  const cv::Size size(64, 48);
+  multiview_object_detection::InstanceDetections msg =
+      detectionsToMsg({makeDetection("chair", 0.9f, cv::Rect(4, 6, 20, 30), size),
+                       makeDetection("cup", 0.6f, cv::Rect(40, 10, 12, 12), size)},
+                      makeHeader("camera", 8.0));
+  std::vector<Detection2D> detections(1);
+
+  multiview_object_detection::InstanceDetections bad = msg;
+  bad.scores.pop_back();
+  Status status = detectionsFromMsg(bad, size, "detections", &detections);
+  ASSERT_FALSE(status.ok());
+  EXPECT_TRUE(contains(status.message(), "scores"));
+  EXPECT_TRUE(contains(status.message(), "detections"));
+  EXPECT_EQ(detections.size(), 1u);  // untouched
+
+  bad = msg;
+  bad.masks.pop_back();
+  EXPECT_FALSE(detectionsFromMsg(bad, size, "detections", &detections).ok());
+
+  // A mask of another size or encoding costs only that detection.
+  bad = msg;
+  bad.masks[0].width = 32;
+  bad.masks[1].encoding = enc::BGR8;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(detectionsFromMsg(bad, size, "detections", &detections, &warnings).ok());
+  EXPECT_TRUE(detections.empty());
+  EXPECT_EQ(warnings.size(), 2u);
+
+  bad = msg;
+  bad.masks[0].data.resize(10);  // truncated
+  warnings.clear();
+  ASSERT_TRUE(detectionsFromMsg(bad, size, "detections", &detections, &warnings).ok());
+  EXPECT_EQ(detections.size(), 1u);
+  EXPECT_EQ(warnings.size(), 1u);
+}
+
+// ---- Node configuration -------------------------------------------------------------------------
+
+TEST(RosConversionsTest, NodeConfigValidatesChoicesAndDerivesGravity) {
+  ObjectDetectionRosConfig config;
+  EXPECT_TRUE(config.isValid().ok()) << config.isValid().message();
+  EXPECT_TRUE(config.mapperConfig().gravity_down_W.isApprox(Eigen::Vector3d(0, 0, -1)));
+
+  config.gravity_down_W = Eigen::Vector3d(0, -2, 0);
+  EXPECT_TRUE(config.mapperConfig().gravity_down_W.isApprox(Eigen::Vector3d(0, -1, 0)));
+  config.gravity_source = "estimate";
+  EXPECT_TRUE(config.mapperConfig().gravity_down_W.isZero());
+  config.gravity_source = "param";
+  config.gravity_down_W = Eigen::Vector3d::Zero();
+  EXPECT_FALSE(config.isValid().ok());
+
+  config = ObjectDetectionRosConfig();
+  config.pose_source = "gps";
+  EXPECT_TRUE(contains(config.isValid().message(), "gps"));
+  config = ObjectDetectionRosConfig();
+  config.detector = "yolo";
+  EXPECT_TRUE(contains(config.isValid().message(), "yolo"));
+  config = ObjectDetectionRosConfig();
+  config.detector = "topic";
+  EXPECT_TRUE(config.isValid().ok());
+  config.processing_queue_size = 0;
+  EXPECT_FALSE(config.isValid().ok());
+  config = ObjectDetectionRosConfig();
+  config.mapper.lccp.seed_resolution_m = 0.001;  // below the voxel resolution
+  EXPECT_TRUE(contains(config.isValid().message(), "lccp")) << config.isValid().message();
+  config = ObjectDetectionRosConfig();
+  config.keyframes.every_n = 0;
+  EXPECT_FALSE(config.isValid().ok());
+  EXPECT_TRUE(contains(config.print(), "keyframe_every_n: 0"));
+}
+
+}  // namespace mvod
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
