@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "multiview_object_detection/dataset.h"
+#include "shared_data.h"
 
 namespace mvod {
 namespace {
@@ -347,15 +348,10 @@ TEST_F(SevenScenesDatasetTest, ParsersEdgeCases) {
 
 // The real 7-Scenes redkitchen data, when the shared folder is next to the repository.
 TEST(SevenScenesDatasetRealData, OpensRedkitchenAndLoadsFrameZero) {
-  const char* env = std::getenv("MVOD_SHARED_DIR");
-  const fs::path shared =
-      env != nullptr && *env != '\0' ? fs::path(env) : fs::path(MVOD_SOURCE_DIR) / ".." / "shared";
-  const fs::path data = shared / "data" / "7scenes_redkitchen" / "data";
-  std::error_code error;
-  if (!fs::is_directory(data, error)) {
+  const fs::path data = test::sharedPath("data/7scenes_redkitchen/data");
+  if (data.empty()) {
     GTEST_SKIP() << "7-Scenes data not found (set MVOD_SHARED_DIR or put shared/ next to the "
-                    "repository): "
-                 << data.string();
+                    "repository): data/7scenes_redkitchen/data";
   }
   SevenScenesDataset dataset;
   const Status opened = SevenScenesDataset::open(data.string(), &dataset);

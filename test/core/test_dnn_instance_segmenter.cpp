@@ -15,22 +15,14 @@
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/dnn_instance_segmenter.h"
 #include "multiview_object_detection/segmenter_factory.h"
+#include "shared_data.h"
 
 namespace mvod {
 namespace {
 
 namespace fs = std::filesystem;
 
-// $MVOD_SHARED_DIR/models, else <repo>/../shared/models; empty when absent.
-std::string modelsDir() {
-  const char* env = std::getenv("MVOD_SHARED_DIR");
-  const fs::path dir =
-      (env != nullptr && *env != '\0' ? fs::path(env)
-                                      : fs::path(MVOD_SOURCE_DIR) / ".." / "shared") /
-      "models";
-  std::error_code error;
-  return fs::is_directory(dir, error) ? fs::canonical(dir, error).string() : std::string();
-}
+std::string modelsDir() { return test::sharedPath("models"); }
 
 float logit(float p) { return std::log(p / (1.f - p)); }
 

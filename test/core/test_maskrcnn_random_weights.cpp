@@ -22,6 +22,7 @@
 
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/segmenter_factory.h"
+#include "shared_data.h"
 
 namespace mvod {
 namespace {
@@ -34,16 +35,7 @@ constexpr char kWeights[] = "frozen_inference_graph.pb";
 constexpr char kPhoto[] = "sample_person.jpg";
 const cv::Size kImageSize(640, 480);
 
-// $MVOD_SHARED_DIR/models, else <repo>/../shared/models; empty when absent.
-std::string sharedModelsDirForMaskRcnn() {
-  const char* env = std::getenv("MVOD_SHARED_DIR");
-  const fs::path dir =
-      (env != nullptr && *env != '\0' ? fs::path(env)
-                                      : fs::path(MVOD_SOURCE_DIR) / ".." / "shared") /
-      "models";
-  std::error_code error;
-  return fs::is_directory(dir, error) ? fs::canonical(dir, error).string() : std::string();
-}
+std::string sharedModelsDirForMaskRcnn() { return test::sharedPath("models"); }
 
 [[maybe_unused]] std::string readWholeFile(const fs::path& path) {
   std::ifstream in(path);

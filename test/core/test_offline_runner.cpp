@@ -18,6 +18,7 @@
 #include "multiview_object_detection/json_io.h"
 #include "multiview_object_detection/object_cloud_extractor.h"
 #include "multiview_object_detection/synthetic_scene.h"
+#include "shared_data.h"
 
 namespace mvod {
 namespace {
@@ -29,14 +30,7 @@ const std::string kSourceDir = MVOD_SOURCE_DIR;
 
 std::string priorsPath() { return kSourceDir + "/config/class_priors.yaml"; }
 
-// $MVOD_SHARED_DIR, else <repo>/../shared; empty when absent.
-std::string sharedDir() {
-  const char* env = std::getenv("MVOD_SHARED_DIR");
-  const fs::path dir =
-      env != nullptr && *env != '\0' ? fs::path(env) : fs::path(kSourceDir) / ".." / "shared";
-  std::error_code error;
-  return fs::is_directory(dir, error) ? fs::canonical(dir, error).string() : std::string();
-}
+std::string sharedDir() { return test::sharedPath(); }
 
 std::string quote(const std::string& arg) {
   std::string quoted = "'";

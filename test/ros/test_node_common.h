@@ -5,6 +5,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
@@ -383,5 +384,18 @@ class NodeOutputs {
   std::set<MarkerKey> deleted_;
   std::vector<rosgraph_msgs::Log> logs_;
 };
+
+// The main() of a rostest gtest: ROS initialised, callbacks served by two threads while the tests
+// run.
+inline int runRosTests(int argc, char** argv, const char* node_name) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, node_name);
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  spinner.stop();
+  ros::shutdown();
+  return result;
+}
 
 }  // namespace mvod_test

@@ -529,12 +529,5 @@ TEST_F(NodeSyntheticTest, RefineRemovesAtypicalObjectsAndDeletesTheirMarkers) {
 }  // namespace mvod_test
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_synthetic");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
+  return mvod_test::runRosTests(argc, argv, "test_node_synthetic");
 }
