@@ -1,0 +1,455 @@
+// dataset_to_bag: a 7-Scenes-layout folder or a SceneNN sequence -> a rosbag with what a Kinect
+// driver and an ORB-SLAM2 wrapper would publish, so replay.launch can play it through the node:
+//   /<camera>/rgb/image_raw                  sensor_msgs/Image bgr8
+//   /<camera>/depth_registered/image_raw     sensor_msgs/Image 16UC1 (mm), in the colour camera
+//   /<camera>/rgb/camera_info                sensor_msgs/CameraInfo (colour K)
+//   /<camera>/depth_registered/camera_info   the same K (registered depth)
+//   /orb_slam2_rgbd/pose                     geometry_msgs/PoseStamped, colour camera in
+//   world_frame /tf                                      world_frame -> <camera>_rgb_optical_frame
+// all stamped with the dataset's time (7-Scenes: index / rate; SceneNN: timestamp.txt) plus
+// --time-offset (default 1 s: rosbag rejects time 0, and tf reads stamp 0 as "latest").
+// Where colour and depth come from two cameras (7-Scenes with color-intrinsics.txt) the depth is
+// registered to the colour camera (registerDepthToColor), as a driver's depth_registered topic is.
+// Exit status: 0 done, 1 bad or missing data (the partial bag is removed), 2 bad usage.
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "../tools/cli_args.h"
+#include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/scenenn_dataset.h"
+
+namespace mvod {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitData = 1;
+constexpr int kExitUsage = 2;
+
+const char kUsage[] =
+    "Usage: dataset_to_bag --dataset DIR --output OUT.bag [options]\n"
+    "  Converts a 7-Scenes-layout folder or a SceneNN sequence (image/, depth/, trajectory.log,\n"
+    "  timestamp.txt, asus.ini) into a rosbag for replay.launch.\n"
+    "Options:\n"
+    "  --format auto|7scenes|scenenn  dataset layout (auto: trajectory.log or depth/ -> SceneNN,\n"
+    "                                 camera-intrinsics.txt -> 7-Scenes) [auto]\n"
+    "  --camera NAME                  topic namespace and frame prefix [camera]\n"
+    "  --world-frame FRAME            parent frame of the pose and TF [map]\n"
+    "  --pose-topic TOPIC             [/orb_slam2_rgbd/pose]\n"
+    "  --rate-hz HZ                   frame rate where the dataset has no time stamps (7-Scenes,\n"
+    "                                 SceneNN without timestamp.txt) [30]\n"
+    "  --time-offset S                added to every stamp (> 0: rosbag rejects time 0) [1]\n"
+    "  --first N, --last N            only frames whose number is in [N, M] (inclusive; 7-Scenes\n"
+    "                                 frame-NNNNNN, SceneNN imageNNNNN) [all]\n"
+    "  --lz4                          compress the bag (LZ4)\n"
+    "  --quiet                        no progress bar\n";
+
+struct Options {
+  std::string dataset_dir;
+  std::string output_path;
+  std::string format = "auto";
+  std::string camera = "camera";
+  std::string world_frame = "map";
+  std::string pose_topic = "/orb_slam2_rgbd/pose";
+  double rate_hz = 30.0;
+  double time_offset_s = 1.0;
+  long first = 0;
+  long last = -1;  // -1 = no limit
+  bool lz4 = false;
+  bool quiet = false;
+};
+
+int usageError(const std::string& message) {
+  std::cerr << "dataset_to_bag: " << message << "\n" << kUsage;
+  return kExitUsage;
+}
+
+// Returns -1 when the options are fine, else the exit status.
+int parseOptions(int argc, char** argv, Options* options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (arg == "--lz4") {
+      options->lz4 = true;
+      continue;
+    }
+    if (arg == "--quiet") {
+      options->quiet = true;
+      continue;
+    }
+    if (i + 1 >= argc) return usageError(arg + " needs a value");
+    const std::string value = argv[++i];
+    long number = 0;
+    if (arg == "--dataset") {
+      options->dataset_dir = value;
+    } else if (arg == "--output") {
+      options->output_path = value;
+    } else if (arg == "--format") {
+      if (value != "auto" && value != "7scenes" && value != "scenenn") {
+        return usageError("--format must be auto, 7scenes or scenenn, not '" + value + "'");
+      }
+      options->format = value;
+    } else if (arg == "--camera") {
+      options->camera = value;
+    } else if (arg == "--world-frame") {
+      options->world_frame = value;
+    } else if (arg == "--pose-topic") {
+      options->pose_topic = value;
+    } else if (arg == "--rate-hz") {
+      if (!cli::parseDouble(value, &options->rate_hz) || !(options->rate_hz > 0.0)) {
+        return usageError("--rate-hz needs a number > 0, not '" + value + "'");
+      }
+    } else if (arg == "--time-offset") {
+      if (!cli::parseDouble(value, &options->time_offset_s) || options->time_offset_s < 0.0) {
+        return usageError("--time-offset needs a number >= 0, not '" + value + "'");
+      }
+    } else if (arg == "--first") {
+      if (!cli::parseLong(value, 0, 999999999, &number)) {
+        return usageError("--first needs a frame number >= 0, not '" + value + "'");
+      }
+      options->first = number;
+    } else if (arg == "--last") {
+      if (!cli::parseLong(value, 0, 999999999, &number)) {
+        return usageError("--last needs a frame number >= 0, not '" + value + "'");
+      }
+      options->last = number;
+    } else {
+      return usageError("unknown option '" + arg + "'");
+    }
+  }
+  if (options->dataset_dir.empty()) return usageError("--dataset is required");
+  if (options->output_path.empty()) return usageError("--output is required");
+  if (options->camera.empty() || options->world_frame.empty() || options->pose_topic.empty()) {
+    return usageError("--camera, --world-frame and --pose-topic must not be empty");
+  }
+  if (options->last >= 0 && options->last < options->first) {
+    return usageError("--last " + std::to_string(options->last) + " is before --first " +
+                      std::to_string(options->first));
+  }
+  return -1;
+}
+
+// One interface over both readers.
+struct DatasetSource {
+  std::string format;  // "7scenes" / "scenenn"
+  std::vector<int> indices;
+  std::function<Status(int, RgbdFrame*)> load;
+  std::function<Status(int)> check;  // cheap per-frame checks before anything is written
+  bool has_timestamps = false;
+};
+
+Status openDataset(const Options& options, DatasetSource* source, std::vector<std::string>* notes) {
+  const fs::path dir(options.dataset_dir);
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) {
+    return Status::Error(
+        options.dataset_dir + ": " +
+        (fs::exists(dir, error) ? "not a folder" : "dataset folder does not exist"));
+  }
+  std::string format = options.format;
+  if (format == "auto") {
+    if (fs::exists(dir / "trajectory.log", error) || fs::is_directory(dir / "depth", error)) {
+      format = "scenenn";
+    } else if (fs::exists(dir / "camera-intrinsics.txt", error)) {
+      format = "7scenes";
+    } else {
+      return Status::Error(options.dataset_dir +
+                           ": neither a SceneNN sequence (trajectory.log, depth/) nor a 7-Scenes "
+                           "folder (camera-intrinsics.txt); use --format to say which");
+    }
+  }
+  source->format = format;
+  if (format == "7scenes") {
+    auto dataset = std::make_shared<SevenScenesDataset>();
+    const Status status = SevenScenesDataset::open(options.dataset_dir, dataset.get());
+    if (!status) return status;
+    source->indices = dataset->frameIndices();
+    source->has_timestamps = false;
+    source->load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    source->check = [](int) { return Status::Ok(); };
+    if (dataset->hasGravity()) {
+      const Eigen::Vector3d g = dataset->gravityDown_W();
+      char text[160];
+      std::snprintf(text, sizeof(text),
+                    "world gravity (gravity-direction.txt) is [%.4f, %.4f, %.4f]: give the node "
+                    "gravity_down: [%.4f, %.4f, %.4f]",
+                    g.x(), g.y(), g.z(), g.x(), g.y(), g.z());
+      notes->push_back(text);
+    }
+    if (!dataset->registered()) {
+      notes->push_back(
+          "colour and depth are two cameras (color-intrinsics.txt): depth is "
+          "registered to the colour camera");
+    }
+  } else {
+    auto dataset = std::make_shared<SceneNNDataset>();
+    const Status status = SceneNNDataset::open(options.dataset_dir, dataset.get());
+    if (!status) return status;
+    source->indices = dataset->frameIndices();
+    source->has_timestamps = dataset->hasTimestamps();
+    source->load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    source->check = [dataset](int index) { return dataset->checkFrame(index); };
+    const CameraIntrinsics& K = dataset->intrinsics();
+    notes->push_back("intrinsics fx " + std::to_string(K.fx) + " fy " + std::to_string(K.fy) +
+                     " cx " + std::to_string(K.cx) + " cy " + std::to_string(K.cy) + " from " +
+                     (dataset->intrinsicsPath().empty()
+                          ? std::string("SceneNN defaults (no asus.ini)")
+                          : dataset->intrinsicsPath()));
+    // The SceneNN mesh and trajectory frame is y-up (shared/formats/scenenn.md).
+    notes->push_back(
+        "SceneNN's world is y-up: give the node gravity_down: [0, -1, 0] (or "
+        "gravity_source:=estimate)");
+    if (!dataset->hasTimestamps()) {
+      notes->push_back("no timestamp.txt: frames are stamped at --rate-hz");
+    }
+  }
+  return Status::Ok();
+}
+
+sensor_msgs::Image imageToMsg(const cv::Mat& image, const std::string& encoding,
+                              const std_msgs::Header& header) {
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.encoding = encoding;
+  msg.height = static_cast<uint32_t>(image.rows);
+  msg.width = static_cast<uint32_t>(image.cols);
+  msg.is_bigendian = 0;
+  msg.step = static_cast<uint32_t>(image.cols * image.elemSize());
+  msg.data.resize(static_cast<size_t>(msg.step) * image.rows);
+  for (int r = 0; r < image.rows; ++r) {
+    std::memcpy(msg.data.data() + static_cast<size_t>(r) * msg.step, image.ptr(r), msg.step);
+  }
+  return msg;
+}
+
+sensor_msgs::CameraInfo cameraInfoMsg(const CameraIntrinsics& K, const std_msgs::Header& header) {
+  sensor_msgs::CameraInfo msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(K.width);
+  msg.height = static_cast<uint32_t>(K.height);
+  msg.distortion_model = "plumb_bob";
+  msg.D.assign(5, 0.0);  // the datasets' images are undistorted
+  msg.K = {K.fx, 0.0, K.cx, 0.0, K.fy, K.cy, 0.0, 0.0, 1.0};
+  msg.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  msg.P = {K.fx, 0.0, K.cx, 0.0, 0.0, K.fy, K.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+  return msg;
+}
+
+geometry_msgs::Pose poseMsg(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose msg;
+  const Eigen::Quaterniond q(T.linear());
+  msg.position.x = T.translation().x();
+  msg.position.y = T.translation().y();
+  msg.position.z = T.translation().z();
+  msg.orientation.w = q.w();
+  msg.orientation.x = q.x();
+  msg.orientation.y = q.y();
+  msg.orientation.z = q.z();
+  return msg;
+}
+
+// A bar redrawn in place on a terminal; in a log (stderr not a terminal) a line every 10 %.
+void printProgress(size_t done, size_t total, double elapsed_s) {
+  constexpr int kWidth = 30;
+  static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+  const double fraction = total == 0 ? 1.0 : static_cast<double>(done) / total;
+  if (!terminal) {
+    const size_t step = std::max<size_t>(1, total / 10);
+    if (done % step != 0 && done != total) return;
+    std::fprintf(stderr, "dataset_to_bag: %zu/%zu frames %3d%% %.1f s\n", done, total,
+                 static_cast<int>(fraction * 100.0), elapsed_s);
+    return;
+  }
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::string bar(filled, '#');
+  bar.resize(kWidth, '.');
+  std::fprintf(stderr, "\r[%s] %zu/%zu frames %3d%% %.1f s", bar.c_str(), done, total,
+               static_cast<int>(fraction * 100.0), elapsed_s);
+  if (done == total) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
+}
+
+// Writes every selected frame; returns the exit status.
+int convert(const Options& options) {
+  DatasetSource source;
+  std::vector<std::string> notes;
+  Status status = openDataset(options, &source, &notes);
+  if (!status) {
+    std::cerr << "dataset_to_bag: " << status.message() << "\n";
+    return kExitData;
+  }
+  std::vector<int> indices;
+  for (int index : source.indices) {
+    if (index >= options.first && (options.last < 0 || index <= options.last)) {
+      indices.push_back(index);
+    }
+  }
+  if (indices.empty()) {
+    std::cerr << "dataset_to_bag: " << options.dataset_dir << ": no frames in the range --first "
+              << options.first << " --last " << options.last << " (the dataset has "
+              << source.indices.size() << " frames)\n";
+    return kExitData;
+  }
+  for (int index : indices) {
+    status = source.check(index);
+    if (!status) {
+      std::cerr << "dataset_to_bag: " << status.message() << " (use --first/--last to convert "
+                << "the frames that have one)\n";
+      return kExitData;
+    }
+  }
+  if (!options.quiet) {
+    std::cerr << "dataset_to_bag: " << options.dataset_dir << " (" << source.format << "), "
+              << indices.size() << " frames -> " << options.output_path << "\n";
+    for (const std::string& note : notes) std::cerr << "dataset_to_bag: " << note << "\n";
+  }
+
+  const std::string ns = "/" + options.camera;
+  const std::string color_topic = ns + "/rgb/image_raw";
+  const std::string depth_topic = ns + "/depth_registered/image_raw";
+  const std::string color_info_topic = ns + "/rgb/camera_info";
+  const std::string depth_info_topic = ns + "/depth_registered/camera_info";
+  const std::string optical_frame = options.camera + "_rgb_optical_frame";
+
+  rosbag::Bag bag;
+  try {
+    bag.open(options.output_path, rosbag::bagmode::Write);
+    if (options.lz4) bag.setCompression(rosbag::compression::LZ4);
+  } catch (const std::exception& e) {
+    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot write the bag: " << e.what()
+              << "\n";
+    return kExitData;
+  }
+  auto fail = [&](const std::string& message) {
+    if (!options.quiet) std::cerr << "\n";
+    std::cerr << "dataset_to_bag: " << message << "\n";
+    try {
+      bag.close();
+    } catch (const std::exception&) {
+    }
+    std::error_code error;
+    fs::remove(options.output_path, error);  // no half-written bag that looks complete
+    return kExitData;
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  double previous_stamp_s = -1.0;
+  for (size_t i = 0; i < indices.size(); ++i) {
+    RgbdFrame frame;
+    status = source.load(indices[i], &frame);
+    if (!status) return fail(status.message());
+    const double dataset_stamp_s =
+        source.has_timestamps
+            ? frame.stamp_s
+            : (source.format == "scenenn" ? frame.index - 1 : frame.index) / options.rate_hz;
+    const double stamp_s = dataset_stamp_s + options.time_offset_s;
+    if (!(stamp_s > 0.0)) {
+      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
+                  " s is not > 0 (rosbag needs positive times): use --time-offset");
+    }
+    if (stamp_s < previous_stamp_s) {
+      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
+                  " s goes back in time (previous frame " + std::to_string(previous_stamp_s) +
+                  " s)");
+    }
+    previous_stamp_s = stamp_s;
+
+    // Depth in the colour camera, and the colour camera's pose.
+    cv::Mat depth_mm;
+    CameraIntrinsics K_color = frame.registered ? frame.K_depth : frame.K_color;
+    K_color.width = frame.color_bgr.cols;
+    K_color.height = frame.color_bgr.rows;
+    if (frame.registered) {
+      if (frame.depth.type() == CV_16UC1) {
+        depth_mm = frame.depth;
+      } else {
+        frame.depth.convertTo(depth_mm, CV_16UC1, 1e3);  // saturates; NaN -> 0
+      }
+    } else {
+      status = registerDepthToColor(frame.depth, frame.K_depth, K_color, frame.T_C_D, &depth_mm);
+      if (!status) return fail(frame.name + ": " + status.message());
+    }
+    const Eigen::Isometry3d T_W_C = frame.T_W_D * frame.T_C_D.inverse();
+
+    std_msgs::Header header;
+    header.seq = static_cast<uint32_t>(i);
+    header.stamp = ros::Time(stamp_s);
+    header.frame_id = optical_frame;
+
+    geometry_msgs::PoseStamped pose;
+    pose.header = header;
+    pose.header.frame_id = options.world_frame;
+    pose.pose = poseMsg(T_W_C);
+
+    geometry_msgs::TransformStamped transform;
+    transform.header = pose.header;
+    transform.child_frame_id = optical_frame;
+    transform.transform.translation.x = pose.pose.position.x;
+    transform.transform.translation.y = pose.pose.position.y;
+    transform.transform.translation.z = pose.pose.position.z;
+    transform.transform.rotation = pose.pose.orientation;
+    tf2_msgs::TFMessage tf;
+    tf.transforms.push_back(transform);
+
+    try {
+      // TF and pose first: a node that receives the images can already look the pose up.
+      bag.write("/tf", header.stamp, tf);
+      bag.write(options.pose_topic, header.stamp, pose);
+      bag.write(color_info_topic, header.stamp, cameraInfoMsg(K_color, header));
+      bag.write(depth_info_topic, header.stamp, cameraInfoMsg(K_color, header));
+      bag.write(color_topic, header.stamp,
+                imageToMsg(frame.color_bgr, sensor_msgs::image_encodings::BGR8, header));
+      bag.write(depth_topic, header.stamp,
+                imageToMsg(depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
+    } catch (const std::exception& e) {
+      return fail(options.output_path + ": cannot write: " + e.what());
+    }
+    if (!options.quiet) {
+      const double elapsed_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      printProgress(i + 1, indices.size(), elapsed_s);
+    }
+  }
+  try {
+    bag.close();
+  } catch (const std::exception& e) {
+    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot close: " << e.what()
+              << "\n";
+    return kExitData;
+  }
+  if (!options.quiet) {
+    std::cerr << "dataset_to_bag: wrote " << indices.size() << " frames to " << options.output_path
+              << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace mvod
+
+int main(int argc, char** argv) {
+  mvod::Options options;
+  const int parsed = mvod::parseOptions(argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return mvod::convert(options);
+}
