@@ -1,0 +1,201 @@
+// evaluate: scores an objects.json against ground truth (Sec. 4.1). Per class: AP of object
+// segmentation by the IoU of voxelised point sets (match at IoU >= 0.5, VOC all-point AP; the
+// paper's Tables 1 and 2) and oriented-box AP at 3D IoU 0.25 and 0.5. Prints a Markdown table.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "cli_args.h"
+#include "multiview_object_detection/evaluation.h"
+#include "multiview_object_detection/json_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;  // an input cannot be read, or an output cannot be written
+constexpr int kExitUsage = 2;    // bad arguments
+
+const char* const kUsage =
+    "usage: evaluate --objects objects.json --ground-truth PATH [options]\n"
+    "\n"
+    "Per-class AP of the detected objects against ground truth: segmentation AP\n"
+    "(3D IoU of voxelised point sets >= 0.5, VOC all-point AP, the paper's Sec. 4.1)\n"
+    "and oriented-box AP at 3D IoU 0.25 and 0.5; means over the ground-truth classes.\n"
+    "\n"
+    "PATH: a synthetic ground_truth.json or the dataset folder holding it (boxes;\n"
+    "their surface is the ground-truth cloud) or a SceneNN sequence: the <id>\n"
+    "folder with <id>.ply and <id>.xml, or the .ply itself.\n"
+    "Predicted clouds: the fused cloud stored in objects.json (written with clouds),\n"
+    "or object_<id>_<class>_fused.ply in --clouds DIR (offline_detection\n"
+    "--save-clouds). A prediction without a cloud segments the ground-truth points\n"
+    "inside its box: a proxy; save the clouds for the paper's metric.\n"
+    "\n"
+    "options:\n"
+    "  --objects FILE       objects.json to score (required)\n"
+    "  --ground-truth PATH  ground truth (required)\n"
+    "  --clouds DIR         folder of object_<id>_<class>_fused.ply clouds\n"
+    "  --voxel-size M       voxel of the segmentation IoU, metres (default: 0.05)\n"
+    "  --up AXIS            world up: x, y, z, -x, -y, -z or auto (default: auto =\n"
+    "                       y for SceneNN, whose meshes are y-up; z for .json)\n"
+    "  --markdown FILE      also write the table as Markdown\n"
+    "  --csv FILE           also write the table as CSV (AP as fractions)\n"
+    "  --help               this text\n"
+    "\n"
+    "exit status: 0 ok, 1 an input cannot be read or an output written, 2 bad arguments\n";
+
+struct Options {
+  std::string objects;
+  std::string ground_truth;
+  std::string clouds;
+  std::string markdown;
+  std::string csv;
+  std::string up = "auto";
+  double voxel_size_m = 0.05;
+  bool help = false;
+};
+
+bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
+  const bool negative = !text.empty() && text[0] == '-';
+  const std::string name = negative ? text.substr(1) : text;
+  Eigen::Vector3d v;
+  if (name == "x") {
+    v = Eigen::Vector3d::UnitX();
+  } else if (name == "y") {
+    v = Eigen::Vector3d::UnitY();
+  } else if (name == "z") {
+    v = Eigen::Vector3d::UnitZ();
+  } else {
+    return false;
+  }
+  *axis = negative ? Eigen::Vector3d(-v) : v;
+  return true;
+}
+
+// Returns an empty string on success, else what is wrong.
+std::string parseArguments(int argc, char** argv, Options* options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&](std::string* out) {
+      if (i + 1 >= argc) return false;
+      *out = argv[++i];
+      return true;
+    };
+    std::string text;
+    if (arg == "--help" || arg == "-h") {
+      options->help = true;
+    } else if (arg == "--objects" || arg == "--ground-truth" || arg == "--clouds" ||
+               arg == "--markdown" || arg == "--csv" || arg == "--up") {
+      if (!value(&text) || text.empty()) return arg + " needs a value";
+      if (arg == "--objects") options->objects = text;
+      if (arg == "--ground-truth") options->ground_truth = text;
+      if (arg == "--clouds") options->clouds = text;
+      if (arg == "--markdown") options->markdown = text;
+      if (arg == "--csv") options->csv = text;
+      if (arg == "--up") {
+        Eigen::Vector3d axis;
+        if (text != "auto" && !parseAxis(text, &axis)) {
+          return "--up must be x, y, z, -x, -y, -z or auto";
+        }
+        options->up = text;
+      }
+    } else if (arg == "--voxel-size") {
+      if (!value(&text) || !mvod::cli::parseDouble(text, &options->voxel_size_m) ||
+          !(options->voxel_size_m > 0.0)) {
+        return "--voxel-size needs a number > 0 (metres)";
+      }
+    } else {
+      return "unknown argument '" + arg + "'";
+    }
+  }
+  if (options->help) return "";
+  if (options->objects.empty()) return "--objects is required";
+  if (options->ground_truth.empty()) return "--ground-truth is required";
+  return "";
+}
+
+bool endsWith(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  const std::string error = parseArguments(argc, argv, &options);
+  if (options.help) {
+    std::fputs(kUsage, stdout);
+    return kExitOk;
+  }
+  if (!error.empty()) {
+    std::cerr << "evaluate: " << error << "\n\n" << kUsage;
+    return kExitUsage;
+  }
+
+  std::error_code fs_error;
+  if (!fs::exists(options.ground_truth, fs_error)) {
+    std::cerr << "evaluate: " << options.ground_truth << ": no such file or folder\n";
+    return kExitFailure;
+  }
+  // A synthetic dataset folder holds its ground_truth.json; a SceneNN folder holds <id>.ply/.xml.
+  if (fs::is_directory(options.ground_truth, fs_error) &&
+      fs::is_regular_file(fs::path(options.ground_truth) / "ground_truth.json", fs_error)) {
+    options.ground_truth = (fs::path(options.ground_truth) / "ground_truth.json").string();
+  }
+  const bool synthetic = endsWith(options.ground_truth, ".json");
+  mvod::EvaluationOptions evaluation;
+  evaluation.voxel_size_m = options.voxel_size_m;
+  if (options.up == "auto") {
+    evaluation.up_W = synthetic ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
+  } else {
+    parseAxis(options.up, &evaluation.up_W);
+  }
+
+  std::vector<mvod::GroundTruthObject> ground_truth;
+  const mvod::Status loaded =
+      synthetic
+          ? mvod::loadSyntheticGroundTruth(options.ground_truth, evaluation.surface_spacing_m,
+                                           evaluation.up_W, &ground_truth)
+          : mvod::loadSceneNNGroundTruth(options.ground_truth, evaluation.up_W, &ground_truth);
+  if (!loaded) {
+    std::cerr << "evaluate: " << loaded.message() << "\n";
+    return kExitFailure;
+  }
+  std::vector<mvod::EvaluatedPrediction> predictions;
+  int with_clouds = 0;
+  const mvod::Status read =
+      mvod::loadPredictions(options.objects, options.clouds, &predictions, &with_clouds);
+  if (!read) {
+    std::cerr << "evaluate: " << read.message() << "\n";
+    return kExitFailure;
+  }
+
+  const mvod::EvaluationResult result = mvod::evaluate(ground_truth, predictions, evaluation);
+  const std::string markdown = mvod::evaluationToMarkdown(result);
+  std::fputs(markdown.c_str(), stdout);
+  std::fprintf(stderr,
+               "%zu ground-truth objects, %zu predictions (%d with clouds; the others "
+               "segment the ground truth inside their box); voxel %.3f m\n",
+               ground_truth.size(), predictions.size(), with_clouds, evaluation.voxel_size_m);
+
+  int exit_code = kExitOk;
+  if (!options.markdown.empty()) {
+    const mvod::Status written = mvod::writeFileAtomic(options.markdown, markdown);
+    if (!written) {
+      std::cerr << "evaluate: " << written.message() << "\n";
+      exit_code = kExitFailure;
+    }
+  }
+  if (!options.csv.empty()) {
+    const mvod::Status written = mvod::writeFileAtomic(options.csv, mvod::evaluationToCsv(result));
+    if (!written) {
+      std::cerr << "evaluate: " << written.message() << "\n";
+      exit_code = kExitFailure;
+    }
+  }
+  return exit_code;
+}
