@@ -8,7 +8,7 @@ ws=${1:?usage: demo.sh WORKSPACE}
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin="$ws/devel/lib/multiview_object_detection"
 out="$root/build/demo"
-for tool in make_synthetic_dataset offline_detection; do
+for tool in make_synthetic_dataset offline_detection evaluate; do
   [[ -x "$bin/$tool" ]] || { echo "demo: $bin/$tool is missing: run 'make build' first" >&2; exit 1; }
 done
 rm -rf "$out"
@@ -36,5 +36,9 @@ for o in gt["objects"]:
     print("%-16s (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)  %8.1f"
           % (o["class_name"], *c, *s, math.degrees(o["yaw"])))
 PY
+echo
+echo "== accuracy against the ground truth (evaluate; see README, Evaluation)"
+"$bin/evaluate" --objects "$out/objects.json" --ground-truth "$out/dataset/ground_truth.json" \
+  --clouds "$out/clouds" --markdown "$out/accuracy.md" --csv "$out/accuracy.csv"
 echo
 echo "wrote $out/objects.json, object clouds in $out/clouds, keyframe overlays in $out/overlays"
