@@ -1,5 +1,7 @@
 #include "multiview_object_detection/common.h"
 
+#include <Eigen/SVD>
+
 namespace mvod {
 
 PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T_B_A) {
@@ -9,6 +11,13 @@ PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T
   points_B.reserve(points_A.size());
   for (const Eigen::Vector3f& p : points_A) points_B.emplace_back(R * p + t);
   return points_B;
+}
+
+Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& M) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU();
+  if ((U * svd.matrixV().transpose()).determinant() < 0.0) U.col(2) *= -1.0;
+  return U * svd.matrixV().transpose();
 }
 
 bool isValidPose(const Eigen::Isometry3d& T, double tol) {

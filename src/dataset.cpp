@@ -141,15 +141,7 @@ Status SevenScenesDataset::readPose(const std::string& path, Eigen::Isometry3d* 
                          ": not a rigid transform (the rotation is not orthonormal with "
                          "determinant +1)");
   }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(T.linear(),
-                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
-  if (R.determinant() < 0.0) {
-    Eigen::Matrix3d U = svd.matrixU();
-    U.col(2) *= -1.0;
-    R = U * svd.matrixV().transpose();
-  }
-  T.linear() = R;
+  T.linear() = nearestRotation(T.linear());
   *T_W_C = T;
   return Status::Ok();
 }

@@ -435,35 +435,11 @@ OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector
     high = std::max(high, p.dot(frame.up));
   }
   if (footprint.empty()) return box;
-  const std::vector<Eigen::Vector2d> hull = convexHull(footprint);
-  // Candidate directions: every hull edge (the minimum-area rectangle has a side on one), or the
-  // frame's x_h for a degenerate hull.
-  std::vector<double> yaws = {0.0};
-  for (size_t i = 0; hull.size() >= 2 && i < hull.size(); ++i) {
-    const Eigen::Vector2d edge = hull[(i + 1) % hull.size()] - hull[i];
-    if (edge.norm() > 1e-12) yaws.push_back(std::atan2(edge.y(), edge.x()));
-  }
-  double best_area = std::numeric_limits<double>::infinity();
-  for (const double yaw : yaws) {
-    const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw));
-    const Eigen::Vector2d v(-u.y(), u.x());
-    double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
-    double min_v = min_u, max_v = -min_u;
-    for (const Eigen::Vector2d& q : hull) {
-      min_u = std::min(min_u, q.dot(u));
-      max_u = std::max(max_u, q.dot(u));
-      min_v = std::min(min_v, q.dot(v));
-      max_v = std::max(max_v, q.dot(v));
-    }
-    const double area = (max_u - min_u) * (max_v - min_v);
-    if (area < best_area - 1e-12) {
-      best_area = area;
-      const Eigen::Vector2d c = 0.5 * (min_u + max_u) * u + 0.5 * (min_v + max_v) * v;
-      box.center_m = c.x() * frame.x_h + c.y() * frame.y_h + 0.5 * (low + high) * frame.up;
-      box.size_m = Eigen::Vector3d(max_u - min_u, max_v - min_v, high - low);
-      box.rotation = frame.rotationFromYaw(yaw);
-    }
-  }
+  const Rectangle2d rectangle = minimumAreaRectangle(footprint);
+  box.center_m = rectangle.center.x() * frame.x_h + rectangle.center.y() * frame.y_h +
+                 0.5 * (low + high) * frame.up;
+  box.size_m = Eigen::Vector3d(rectangle.size.x(), rectangle.size.y(), high - low);
+  box.rotation = frame.rotationFromYaw(rectangle.yaw_rad);
   return box;
 }
 

@@ -342,10 +342,7 @@ Eigen::Matrix3d polishFrame(const std::vector<Eigen::Vector3d>& normals, const E
     for (int j = 0; j < 3; ++j) {
       if (sums.col(j).norm() < 1e-9) sums.col(j) = current.col(j);  // an axis without inliers stays
     }
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sums, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d U = svd.matrixU();
-    if ((U * svd.matrixV().transpose()).determinant() < 0.0) U.col(2) *= -1.0;
-    const Eigen::Matrix3d polished = U * svd.matrixV().transpose();
+    const Eigen::Matrix3d polished = nearestRotation(sums);
     if (!polished.allFinite()) break;
     const double change = (polished - current).norm();
     current = polished;
@@ -409,30 +406,7 @@ double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
     const Eigen::Vector3d q = p.cast<double>();
     footprint.emplace_back(q.dot(gravity.x_h), q.dot(gravity.y_h));
   }
-  const std::vector<Eigen::Vector2d> hull = convexHull(std::move(footprint));
-  if (hull.size() < 2) return 0.0;
-  double best_area = std::numeric_limits<double>::infinity();
-  double best_yaw = 0.0;
-  for (size_t e = 0; e < hull.size(); ++e) {
-    const Eigen::Vector2d edge = hull[(e + 1) % hull.size()] - hull[e];
-    if (edge.norm() < 1e-12) continue;
-    const Eigen::Vector2d u = edge.normalized();
-    const Eigen::Vector2d v(-u.y(), u.x());
-    double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
-    double min_v = min_u, max_v = -min_u;
-    for (const Eigen::Vector2d& p : hull) {
-      min_u = std::min(min_u, p.dot(u));
-      max_u = std::max(max_u, p.dot(u));
-      min_v = std::min(min_v, p.dot(v));
-      max_v = std::max(max_v, p.dot(v));
-    }
-    const double area = (max_u - min_u) * (max_v - min_v);
-    if (area < best_area - 1e-12) {
-      best_area = area;
-      best_yaw = std::atan2(u.y(), u.x());
-    }
-  }
-  return foldYaw(best_yaw);
+  return foldYaw(minimumAreaRectangle(footprint).yaw_rad);
 }
 
 }  // namespace

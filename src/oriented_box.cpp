@@ -87,6 +87,37 @@ std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points) {
   return hull;
 }
 
+Rectangle2d minimumAreaRectangle(const std::vector<Eigen::Vector2d>& points) {
+  const std::vector<Eigen::Vector2d> hull = convexHull(points);
+  std::vector<double> yaws = {0.0};
+  for (size_t i = 0; hull.size() >= 2 && i < hull.size(); ++i) {
+    const Eigen::Vector2d edge = hull[(i + 1) % hull.size()] - hull[i];
+    if (edge.norm() > 1e-12) yaws.push_back(std::atan2(edge.y(), edge.x()));
+  }
+  Rectangle2d best;
+  double best_area = std::numeric_limits<double>::infinity();
+  for (const double yaw : yaws) {
+    const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw));
+    const Eigen::Vector2d v(-u.y(), u.x());
+    double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
+    double min_v = min_u, max_v = -min_u;
+    for (const Eigen::Vector2d& q : hull) {
+      min_u = std::min(min_u, q.dot(u));
+      max_u = std::max(max_u, q.dot(u));
+      min_v = std::min(min_v, q.dot(v));
+      max_v = std::max(max_v, q.dot(v));
+    }
+    const double area = (max_u - min_u) * (max_v - min_v);
+    if (area < best_area - 1e-12) {
+      best_area = area;
+      best.yaw_rad = yaw;
+      best.center = 0.5 * (min_u + max_u) * u + 0.5 * (min_v + max_v) * v;
+      best.size = Eigen::Vector2d(max_u - min_u, max_v - min_v);
+    }
+  }
+  return best;
+}
+
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,
                                      const std::vector<Eigen::Vector2d>& b) {
   if (a.size() < 3 || b.size() < 3) return 0.0;

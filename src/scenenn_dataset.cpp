@@ -58,15 +58,7 @@ bool toRigid(const Eigen::Matrix4d& M, Eigen::Isometry3d* T_out) {
   T.linear() = M.topLeftCorner<3, 3>();
   T.translation() = M.topRightCorner<3, 1>();
   if (!isValidPose(T, 1e-2)) return false;
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(T.linear(),
-                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
-  if (R.determinant() < 0.0) {
-    Eigen::Matrix3d U = svd.matrixU();
-    U.col(2) *= -1.0;
-    R = U * svd.matrixV().transpose();
-  }
-  T.linear() = R;
+  T.linear() = nearestRotation(T.linear());
   *T_out = T;
   return true;
 }

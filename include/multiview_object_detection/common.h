@@ -1,10 +1,10 @@
-// Basic types shared by every stage of the core library. No ROS and no PCL here: PCL stays inside the
-// .cpp files of the stages that need it, so this header is cheap to include.
+// Basic types shared by every stage of the core library. No ROS and no PCL here: PCL stays inside
+// the .cpp files of the stages that need it, so this header is cheap to include.
 #pragma once
 
-#include <cmath>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,8 +16,8 @@ namespace mvod {
 // fixed-size type, so no aligned allocator is needed.
 using PointCloud = std::vector<Eigen::Vector3f>;
 
-// Result of an operation that can fail on bad input. The core never logs: it returns a Status and the
-// caller (offline runner, ROS node) reports it.
+// Result of an operation that can fail on bad input. The core never logs: it returns a Status and
+// the caller (offline runner, ROS node) reports it.
 class Status {
  public:
   Status() = default;
@@ -52,6 +52,10 @@ struct CameraIntrinsics {
 
 // Transform a cloud: points_B = T_B_A * points_A.
 PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T_B_A);
+
+// The rotation nearest to M (SVD, determinant +1): for matrices read from text files, which are
+// only nearly orthonormal.
+Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& M);
 
 // True if every element of the matrix is finite and its rotation part is orthonormal within tol.
 bool isValidPose(const Eigen::Isometry3d& T, double tol = 1e-3);

@@ -44,6 +44,16 @@ double gravityAlignedIntersectionVolume(const OrientedBox& a, const OrientedBox&
 // than three distinct points are returned as they are.
 std::vector<Eigen::Vector2d> convexHull(std::vector<Eigen::Vector2d> points);
 
+// The smallest-area rectangle around 2D points: one of its sides lies on a convex hull edge, so
+// each edge direction is tried. yaw_rad is the direction of its first side (0 when the points have
+// no extent); size is the extent along that side and the one perpendicular to it.
+struct Rectangle2d {
+  double yaw_rad = 0.0;
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  Eigen::Vector2d size = Eigen::Vector2d::Zero();
+};
+Rectangle2d minimumAreaRectangle(const std::vector<Eigen::Vector2d>& points);
+
 // Area of the intersection of two convex polygons given counter-clockwise (Sutherland-Hodgman).
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,
                                      const std::vector<Eigen::Vector2d>& b);

@@ -252,3 +252,43 @@ TEST(IntersectionVolumeTest, BadBoxesGiveZeroNotACrash) {
 
 }  // namespace
 }  // namespace mvod
+
+namespace mvod {
+namespace {
+
+TEST(MinimumAreaRectangleTest, RecoversARotatedRectangle) {
+  const double yaw = 0.6;
+  const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw));
+  const Eigen::Vector2d v(-u.y(), u.x());
+  const Eigen::Vector2d center(1.5, -2.0);
+  std::vector<Eigen::Vector2d> points;
+  for (int i = 0; i <= 20; ++i) {
+    for (int j = 0; j <= 10; ++j) {
+      points.push_back(center + (-0.4 + 0.04 * i) * u + (-0.15 + 0.03 * j) * v);
+    }
+  }
+  const Rectangle2d rectangle = minimumAreaRectangle(points);
+  const Eigen::Vector2d size = rectangle.size;
+  // The first side may be either edge direction: compare sorted sizes and the axis modulo 90 deg.
+  EXPECT_NEAR(std::max(size.x(), size.y()), 0.8, 1e-9);
+  EXPECT_NEAR(std::min(size.x(), size.y()), 0.3, 1e-9);
+  EXPECT_NEAR(std::abs(std::sin(2.0 * (rectangle.yaw_rad - yaw))), 0.0, 1e-9);
+  EXPECT_LT((rectangle.center - center).norm(), 1e-9);
+  EXPECT_EQ(minimumAreaRectangle({}).size, Eigen::Vector2d::Zero());
+}
+
+TEST(NearestRotationTest, SnapsANearlyOrthonormalMatrix) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  Eigen::Matrix3d noisy = R;
+  noisy(0, 1) += 2e-3;
+  noisy(2, 0) -= 1e-3;
+  const Eigen::Matrix3d snapped = nearestRotation(noisy);
+  EXPECT_TRUE((snapped.transpose() * snapped).isApprox(Eigen::Matrix3d::Identity(), 1e-12));
+  EXPECT_NEAR(snapped.determinant(), 1.0, 1e-12);
+  EXPECT_LT((snapped - R).norm(), 3e-3);
+  // A reflection becomes a proper rotation.
+  EXPECT_NEAR(nearestRotation(-Eigen::Matrix3d::Identity()).determinant(), 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace mvod
