@@ -232,6 +232,10 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
   doc["removed"] = {{"atypical", summary.removed_atypical},
                     {"intersecting", summary.removed_intersecting}};
   doc["stage_ms"] = stageTimesToJson(summary.stage_ms_median);
+  const MapSummary::Counts& c = summary.counts;
+  doc["counts"] = {{"detections", c.detections}, {"above_threshold", c.above_threshold},
+                   {"with_box", c.with_box},     {"inserted", c.inserted},
+                   {"fused", c.fused},           {"before_refinement", c.before_refinement}};
   // With clouds the document is large: compact. Without, indented for people to read.
   return doc.dump(include_clouds ? -1 : 2) + "\n";
 }
@@ -276,6 +280,19 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   for (const auto& field : stage_fields) {
     if (!(status = readNumber(*stages, "stage_ms.", field.first, field.second))) return status;
     if (*field.second < 0.0) return fieldError(std::string("stage_ms.") + field.first, "negative");
+  }
+
+  if (doc.contains("counts")) {
+    const json& counts = doc["counts"];
+    if (!counts.is_object()) return fieldError("counts", "expected an object");
+    MapSummary::Counts& c = parsed.counts;
+    const std::pair<const char*, int*> count_fields[] = {
+        {"detections", &c.detections}, {"above_threshold", &c.above_threshold},
+        {"with_box", &c.with_box},     {"inserted", &c.inserted},
+        {"fused", &c.fused},           {"before_refinement", &c.before_refinement}};
+    for (const auto& field : count_fields) {
+      if (!(status = readInt(counts, "counts.", field.first, 0, field.second))) return status;
+    }
   }
 
   const json* list = nullptr;

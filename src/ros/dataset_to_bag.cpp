@@ -4,6 +4,8 @@
 //   /<camera>/depth_registered/image_raw     sensor_msgs/Image 16UC1 (mm), in the colour camera
 //   /<camera>/rgb/camera_info                sensor_msgs/CameraInfo (colour K)
 //   /<camera>/depth_registered/camera_info   the same K (registered depth)
+//   /detections (with --detector)            InstanceDetections of the colour image, for the
+//                                            node's detector:=topic (an external detector)
 //   /orb_slam2_rgbd/pose                     geometry_msgs/PoseStamped, colour camera in
 //   world_frame /tf                                      world_frame -> <camera>_rgb_optical_frame
 // all stamped with the dataset's time (7-Scenes: index / rate; SceneNN: timestamp.txt) plus
@@ -32,8 +34,10 @@
 #include <vector>
 
 #include "../tools/cli_args.h"
-#include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/dataset_source.h"
+#include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/scenenn_dataset.h"
+#include "multiview_object_detection/segmenter_factory.h"
 
 namespace mvod {
 namespace {
@@ -58,6 +62,13 @@ const char kUsage[] =
     "  --time-offset S                added to every stamp (> 0: rosbag rejects time 0) [1]\n"
     "  --first N, --last N            only frames whose number is in [N, M] (inclusive; 7-Scenes\n"
     "                                 frame-NNNNNN, SceneNN imageNNNNN) [all]\n"
+    "  --detector NAME                also record 2D detections of every frame as\n"
+    "                                 InstanceDetections (replay with detector:=topic): files\n"
+    "                                 (JSON + masks in --detections DIR), simulated (the\n"
+    "                                 synthetic benchmark's label images), fastestdet, maskrcnn\n"
+    "  --detections DIR               folder for files / simulated [the dataset folder]\n"
+    "  --model-dir DIR                DNN model folder [$MVOD_MODEL_DIR]\n"
+    "  --detections-topic TOPIC       [/detections]\n"
     "  --lz4                          compress the bag (LZ4)\n"
     "  --quiet                        no progress bar\n";
 
@@ -71,7 +82,11 @@ struct Options {
   double rate_hz = 30.0;
   double time_offset_s = 1.0;
   long first = 0;
-  long last = -1;  // -1 = no limit
+  long last = -1;        // -1 = no limit
+  std::string detector;  // empty = no detections in the bag
+  std::string detections_dir;
+  std::string model_dir;
+  std::string detections_topic = "/detections";
   bool lz4 = false;
   bool quiet = false;
 };
@@ -79,6 +94,15 @@ struct Options {
 int usageError(const std::string& message) {
   std::cerr << "dataset_to_bag: " << message << "\n" << kUsage;
   return kExitUsage;
+}
+
+SegmenterOptions segmenterOptions(const Options& options) {
+  SegmenterOptions segmenter;
+  segmenter.detector = options.detector;
+  segmenter.detections_dir =
+      options.detections_dir.empty() ? options.dataset_dir : options.detections_dir;
+  segmenter.model_dir = options.model_dir;
+  return segmenter;
 }
 
 // Returns -1 when the options are fine, else the exit status.
@@ -109,6 +133,15 @@ int parseOptions(int argc, char** argv, Options* options) {
         return usageError("--format must be auto, 7scenes or scenenn, not '" + value + "'");
       }
       options->format = value;
+    } else if (arg == "--detector") {
+      options->detector = value;
+    } else if (arg == "--detections") {
+      options->detections_dir = value;
+    } else if (arg == "--model-dir") {
+      options->model_dir = value;
+    } else if (arg == "--detections-topic") {
+      if (value.empty()) return usageError("--detections-topic must not be empty");
+      options->detections_topic = value;
     } else if (arg == "--camera") {
       options->camera = value;
     } else if (arg == "--world-frame") {
@@ -146,82 +179,30 @@ int parseOptions(int argc, char** argv, Options* options) {
     return usageError("--last " + std::to_string(options->last) + " is before --first " +
                       std::to_string(options->first));
   }
+  if (!options->detector.empty()) {
+    const Status valid = segmenterOptions(*options).isValid();
+    if (!valid) return usageError(valid.message());
+  } else if (!options->detections_dir.empty()) {
+    return usageError("--detections needs --detector");
+  }
   return -1;
 }
 
-// One interface over both readers.
-struct DatasetSource {
-  std::string format;  // "7scenes" / "scenenn"
-  std::vector<int> indices;
-  std::function<Status(int, RgbdFrame*)> load;
-  std::function<Status(int)> check;  // cheap per-frame checks before anything is written
-  bool has_timestamps = false;
-};
-
+// The dataset, with what a user must tell the node to replay it.
 Status openDataset(const Options& options, DatasetSource* source, std::vector<std::string>* notes) {
-  const fs::path dir(options.dataset_dir);
-  std::error_code error;
-  if (!fs::is_directory(dir, error)) {
-    return Status::Error(
-        options.dataset_dir + ": " +
-        (fs::exists(dir, error) ? "not a folder" : "dataset folder does not exist"));
+  const Status status = openDatasetSource(options.dataset_dir, options.format, source);
+  if (!status) return status;
+  *notes = source->notes;
+  if (source->has_gravity) {
+    const Eigen::Vector3d& g = source->gravity_down_W;
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "give the node gravity_down: [%.4f, %.4f, %.4f] (or gravity_source:=estimate)",
+                  g.x(), g.y(), g.z());
+    notes->push_back(text);
   }
-  std::string format = options.format;
-  if (format == "auto") {
-    if (fs::exists(dir / "trajectory.log", error) || fs::is_directory(dir / "depth", error)) {
-      format = "scenenn";
-    } else if (fs::exists(dir / "camera-intrinsics.txt", error)) {
-      format = "7scenes";
-    } else {
-      return Status::Error(options.dataset_dir +
-                           ": neither a SceneNN sequence (trajectory.log, depth/) nor a 7-Scenes "
-                           "folder (camera-intrinsics.txt); use --format to say which");
-    }
-  }
-  source->format = format;
-  if (format == "7scenes") {
-    auto dataset = std::make_shared<SevenScenesDataset>();
-    const Status status = SevenScenesDataset::open(options.dataset_dir, dataset.get());
-    if (!status) return status;
-    source->indices = dataset->frameIndices();
-    source->has_timestamps = false;
-    source->load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
-    source->check = [](int) { return Status::Ok(); };
-    if (dataset->hasGravity()) {
-      const Eigen::Vector3d g = dataset->gravityDown_W();
-      char text[160];
-      std::snprintf(text, sizeof(text),
-                    "world gravity (gravity-direction.txt) is [%.4f, %.4f, %.4f]: give the node "
-                    "gravity_down: [%.4f, %.4f, %.4f]",
-                    g.x(), g.y(), g.z(), g.x(), g.y(), g.z());
-      notes->push_back(text);
-    }
-    if (!dataset->registered()) {
-      notes->push_back(
-          "colour and depth are two cameras (color-intrinsics.txt): depth is "
-          "registered to the colour camera");
-    }
-  } else {
-    auto dataset = std::make_shared<SceneNNDataset>();
-    const Status status = SceneNNDataset::open(options.dataset_dir, dataset.get());
-    if (!status) return status;
-    source->indices = dataset->frameIndices();
-    source->has_timestamps = dataset->hasTimestamps();
-    source->load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
-    source->check = [dataset](int index) { return dataset->checkFrame(index); };
-    const CameraIntrinsics& K = dataset->intrinsics();
-    notes->push_back("intrinsics fx " + std::to_string(K.fx) + " fy " + std::to_string(K.fy) +
-                     " cx " + std::to_string(K.cx) + " cy " + std::to_string(K.cy) + " from " +
-                     (dataset->intrinsicsPath().empty()
-                          ? std::string("SceneNN defaults (no asus.ini)")
-                          : dataset->intrinsicsPath()));
-    // The SceneNN mesh and trajectory frame is y-up (shared/formats/scenenn.md).
-    notes->push_back(
-        "SceneNN's world is y-up: give the node gravity_down: [0, -1, 0] (or "
-        "gravity_source:=estimate)");
-    if (!dataset->hasTimestamps()) {
-      notes->push_back("no timestamp.txt: frames are stamped at --rate-hz");
-    }
+  if (source->format == "7scenes" || !source->has_timestamps) {
+    notes->push_back("frames are stamped at --rate-hz");
   }
   return Status::Ok();
 }
@@ -324,6 +305,20 @@ int convert(const Options& options) {
     for (const std::string& note : notes) std::cerr << "dataset_to_bag: " << note << "\n";
   }
 
+  std::unique_ptr<InstanceSegmenter> segmenter;
+  if (!options.detector.empty()) {
+    status = createInstanceSegmenter(segmenterOptions(options), &segmenter);
+    if (!status) {
+      std::cerr << "dataset_to_bag: detector " << options.detector << ": " << status.message()
+                << "\n";
+      return kExitData;
+    }
+    if (!options.quiet) {
+      std::cerr << "dataset_to_bag: recording " << segmenter->name() << " detections on "
+                << options.detections_topic << " (replay with detector:=topic)\n";
+    }
+  }
+
   const std::string ns = "/" + options.camera;
   const std::string color_topic = ns + "/rgb/image_raw";
   const std::string depth_topic = ns + "/depth_registered/image_raw";
@@ -423,6 +418,24 @@ int convert(const Options& options) {
                 imageToMsg(depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
     } catch (const std::exception& e) {
       return fail(options.output_path + ": cannot write: " + e.what());
+    }
+    if (segmenter) {
+      std::vector<Detection2D> detections;
+      std::vector<std::string> warnings;
+      status =
+          segmenter->detect(frame.color_bgr, source.frame_name(indices[i]), &detections, &warnings);
+      if (!status)
+        return fail(frame.name + ": detector " + segmenter->name() + ": " + status.message());
+      if (!options.quiet) {
+        for (const std::string& warning : warnings) {
+          std::cerr << "\ndataset_to_bag: " << frame.name << ": " << warning << "\n";
+        }
+      }
+      try {
+        bag.write(options.detections_topic, header.stamp, detectionsToMsg(detections, header));
+      } catch (const std::exception& e) {
+        return fail(options.output_path + ": cannot write: " + e.what());
+      }
     }
     if (!options.quiet) {
       const double elapsed_s =

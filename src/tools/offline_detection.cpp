@@ -1,6 +1,7 @@
-// offline_detection: the whole pipeline over a dataset folder in the 7-Scenes layout, no ROS master
-// needed. Every N-th frame is a keyframe: load -> detect -> ObjectMapper::processKeyframe; at the
-// end the database is refined (Sec. 3.5), printed, and written to objects.json.
+// offline_detection: the whole pipeline over a dataset folder in the 7-Scenes layout or a SceneNN
+// sequence, no ROS master needed. Every N-th frame is a keyframe: load -> detect ->
+// ObjectMapper::processKeyframe; at the end the database is refined (Sec. 3.5), printed, and
+// written to objects.json.
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,7 +23,7 @@
 
 #include "cli_args.h"
 #include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/dataset_source.h"
 #include "multiview_object_detection/json_io.h"
 #include "multiview_object_detection/object_mapper.h"
 #include "multiview_object_detection/segmenter_factory.h"
@@ -40,12 +41,16 @@ const char* const kUsage =
     "\n"
     "Runs the multi-view 3D object detection pipeline over a folder in the 7-Scenes layout\n"
     "(frame-NNNNNN.{color.jpg|color.png,depth.png,pose.txt}, camera-intrinsics.txt, optional\n"
-    "color-intrinsics.txt and gravity-direction.txt). No ROS master is needed.\n"
+    "color-intrinsics.txt and gravity-direction.txt) or a SceneNN sequence (image/, depth/,\n"
+    "trajectory.log, optional timestamp.txt and asus.ini; y-up world). No ROS master is needed.\n"
     "\n"
     "options:\n"
     "  --dataset DIR          dataset folder (required)\n"
-    "  --detector NAME        files | fastestdet | maskrcnn (default: files)\n"
-    "  --detections DIR       folder of frame-NNNNNN.json detections (needed by 'files')\n"
+    "  --format NAME          auto | 7scenes | scenenn (default: auto, from the folder's files)\n"
+    "  --detector NAME        files | simulated | fastestdet | maskrcnn (default: files)\n"
+    "  --detections DIR       files: folder of <frame>.json detections (required);\n"
+    "                         simulated: the sequence with label/ and <id>.xml (default: "
+    "--dataset)\n"
     "  --model-dir DIR        folder of the DNN model files (default: $MVOD_MODEL_DIR)\n"
     "  --score-threshold S    detector score below which detections are not reported (default: "
     "0.5)\n"
@@ -61,6 +66,8 @@ const char* const kUsage =
     "  --no-filter            ablation: no voxel/pass-through/outlier filters\n"
     "  --no-lccp              ablation: no LCCP segmentation\n"
     "  --single-frame         baseline: no fusion across keyframes (each detection a new object)\n"
+    "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
+    "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
     "  --help                 this text\n"
     "\n"
@@ -68,6 +75,7 @@ const char* const kUsage =
 
 struct Options {
   std::string dataset;
+  std::string format = "auto";
   std::string detections;
   std::string detector = "files";
   std::string model_dir;
@@ -84,6 +92,7 @@ struct Options {
   bool no_filter = false;
   bool no_lccp = false;
   bool single_frame = false;
+  bool estimate_gravity = false;
   bool quiet = false;
   bool help = false;
 };
@@ -106,11 +115,14 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       options->no_lccp = true;
     } else if (arg == "--single-frame") {
       options->single_frame = true;
+    } else if (arg == "--estimate-gravity") {
+      options->estimate_gravity = true;
     } else if (arg == "--quiet") {
       options->quiet = true;
     } else if (arg == "--dataset" || arg == "--detections" || arg == "--detector" ||
                arg == "--model-dir" || arg == "--output" || arg == "--save-clouds" ||
-               arg == "--overlays" || arg == "--priors" || arg == "--backend") {
+               arg == "--overlays" || arg == "--priors" || arg == "--backend" ||
+               arg == "--format") {
       if (!value(&text) || text.empty()) return arg + " needs a value";
       if (arg == "--dataset") options->dataset = text;
       if (arg == "--detections") options->detections = text;
@@ -121,6 +133,12 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (arg == "--overlays") options->overlays = text;
       if (arg == "--priors") options->priors = text;
       if (arg == "--backend") options->backend = text;
+      if (arg == "--format") {
+        if (text != "auto" && text != "7scenes" && text != "scenenn") {
+          return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
+        }
+        options->format = text;
+      }
     } else if (arg == "--every" || arg == "--first" || arg == "--last") {
       long parsed = 0;
       if (!value(&text) || !mvod::cli::parseLong(text, std::numeric_limits<int>::min(),
@@ -293,7 +311,9 @@ int main(int argc, char** argv) {
   // Bad options are usage errors (exit 2), found before any file is touched.
   mvod::SegmenterOptions segmenter_options;
   segmenter_options.detector = options.detector;
-  segmenter_options.detections_dir = options.detections;
+  segmenter_options.detections_dir = options.detections.empty() && options.detector == "simulated"
+                                         ? options.dataset
+                                         : options.detections;
   segmenter_options.model_dir = options.model_dir;
   segmenter_options.score_threshold = static_cast<float>(options.score_threshold);
   segmenter_options.backend = options.backend;
@@ -303,12 +323,18 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  mvod::SevenScenesDataset dataset;
-  const mvod::Status opened = mvod::SevenScenesDataset::open(options.dataset, &dataset);
+  mvod::DatasetSource dataset;
+  const mvod::Status opened = mvod::openDatasetSource(options.dataset, options.format, &dataset);
   if (!opened) {
     std::cerr << "offline_detection: cannot open dataset " << options.dataset << ": "
               << opened.message() << "\n";
     return kExitFailure;
+  }
+  if (!options.quiet) {
+    std::cerr << "offline_detection: " << options.dataset << " (" << dataset.format << ", "
+              << dataset.indices.size() << " frames)\n";
+    for (const std::string& note : dataset.notes)
+      std::cerr << "offline_detection: " << note << "\n";
   }
 
   if (options.priors.empty()) {
@@ -339,7 +365,9 @@ int main(int argc, char** argv) {
   config.lccp.enable = !options.no_lccp;
   config.database.disable_fusion = options.single_frame;
   // The dataset's gravity when it has one; else estimated from the first frames' dominant plane.
-  config.gravity_down_W = dataset.hasGravity() ? dataset.gravityDown_W() : Eigen::Vector3d::Zero();
+  config.gravity_down_W = dataset.has_gravity && !options.estimate_gravity
+                              ? dataset.gravity_down_W
+                              : Eigen::Vector3d::Zero();
   const mvod::Status config_valid = config.isValid();
   if (!config_valid) {
     std::cerr << "offline_detection: invalid configuration: " << config_valid.message() << "\n";
@@ -356,7 +384,7 @@ int main(int argc, char** argv) {
   }
 
   std::vector<int> frames;
-  for (const int index : dataset.frameIndices()) {
+  for (const int index : dataset.indices) {
     if (index >= options.first && index <= options.last) frames.push_back(index);
   }
   if (frames.empty()) {
@@ -368,6 +396,7 @@ int main(int argc, char** argv) {
   std::vector<double> detection_ms;
   int keyframes = 0;
   int errors = 0;
+  mvod::MapSummary::Counts counts;
   auto report_line = [&](const std::string& line, bool is_error) {
     if (options.quiet && !is_error) return;
     progress.breakLine();
@@ -379,7 +408,7 @@ int main(int argc, char** argv) {
       progress.update(i + 1, keyframes, mapper.database().size());
       continue;
     }
-    const std::string name = mvod::SevenScenesDataset::frameName(frames[i]);
+    const std::string name = dataset.frame_name(frames[i]);
     mvod::RgbdFrame frame;
     const mvod::Status loaded = dataset.load(frames[i], &frame);
     if (!loaded) {
@@ -425,6 +454,11 @@ int main(int argc, char** argv) {
       report_line(name + ": error: " + processed.message(), true);
     } else {
       ++keyframes;
+      counts.detections += report.detections;
+      counts.above_threshold += report.above_threshold;
+      counts.with_box += report.with_box;
+      counts.inserted += report.inserted;
+      counts.fused += report.fused;
       if (report.above_threshold > 0 && !report.waiting_for_gravity) {
         stage_times.push_back(report.times);
       }
@@ -434,6 +468,7 @@ int main(int argc, char** argv) {
   }
   progress.breakLine();
 
+  counts.before_refinement = static_cast<int>(mapper.database().size());
   const mvod::ObjectMapper::RefinementReport refinement = mapper.refine();
 
   // Table 5's split as medians per keyframe (over the keyframes that had detections to process).
@@ -443,6 +478,7 @@ int main(int argc, char** argv) {
   summary.removed_atypical = static_cast<int>(refinement.atypical_ids.size());
   summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
   summary.gravity_down_W = -mapper.gravity().up;
+  summary.counts = counts;
   auto stage_median = [&](double mvod::StageTimes::*field) {
     std::vector<double> values;
     for (const mvod::StageTimes& t : stage_times) values.push_back(t.*field);
@@ -487,11 +523,15 @@ int main(int argc, char** argv) {
                  "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
                  "(removed: %zu atypical, %zu intersecting)\n"
                  "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
-                 "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n",
+                 "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n"
+                 "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
+                 "%d objects before refinement\n",
                  frames.size(), keyframes, stage_times.size(), errors, objects.size(),
                  refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
                  median(detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
-                 med.manhattan_ms, med.fusion_ms, med.total_ms, med.refinement_ms);
+                 med.manhattan_ms, med.fusion_ms, med.total_ms, med.refinement_ms,
+                 counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
+                 counts.fused, counts.before_refinement);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
   }
   return exit_code;

@@ -50,6 +50,12 @@ MapSummary makeSummary() {
   summary.stage_ms_median.fusion_ms = 55.5;
   summary.stage_ms_median.refinement_ms = 0.75;
   summary.stage_ms_median.total_ms = 130.0;
+  summary.counts.detections = 420;
+  summary.counts.above_threshold = 300;
+  summary.counts.with_box = 250;
+  summary.counts.inserted = 40;
+  summary.counts.fused = 210;
+  summary.counts.before_refinement = 38;
   return summary;
 }
 
@@ -95,6 +101,12 @@ void expectSameSummary(const MapSummary& a, const MapSummary& b) {
   EXPECT_EQ(a.stage_ms_median.fusion_ms, b.stage_ms_median.fusion_ms);
   EXPECT_EQ(a.stage_ms_median.refinement_ms, b.stage_ms_median.refinement_ms);
   EXPECT_EQ(a.stage_ms_median.total_ms, b.stage_ms_median.total_ms);
+  EXPECT_EQ(a.counts.detections, b.counts.detections);
+  EXPECT_EQ(a.counts.above_threshold, b.counts.above_threshold);
+  EXPECT_EQ(a.counts.with_box, b.counts.with_box);
+  EXPECT_EQ(a.counts.inserted, b.counts.inserted);
+  EXPECT_EQ(a.counts.fused, b.counts.fused);
+  EXPECT_EQ(a.counts.before_refinement, b.counts.before_refinement);
 }
 
 TEST(JsonIoTest, RoundTripWithClouds) {
@@ -131,6 +143,26 @@ TEST(JsonIoTest, RoundTripWithoutClouds) {
   ASSERT_EQ(loaded.size(), 1u);
   expectSameObject(objects[0], loaded[0], false);
   expectSameSummary(summary, loaded_summary);
+}
+
+// Table 4's counts are optional (maps saved before they existed still load) but checked when there.
+TEST(JsonIoTest, CountsAreOptionalAndValidated) {
+  const std::vector<MapObject> objects = {makeObject(3, "tv", 1.2, 20)};
+  nlohmann::json doc = nlohmann::json::parse(objectsToJson(objects, makeSummary(), false));
+  EXPECT_EQ(doc["counts"]["fused"], 210);
+  doc.erase("counts");
+  MapSummary loaded;
+  ASSERT_TRUE(objectsFromJson(doc.dump(), nullptr, &loaded).ok());
+  EXPECT_EQ(loaded.counts.detections, 0);
+  EXPECT_EQ(loaded.counts.before_refinement, 0);
+  doc["counts"] = {{"detections", 1}};
+  const Status missing = objectsFromJson(doc.dump(), nullptr, &loaded);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("counts.above_threshold"), std::string::npos)
+      << missing.message();
+  doc = nlohmann::json::parse(objectsToJson(objects, makeSummary(), false));
+  doc["counts"]["fused"] = -1;
+  EXPECT_FALSE(objectsFromJson(doc.dump(), nullptr, &loaded).ok());
 }
 
 TEST(JsonIoTest, CloudsAreRoundedToMillimetres) {

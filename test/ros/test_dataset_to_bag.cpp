@@ -22,6 +22,8 @@
 #include <sstream>
 
 #include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/file_instance_segmenter.h"
+#include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/scenenn_dataset.h"
 #include "multiview_object_detection/synthetic_scene.h"
 
@@ -319,6 +321,69 @@ TEST_F(DatasetToBagTest, SceneNNLayoutUsesTimestampsAndTrajectory) {
       "--dataset " + data.string() + " --output " + bag_path.string() + " --last 2", dir_);
   ASSERT_EQ(bad.exit_code, 0) << bad.stderr_text;
   expectTopicsAndCounts(readBag(bag_path), 2);
+}
+
+// --detector records the detector's output per frame, stamped like the colour image, so the node's
+// detector:=topic replays it.
+TEST_F(DatasetToBagTest, RecordsDetectionsForTheTopicDetector) {
+  const fs::path data = dir_ / "data";
+  const fs::path detections = dir_ / "detections";
+  ASSERT_TRUE(scene_->writeSevenScenes(data.string(), detections.string()).ok());
+  const fs::path bag_path = dir_ / "out.bag";
+  const ToolResult run =
+      runDatasetToBag("--dataset " + data.string() + " --output " + bag_path.string() +
+                          " --detector files --detections " + detections.string(),
+                      dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("detector:=topic"), std::string::npos) << run.stderr_text;
+
+  rosbag::Bag bag(bag_path.string(), rosbag::bagmode::Read);
+  std::map<double, multiview_object_detection::InstanceDetections> by_stamp;
+  std::vector<double> color_stamps;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (m.getTopic() == "/detections") {
+      const auto msg = m.instantiate<multiview_object_detection::InstanceDetections>();
+      ASSERT_TRUE(msg != nullptr) << m.getDataType();
+      by_stamp[msg->header.stamp.toSec()] = *msg;
+    } else if (m.getTopic() == "/camera/rgb/image_raw") {
+      color_stamps.push_back(m.instantiate<sensor_msgs::Image>()->header.stamp.toSec());
+    }
+  }
+  ASSERT_EQ(color_stamps.size(), 3u);
+  ASSERT_EQ(by_stamp.size(), 3u);
+  FileInstanceSegmenter files(detections.string());
+  size_t total = 0;
+  for (size_t i = 0; i < color_stamps.size(); ++i) {
+    ASSERT_EQ(by_stamp.count(color_stamps[i]), 1u) << "no detections at a colour stamp";
+    const auto& msg = by_stamp[color_stamps[i]];
+    std::vector<Detection2D> expected;
+    ASSERT_TRUE(files
+                    .detect(cv::Mat(240, 320, CV_8UC3),
+                            SevenScenesDataset::frameName(static_cast<int>(i)), &expected)
+                    .ok());
+    std::vector<Detection2D> replayed;
+    ASSERT_TRUE(detectionsFromMsg(msg, cv::Size(320, 240), "/detections", &replayed).ok());
+    ASSERT_EQ(replayed.size(), expected.size());
+    for (size_t k = 0; k < expected.size(); ++k) {
+      EXPECT_EQ(replayed[k].class_name, expected[k].class_name);
+      EXPECT_FLOAT_EQ(replayed[k].score, expected[k].score);
+      EXPECT_EQ(cv::norm(replayed[k].mask, expected[k].mask, cv::NORM_INF), 0.0);
+    }
+    total += expected.size();
+  }
+  EXPECT_GT(total, 3u);
+
+  // A detector that cannot be created is a data error before anything is written; an unknown one
+  // is a usage error.
+  const std::string io = " --dataset " + data.string() + " --output " + bag_path.string();
+  fs::remove(bag_path);
+  EXPECT_EQ(runDatasetToBag(io + " --detector nonsense", dir_).exit_code, 2);
+  EXPECT_EQ(runDatasetToBag(io + " --detections " + detections.string(), dir_).exit_code, 2);
+  const ToolResult missing = runDatasetToBag(
+      io + " --detector fastestdet --model-dir " + (dir_ / "no_models").string(), dir_);
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.stderr_text.find("FastestDet"), std::string::npos) << missing.stderr_text;
+  EXPECT_FALSE(fs::exists(bag_path));
 }
 
 TEST_F(DatasetToBagTest, BadUsageAndBadData) {
