@@ -930,6 +930,34 @@ Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up
   return Status::Ok();
 }
 
+EvaluationResult evaluateScenes(std::vector<EvaluationScene> scenes,
+                                const EvaluationOptions& options) {
+  constexpr double kSceneSpacingM = 1000.0;
+  const Eigen::Vector3d up =
+      options.up_W.norm() > 1e-9 ? options.up_W.normalized() : Eigen::Vector3d::UnitZ();
+  Eigen::Index axis = 0;
+  up.cwiseAbs().minCoeff(&axis);
+  const Eigen::Vector3d across =
+      (Eigen::Vector3d::Unit(axis) - Eigen::Vector3d::Unit(axis).dot(up) * up).normalized();
+  std::vector<GroundTruthObject> ground_truth;
+  std::vector<EvaluatedPrediction> predictions;
+  for (size_t k = 0; k < scenes.size(); ++k) {
+    const Eigen::Vector3d shift = static_cast<double>(k) * kSceneSpacingM * across;
+    const Eigen::Vector3f shift_f = shift.cast<float>();
+    for (GroundTruthObject& object : scenes[k].ground_truth) {
+      object.box.center_m += shift;
+      for (Eigen::Vector3f& p : object.points_W) p += shift_f;
+      ground_truth.push_back(std::move(object));
+    }
+    for (EvaluatedPrediction& object : scenes[k].predictions) {
+      object.box.center_m += shift;
+      for (Eigen::Vector3f& p : object.points_W) p += shift_f;
+      predictions.push_back(std::move(object));
+    }
+  }
+  return evaluate(ground_truth, predictions, options);
+}
+
 std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObject>& objects) {
   std::vector<EvaluatedPrediction> predictions;
   predictions.reserve(objects.size());

@@ -98,6 +98,17 @@ EvaluationResult evaluate(const std::vector<GroundTruthObject>& ground_truth,
                           const std::vector<EvaluatedPrediction>& predictions,
                           const EvaluationOptions& options);
 
+// Several scenes pooled into one evaluation, as PASCAL VOC pools images: a class's predictions are
+// ranked together across scenes, each can match only its own scene's ground truth, and the ground
+// truth counts add up. (Scene k is moved by k * 1000 m along a horizontal axis, so no two scenes
+// overlap; every scene must use options.up_W.)
+struct EvaluationScene {
+  std::vector<GroundTruthObject> ground_truth;
+  std::vector<EvaluatedPrediction> predictions;
+};
+EvaluationResult evaluateScenes(std::vector<EvaluationScene> scenes,
+                                const EvaluationOptions& options);
+
 // Markdown table (AP in %, one decimal; "-" where undefined) and CSV (fractions; empty where
 // undefined): class, #GT, #pred, AP seg, AP box@0.25, AP box@0.5, and a mean row.
 std::string evaluationToMarkdown(const EvaluationResult& result);

@@ -4,12 +4,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
 #include "cli_args.h"
 #include "multiview_object_detection/evaluation.h"
 #include "multiview_object_detection/json_io.h"
+#include "multiview_object_detection/map_plot.h"
 
 namespace fs = std::filesystem;
 
@@ -21,6 +23,8 @@ constexpr int kExitUsage = 2;    // bad arguments
 
 const char* const kUsage =
     "usage: evaluate --objects objects.json --ground-truth PATH [options]\n"
+    "       evaluate --objects A.json --ground-truth A --objects B.json --ground-truth B ...\n"
+    "       evaluate --objects objects.json --plot map.png        (no ground truth: plot only)\n"
     "\n"
     "Per-class AP of the detected objects against ground truth: segmentation AP\n"
     "(3D IoU of voxelised point sets >= 0.5, VOC all-point AP, the paper's Sec. 4.1)\n"
@@ -33,11 +37,16 @@ const char* const kUsage =
     "or object_<id>_<class>_fused.ply in --clouds DIR (offline_detection\n"
     "--save-clouds). A prediction without a cloud segments the ground-truth points\n"
     "inside its box: a proxy; save the clouds for the paper's metric.\n"
+    "Several --objects/--ground-truth pairs (and --clouds, one per pair or none) are\n"
+    "pooled into one table, as PASCAL VOC pools images: per class, predictions of\n"
+    "every scene are ranked together and #GT adds up.\n"
     "\n"
     "options:\n"
-    "  --objects FILE       objects.json to score (required)\n"
-    "  --ground-truth PATH  ground truth (required)\n"
+    "  --objects FILE       objects.json to score (required; repeat for more scenes)\n"
+    "  --ground-truth PATH  ground truth (required unless only --plot; one per --objects)\n"
     "  --clouds DIR         folder of object_<id>_<class>_fused.ply clouds\n"
+    "  --plot FILE          bird's-eye PNG of the (first) scene: detected boxes over the\n"
+    "                       ground truth (or over their own clouds without ground truth)\n"
     "  --voxel-size M       voxel of the segmentation IoU, metres (default: 0.05)\n"
     "  --up AXIS            world up: x, y, z, -x, -y, -z or auto (default: auto =\n"
     "                       y for SceneNN, whose meshes are y-up; z for .json)\n"
@@ -48,9 +57,10 @@ const char* const kUsage =
     "exit status: 0 ok, 1 an input cannot be read or an output written, 2 bad arguments\n";
 
 struct Options {
-  std::string objects;
-  std::string ground_truth;
-  std::string clouds;
+  std::vector<std::string> objects;
+  std::vector<std::string> ground_truth;
+  std::vector<std::string> clouds;
+  std::string plot;
   std::string markdown;
   std::string csv;
   std::string up = "auto";
@@ -88,11 +98,12 @@ std::string parseArguments(int argc, char** argv, Options* options) {
     if (arg == "--help" || arg == "-h") {
       options->help = true;
     } else if (arg == "--objects" || arg == "--ground-truth" || arg == "--clouds" ||
-               arg == "--markdown" || arg == "--csv" || arg == "--up") {
+               arg == "--markdown" || arg == "--csv" || arg == "--up" || arg == "--plot") {
       if (!value(&text) || text.empty()) return arg + " needs a value";
-      if (arg == "--objects") options->objects = text;
-      if (arg == "--ground-truth") options->ground_truth = text;
-      if (arg == "--clouds") options->clouds = text;
+      if (arg == "--objects") options->objects.push_back(text);
+      if (arg == "--ground-truth") options->ground_truth.push_back(text);
+      if (arg == "--clouds") options->clouds.push_back(text);
+      if (arg == "--plot") options->plot = text;
       if (arg == "--markdown") options->markdown = text;
       if (arg == "--csv") options->csv = text;
       if (arg == "--up") {
@@ -113,7 +124,16 @@ std::string parseArguments(int argc, char** argv, Options* options) {
   }
   if (options->help) return "";
   if (options->objects.empty()) return "--objects is required";
-  if (options->ground_truth.empty()) return "--ground-truth is required";
+  if (options->ground_truth.empty()) {
+    if (options->plot.empty()) return "--ground-truth is required";
+    if (options->objects.size() > 1) return "several --objects need one --ground-truth each";
+  } else if (options->ground_truth.size() != options->objects.size()) {
+    return "give one --ground-truth per --objects (" + std::to_string(options->objects.size()) +
+           " --objects, " + std::to_string(options->ground_truth.size()) + " --ground-truth)";
+  }
+  if (!options->clouds.empty() && options->clouds.size() != options->objects.size()) {
+    return "give --clouds once per --objects, or not at all";
+  }
   return "";
 }
 
@@ -136,17 +156,27 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  std::error_code fs_error;
-  if (!fs::exists(options.ground_truth, fs_error)) {
-    std::cerr << "evaluate: " << options.ground_truth << ": no such file or folder\n";
-    return kExitFailure;
-  }
   // A synthetic dataset folder holds its ground_truth.json; a SceneNN folder holds <id>.ply/.xml.
-  if (fs::is_directory(options.ground_truth, fs_error) &&
-      fs::is_regular_file(fs::path(options.ground_truth) / "ground_truth.json", fs_error)) {
-    options.ground_truth = (fs::path(options.ground_truth) / "ground_truth.json").string();
+  std::error_code fs_error;
+  for (std::string& path : options.ground_truth) {
+    if (!fs::exists(path, fs_error)) {
+      std::cerr << "evaluate: " << path << ": no such file or folder\n";
+      return kExitFailure;
+    }
+    if (fs::is_directory(path, fs_error) &&
+        fs::is_regular_file(fs::path(path) / "ground_truth.json", fs_error)) {
+      path = (fs::path(path) / "ground_truth.json").string();
+    }
   }
-  const bool synthetic = endsWith(options.ground_truth, ".json");
+  const bool synthetic =
+      options.ground_truth.empty() || endsWith(options.ground_truth.front(), ".json");
+  for (const std::string& path : options.ground_truth) {
+    if (endsWith(path, ".json") != synthetic && options.up == "auto") {
+      std::cerr << "evaluate: the scenes mix synthetic (.json, z-up) and SceneNN (y-up) ground "
+                   "truth: give --up\n";
+      return kExitUsage;
+    }
+  }
   mvod::EvaluationOptions evaluation;
   evaluation.voxel_size_m = options.voxel_size_m;
   if (options.up == "auto") {
@@ -155,34 +185,64 @@ int main(int argc, char** argv) {
     parseAxis(options.up, &evaluation.up_W);
   }
 
-  std::vector<mvod::GroundTruthObject> ground_truth;
-  const mvod::Status loaded =
-      synthetic
-          ? mvod::loadSyntheticGroundTruth(options.ground_truth, evaluation.surface_spacing_m,
-                                           evaluation.up_W, &ground_truth)
-          : mvod::loadSceneNNGroundTruth(options.ground_truth, evaluation.up_W, &ground_truth);
-  if (!loaded) {
-    std::cerr << "evaluate: " << loaded.message() << "\n";
-    return kExitFailure;
-  }
-  std::vector<mvod::EvaluatedPrediction> predictions;
+  std::vector<mvod::EvaluationScene> scenes(options.objects.size());
+  size_t num_ground_truth = 0;
+  size_t num_predictions = 0;
   int with_clouds = 0;
-  const mvod::Status read =
-      mvod::loadPredictions(options.objects, options.clouds, &predictions, &with_clouds);
-  if (!read) {
-    std::cerr << "evaluate: " << read.message() << "\n";
-    return kExitFailure;
+  for (size_t k = 0; k < scenes.size(); ++k) {
+    if (!options.ground_truth.empty()) {
+      const std::string& path = options.ground_truth[k];
+      const mvod::Status loaded =
+          endsWith(path, ".json")
+              ? mvod::loadSyntheticGroundTruth(path, evaluation.surface_spacing_m, evaluation.up_W,
+                                               &scenes[k].ground_truth)
+              : mvod::loadSceneNNGroundTruth(path, evaluation.up_W, &scenes[k].ground_truth);
+      if (!loaded) {
+        std::cerr << "evaluate: " << loaded.message() << "\n";
+        return kExitFailure;
+      }
+    }
+    int clouds = 0;
+    const mvod::Status read = mvod::loadPredictions(
+        options.objects[k], options.clouds.empty() ? std::string() : options.clouds[k],
+        &scenes[k].predictions, &clouds);
+    if (!read) {
+      std::cerr << "evaluate: " << read.message() << "\n";
+      return kExitFailure;
+    }
+    with_clouds += clouds;
+    num_ground_truth += scenes[k].ground_truth.size();
+    num_predictions += scenes[k].predictions.size();
   }
 
-  const mvod::EvaluationResult result = mvod::evaluate(ground_truth, predictions, evaluation);
+  int exit_code = kExitOk;
+  if (!options.plot.empty()) {
+    const cv::Mat image = mvod::drawBirdsEyeMap(scenes.front().ground_truth,
+                                                scenes.front().predictions, evaluation.up_W);
+    bool written = false;
+    try {
+      written = cv::imwrite(options.plot, image);
+    } catch (const cv::Exception& e) {
+      std::cerr << "evaluate: " << options.plot << ": " << e.what() << "\n";
+    }
+    if (!written) {
+      std::cerr << "evaluate: cannot write " << options.plot << "\n";
+      exit_code = kExitFailure;
+    } else {
+      std::fprintf(stderr, "wrote %s\n", options.plot.c_str());
+    }
+  }
+  if (options.ground_truth.empty()) return exit_code;
+
+  const mvod::EvaluationResult result = mvod::evaluateScenes(std::move(scenes), evaluation);
   const std::string markdown = mvod::evaluationToMarkdown(result);
   std::fputs(markdown.c_str(), stdout);
   std::fprintf(stderr,
-               "%zu ground-truth objects, %zu predictions (%d with clouds; the others "
-               "segment the ground truth inside their box); voxel %.3f m\n",
-               ground_truth.size(), predictions.size(), with_clouds, evaluation.voxel_size_m);
+               "%zu scene(s): %zu ground-truth objects, %zu predictions (%d with clouds; the "
+               "others segment the ground truth inside their box); voxel %.3f m\n",
+               options.objects.size(), num_ground_truth, num_predictions, with_clouds,
+               evaluation.voxel_size_m);
 
-  int exit_code = kExitOk;
   if (!options.markdown.empty()) {
     const mvod::Status written = mvod::writeFileAtomic(options.markdown, markdown);
     if (!written) {
