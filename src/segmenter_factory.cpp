@@ -5,16 +5,26 @@
 
 #include "multiview_object_detection/dnn_instance_segmenter.h"
 #include "multiview_object_detection/file_instance_segmenter.h"
+#include "multiview_object_detection/simulated_instance_segmenter.h"
 
 namespace mvod {
 
 Status SegmenterOptions::isValid() const {
-  if (detector != "files" && detector != "fastestdet" && detector != "maskrcnn") {
+  if (detector != "files" && detector != "fastestdet" && detector != "maskrcnn" &&
+      detector != "simulated") {
     return Status::Error("detector '" + detector +
-                         "' is unknown (use files, fastestdet or maskrcnn)");
+                         "' is unknown (use files, fastestdet, maskrcnn or simulated)");
   }
   if (detector == "files" && detections_dir.empty()) {
     return Status::Error("detector 'files' needs a detections folder");
+  }
+  if (detector == "simulated") {
+    if (detections_dir.empty()) {
+      return Status::Error(
+          "detector 'simulated' needs the sequence folder (with <id>.xml and label/)");
+    }
+    const Status valid = simulated.isValid();
+    if (!valid) return Status::Error("detector 'simulated': " + valid.message());
   }
   if (!(score_threshold >= 0.f && score_threshold <= 1.f)) {
     return Status::Error("score_threshold must be in [0, 1]");
@@ -49,6 +59,14 @@ Status createInstanceSegmenter(const SegmenterOptions& options,
   if (!valid) return valid;
   if (options.detector == "files") {
     *segmenter = std::make_unique<FileInstanceSegmenter>(options.detections_dir);
+    return Status::Ok();
+  }
+  if (options.detector == "simulated") {
+    std::unique_ptr<SimulatedInstanceSegmenter> simulated;
+    const Status created =
+        SimulatedInstanceSegmenter::create(options.detections_dir, options.simulated, &simulated);
+    if (!created) return created;
+    *segmenter = std::move(simulated);
     return Status::Ok();
   }
   DnnModelOptions dnn;
