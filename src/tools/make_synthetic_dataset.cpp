@@ -1,7 +1,8 @@
-// make_synthetic_dataset: writes the default synthetic scene (SyntheticScene::makeDefault) as a
-// dataset in the 7-Scenes layout, optionally with perfect instance detections, plus
-// ground_truth.json with the true boxes.
+// make_synthetic_dataset: renders a synthetic room (SyntheticScene::makeDefault, or a furnished
+// room of SyntheticScene::makeRoom) as a dataset in the 7-Scenes layout, optionally with perfect
+// instance detections, plus ground_truth.json with the true boxes; or as a SceneNN sequence.
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,27 +22,47 @@ constexpr int kExitUsage = 2;    // bad arguments
 const char* const kUsage =
     "usage: make_synthetic_dataset --output DIR [options]\n"
     "\n"
-    "Renders the synthetic room (a dining table with four chairs, a couch, a tv on a stand, cups "
-    "and\n"
-    "a book) to RGB-D frames in the 7-Scenes layout (frame-NNNNNN.color.png, .depth.png, "
-    ".pose.txt,\n"
-    "camera-intrinsics.txt, gravity-direction.txt) and writes ground_truth.json with the true "
-    "boxes.\n"
+    "Renders a synthetic room to RGB-D frames with ground truth. The default room has a dining\n"
+    "table with four chairs, a couch, a tv on a stand, cups and a book; --room living|bedroom|\n"
+    "dining|random builds a furnished room from multi-part furniture (chairs, tables, couch, bed,\n"
+    "tv, refrigerator, bookshelves with books, cups), varied by the seed.\n"
+    "\n"
+    "--layout 7scenes (default): frame-NNNNNN.color.png, .depth.png, .pose.txt,\n"
+    "  camera-intrinsics.txt, gravity-direction.txt (z-up world) and ground_truth.json with the\n"
+    "  true boxes and each object's observed surface points.\n"
+    "--layout scenenn: a SceneNN sequence in DIR: image/imageNNNNN.png, depth/depthNNNNN.png,\n"
+    "  label/labelNNNNN.png (16-bit instance ids of ID.xml), trajectory.log, timestamp.txt,\n"
+    "  asus.ini, ID.xml (annotation) and ID.ply (observed surface, per-vertex label); y-up world,\n"
+    "  SceneNN's 640x480 camera (fx = fy = 544.47329).\n"
     "\n"
     "options:\n"
-    "  --output DIR       dataset folder to write (required)\n"
-    "  --detections DIR   also write perfect instance detections (JSON + mask PNGs) there\n"
-    "  --frames N         number of frames, one lap around the room (default: 60)\n"
-    "  --seed S           scene variation seed, >= 0 (default: 1)\n"
-    "  --noise K          depth noise sigma = K * z^2 (m), >= 0 (default: 0)\n"
-    "  --holes F          fraction of random invalid depth pixels in [0, 1) (default: 0)\n"
-    "  --help             this text\n"
+    "  --output DIR         dataset folder to write (required)\n"
+    "  --layout L           7scenes or scenenn (default: 7scenes)\n"
+    "  --room R             default, living, bedroom, dining or random (by the seed)\n"
+    "                       (default: default)\n"
+    "  --id NAME            SceneNN sequence id, the ID of ID.xml/ID.ply\n"
+    "                       (default: synthetic_<seed>)\n"
+    "  --detections DIR     7scenes only: also write perfect instance detections (JSON + mask\n"
+    "                       PNGs) there\n"
+    "  --frames N           number of frames, one lap around the room (default: 60)\n"
+    "  --seed S             scene variation seed, >= 0 (default: 1)\n"
+    "  --noise-model M      quadratic (sigma = K * z^2, see --noise) or kinect (Kinect v1: axial\n"
+    "                       noise 1.2 mm + 1.9 mm (z - 0.4)^2, disparity steps, no depth beyond\n"
+    "                       5 m, at grazing angles or in the IR shadow of edges)\n"
+    "                       (default: quadratic)\n"
+    "  --noise K            quadratic model: depth noise sigma = K * z^2 (m), >= 0 (default: 0)\n"
+    "  --holes F            fraction of random invalid depth pixels in [0, 1) (default: 0)\n"
+    "  --help               this text\n"
     "\n"
     "exit status: 0 ok, 1 a folder or file cannot be written, 2 bad arguments\n";
 
 struct Options {
   std::string output;
   std::string detections;
+  std::string layout = "7scenes";
+  std::string room = "default";
+  std::string id;
+  bool noise_given = false;
   mvod::SyntheticSceneConfig scene;
   bool help = false;
 };
@@ -57,12 +78,35 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       continue;
     }
     if (arg != "--output" && arg != "--detections" && arg != "--frames" && arg != "--seed" &&
-        arg != "--noise" && arg != "--holes") {
+        arg != "--noise" && arg != "--holes" && arg != "--layout" && arg != "--room" &&
+        arg != "--id" && arg != "--noise-model") {
       return "unknown argument '" + arg + "'";
     }
     if (!has_value) return arg + " needs a value";
     text = argv[++i];
-    if (arg == "--output" || arg == "--detections") {
+    if (arg == "--layout") {
+      if (text != "7scenes" && text != "scenenn") return "--layout needs 7scenes or scenenn";
+      options->layout = text;
+    } else if (arg == "--room") {
+      if (text != "default" && text != "living" && text != "bedroom" && text != "dining" &&
+          text != "random") {
+        return "--room needs default, living, bedroom, dining or random";
+      }
+      options->room = text;
+    } else if (arg == "--id") {
+      if (text.empty() || text.find_first_of("/\\<>\"&") != std::string::npos) {
+        return "--id needs a name without / \\ < > \" &";
+      }
+      options->id = text;
+    } else if (arg == "--noise-model") {
+      if (text == "quadratic") {
+        options->scene.noise_model = mvod::DepthNoiseModel::kQuadratic;
+      } else if (text == "kinect") {
+        options->scene.noise_model = mvod::DepthNoiseModel::kKinect;
+      } else {
+        return "--noise-model needs quadratic or kinect";
+      }
+    } else if (arg == "--output" || arg == "--detections") {
       if (text.empty()) return arg + " needs a value";
       (arg == "--output" ? options->output : options->detections) = text;
     } else if (arg == "--frames") {
@@ -76,6 +120,7 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       }
       options->scene.seed = static_cast<unsigned int>(seed);
     } else if (arg == "--noise") {
+      options->noise_given = true;
       if (!mvod::cli::parseDouble(text, &options->scene.depth_noise_m_per_m2) ||
           options->scene.depth_noise_m_per_m2 < 0.0) {
         return "--noise needs a number >= 0";
@@ -87,7 +132,18 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       }
     }
   }
-  if (!options->help && options->output.empty()) return "--output is required";
+  if (options->help) return std::string();
+  if (options->output.empty()) return "--output is required";
+  if (options->layout == "scenenn" && !options->detections.empty()) {
+    return "--detections is for --layout 7scenes only (SceneNN sequences carry label images)";
+  }
+  if (options->layout == "7scenes" && !options->id.empty()) {
+    return "--id is for --layout scenenn only";
+  }
+  if (options->noise_given && options->scene.noise_model == mvod::DepthNoiseModel::kKinect) {
+    return "--noise is for --noise-model quadratic (the kinect model sets its own noise)";
+  }
+  if (options->id.empty()) options->id = "synthetic_" + std::to_string(options->scene.seed);
   return std::string();
 }
 
@@ -105,29 +161,65 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  const mvod::SyntheticScene scene = mvod::SyntheticScene::makeDefault(options.scene);
-  const mvod::Status written = scene.writeSevenScenes(options.output, options.detections);
+  mvod::SyntheticScene scene = mvod::SyntheticScene::makeDefault(options.scene);
+  std::string room_name = "default";
+  if (options.room != "default") {
+    mvod::RoomType type = mvod::roomTypeFromSeed(options.scene.seed);
+    if (options.room == "living") type = mvod::RoomType::kLivingRoom;
+    if (options.room == "bedroom") type = mvod::RoomType::kBedroom;
+    if (options.room == "dining") type = mvod::RoomType::kDiningRoom;
+    scene = mvod::SyntheticScene::makeRoom(options.scene, type);
+    room_name = mvod::roomTypeName(type);
+  }
+  const bool scenenn = options.layout == "scenenn";
+  const auto start = std::chrono::steady_clock::now();
+  const mvod::Status written = scenenn ? scene.writeSceneNN(options.output, options.id)
+                                       : scene.writeSevenScenes(options.output, options.detections);
   if (!written) {
     std::cerr << "make_synthetic_dataset: " << written.message() << "\n";
     return kExitFailure;
   }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const mvod::SyntheticSceneConfig& config = scene.config();
-  std::printf("wrote %d frames (%dx%d, depth noise %.4g m/m^2, holes %.3g) to %s\n",
-              config.num_frames, config.K.width, config.K.height, config.depth_noise_m_per_m2,
-              config.hole_fraction, options.output.c_str());
+  const mvod::CameraIntrinsics K = scenenn ? mvod::SyntheticScene::sceneNNIntrinsics() : config.K;
+  const bool kinect = config.noise_model == mvod::DepthNoiseModel::kKinect;
+  std::printf(
+      "wrote %d frames (%s layout, %s room %.2f x %.2f m, %dx%d, %s, holes %.3g) to %s "
+      "in %.1f s\n",
+      config.num_frames, options.layout.c_str(), room_name.c_str(), config.room_size_x_m,
+      config.room_size_y_m, K.width, K.height,
+      kinect ? "kinect depth model"
+             : ("depth noise " + std::to_string(config.depth_noise_m_per_m2) + " m/m^2").c_str(),
+      config.hole_fraction, options.output.c_str(), seconds);
   if (!options.detections.empty()) {
     std::printf("perfect detections in %s\n", options.detections.c_str());
   }
-  std::printf("%zu objects (ground_truth.json):\n", scene.objects().size());
-  std::printf("  %-14s %-24s %-20s %s\n", "class", "centre (m)", "size (m)", "yaw (deg)");
-  for (const mvod::SyntheticObject& object : scene.objects()) {
+  if (scenenn) {
+    std::printf("annotation %s.xml, observed surface %s.ply (y-up world)\n", options.id.c_str(),
+                options.id.c_str());
+  }
+  std::printf("%zu objects (%s), z-up world:\n", scene.objects().size(),
+              scenenn ? "label id = index" : "ground_truth.json");
+  std::printf("  %-3s %-14s %-24s %-20s %s\n", "id", "class", "centre (m)", "size (m)",
+              "yaw (deg)");
+  auto printRow = [](int id, const mvod::SyntheticObject& object) {
     const Eigen::Vector3d& c = object.box.center_m;
     const Eigen::Vector3d& s = object.box.size_m;
     const double yaw_deg =
         std::atan2(object.box.rotation(1, 0), object.box.rotation(0, 0)) * 180.0 / M_PI;
-    std::printf("  %-14s (%5.2f, %5.2f, %5.2f)   (%4.2f, %4.2f, %4.2f)   %6.1f\n",
+    std::printf("  %-3d %-14s (%5.2f, %5.2f, %5.2f)   (%4.2f, %4.2f, %4.2f)   %6.1f\n", id,
                 object.class_name.c_str(), c.x(), c.y(), c.z(), s.x(), s.y(), s.z(), yaw_deg);
+  };
+  for (size_t k = 0; k < scene.objects().size(); ++k) {
+    printRow(scene.sceneNNObjectId(static_cast<int>(k)), scene.objects()[k]);
+  }
+  if (!scene.clutter().empty()) {
+    std::printf("%zu clutter pieces (not ground truth):\n", scene.clutter().size());
+    for (size_t j = 0; j < scene.clutter().size(); ++j) {
+      printRow(scene.sceneNNClutterId(static_cast<int>(j)), scene.clutter()[j]);
+    }
   }
   return kExitOk;
 }
