@@ -967,7 +967,9 @@ std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObj
     prediction.class_name = canonicalClassName(object.class_name);
     prediction.probability = object.probability;
     prediction.box = object.box;
-    prediction.points_W = object.points_W;
+    // The paper scores "the segmented object points" (Sec. 4.1): the LCCP segment of the fused
+    // cloud; the fused cloud only where no segment was stored.
+    prediction.points_W = object.segment_W.empty() ? object.points_W : object.segment_W;
     predictions.push_back(std::move(prediction));
   }
   return predictions;
@@ -990,15 +992,18 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
     std::vector<MapObject> one = {object};
     EvaluatedPrediction prediction = predictionsFromObjects(one).front();
     if (prediction.points_W.empty() && !clouds_dir.empty()) {
-      // offline_detection --save-clouds names the files object_<id>_<class>_fused.ply.
-      const fs::path cloud_path =
-          fs::path(clouds_dir) / ("object_" + std::to_string(object.id) + "_" +
-                                  fileSafe(object.class_name) + "_fused.ply");
-      std::error_code error;
-      if (fs::is_regular_file(cloud_path, error)) {
+      // offline_detection --save-clouds names the files object_<id>_<class>_segment.ply (the
+      // LCCP segment, scored) and ..._fused.ply (the fused cloud, the fallback).
+      for (const char* suffix : {"_segment.ply", "_fused.ply"}) {
+        const fs::path cloud_path =
+            fs::path(clouds_dir) /
+            ("object_" + std::to_string(object.id) + "_" + fileSafe(object.class_name) + suffix);
+        std::error_code error;
+        if (!fs::is_regular_file(cloud_path, error)) continue;
         if (!(status = readPlyVertices(cloud_path.string(), &prediction.points_W, nullptr))) {
           return status;
         }
+        if (!prediction.points_W.empty()) break;
       }
     }
     if (!prediction.points_W.empty()) ++with_clouds;

@@ -145,13 +145,14 @@ Status loadSyntheticGroundTruth(const std::string& path, double spacing_m,
 Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up_W,
                               std::vector<GroundTruthObject>* objects);
 
-// objects.json -> predictions. Points: the fused cloud stored in the file ("points", written with
-// include_clouds) or else, when clouds_dir is not empty and holds it, the
-// object_<id>_<class>_fused.ply written by offline_detection --save-clouds; otherwise empty (the
-// box segments the ground truth, see EvaluatedPrediction). *num_with_clouds (optional) counts
-// predictions that got a cloud.
+// objects.json -> predictions. Points, the paper's "segmented object points": the LCCP segment
+// stored in the file ("segment", written with include_clouds; else its "points", the fused cloud),
+// or else, when clouds_dir is not empty, object_<id>_<class>_segment.ply (else _fused.ply) written
+// by offline_detection --save-clouds; otherwise empty (the box segments the ground truth, see
+// EvaluatedPrediction). *num_with_clouds (optional) counts predictions that got a cloud.
 Status loadPredictions(const std::string& objects_json_path, const std::string& clouds_dir,
                        std::vector<EvaluatedPrediction>* predictions, int* num_with_clouds);
+// Points: segment_W, or points_W where the segment is empty.
 std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObject>& objects);
 
 }  // namespace mvod

@@ -52,6 +52,8 @@ const char* const kUsage =
     "                         simulated: the sequence with label/ and <id>.xml (default: "
     "--dataset)\n"
     "  --model-dir DIR        folder of the DNN model files (default: $MVOD_MODEL_DIR)\n"
+    "  --simulated-seed S     simulated: seed of its failures (default: 1)\n"
+    "  --simulated-perfect    simulated: no failures (exact masks and classes, score 0.85)\n"
     "  --score-threshold S    detector score below which detections are not reported (default: "
     "0.5)\n"
     "  --backend NAME         cpu | cuda: where OpenCV DNN runs the detector (default: cpu)\n"
@@ -93,6 +95,8 @@ struct Options {
   bool no_lccp = false;
   bool single_frame = false;
   bool estimate_gravity = false;
+  bool simulated_perfect = false;
+  long simulated_seed = 1;
   bool quiet = false;
   bool help = false;
 };
@@ -115,6 +119,13 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       options->no_lccp = true;
     } else if (arg == "--single-frame") {
       options->single_frame = true;
+    } else if (arg == "--simulated-perfect") {
+      options->simulated_perfect = true;
+    } else if (arg == "--simulated-seed") {
+      if (!value(&text) || !mvod::cli::parseLong(text, 0, std::numeric_limits<unsigned int>::max(),
+                                                 &options->simulated_seed)) {
+        return "--simulated-seed needs an integer >= 0";
+      }
     } else if (arg == "--estimate-gravity") {
       options->estimate_gravity = true;
     } else if (arg == "--quiet") {
@@ -317,6 +328,10 @@ int main(int argc, char** argv) {
   segmenter_options.model_dir = options.model_dir;
   segmenter_options.score_threshold = static_cast<float>(options.score_threshold);
   segmenter_options.backend = options.backend;
+  if (options.simulated_perfect) {
+    segmenter_options.simulated = mvod::SimulatedInstanceSegmenter::Config::perfect();
+  }
+  segmenter_options.simulated.seed = static_cast<uint64_t>(options.simulated_seed);
   const mvod::Status segmenter_options_valid = segmenter_options.isValid();
   if (!segmenter_options_valid) {
     std::cerr << "offline_detection: " << segmenter_options_valid.message() << "\n";
