@@ -37,8 +37,10 @@ test: build
 	@catkin_test_results $(WS)/build/test_results || true
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 
+# make demo DATASET=DIR [FIRST=N LAST=M]: a 7-Scenes-layout folder or SceneNN sequence instead, FastestDet in the node.
+DATASET ?=
 demo: build
-	@bash scripts/demo.sh $(WS)
+	@bash scripts/demo.sh $(WS) $(DATASET)
 
 format:
 	@clang-format -i $$(git ls-files '*.cpp' '*.h')

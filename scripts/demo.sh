@@ -1,44 +1,135 @@
 #!/usr/bin/env bash
-# `make demo`: generates the embedded synthetic scene (a room with a table, chairs, a couch, a tv, cups and
-# a book, rendered to RGB-D with known boxes), runs the offline pipeline over it with perfect instance masks,
-# and prints the objects it found next to the ground truth.
-#   usage: scripts/demo.sh WORKSPACE
+# `make demo`: the ROS node end to end on the embedded synthetic scene.
+#   1. generates the synthetic room (RGB-D frames, camera poses, ground truth, 2D detections);
+#   2. dataset_to_bag: a bag with what a Kinect driver, ORB-SLAM2 and a detector would publish;
+#   3. scripts/demo_replay.py: roslaunch replay.launch (object_detection_node with detector:=topic, rviz on a
+#      virtual display), rosbag play, ~refine, ~save_map, the objects as a table, an rviz screenshot;
+#   4. evaluate: AP against the ground truth, and a bird's-eye plot of the boxes over the ground truth.
+# `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with FastestDet in the
+# node (models in $MVOD_MODEL_DIR, else ~/.ros/multiview_object_detection/models: scripts/download_models.sh),
+# without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames.
+#   usage: scripts/demo.sh WORKSPACE [DATASET]
+# Output: build/demo/ (objects.json, accuracy.md/.csv, map.png, rviz.png, roslaunch.log).
 set -euo pipefail
-ws=${1:?usage: demo.sh WORKSPACE}
+
+# The synthetic scene: "scenenn:ROOM" (SceneNN layout, y-up, simulated detector with its failures; ROOM =
+# default, living, bedroom or dining) or "7scenes" (the default room in the 7-Scenes layout, perfect masks).
+SCENE=${DEMO_SCENE:-scenenn:default}
+
+ws=${1:?usage: demo.sh WORKSPACE [DATASET]}
+dataset_arg=${2:-}
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin="$ws/devel/lib/multiview_object_detection"
 out="$root/build/demo"
-for tool in make_synthetic_dataset offline_detection evaluate; do
+for tool in make_synthetic_dataset dataset_to_bag object_detection_node evaluate; do
   [[ -x "$bin/$tool" ]] || { echo "demo: $bin/$tool is missing: run 'make build' first" >&2; exit 1; }
 done
+# ROS tools on Debian's python; the workspace's setup gives roslaunch the package.
+export PATH=/usr/bin:$PATH
+set +u
+# shellcheck disable=SC1091
+source "$ws/devel/setup.bash"
+set -u
 rm -rf "$out"
 mkdir -p "$out"
+start=$(date +%s)
+range=()
+[[ -n "${FIRST:-}" ]] && range+=(--first "$FIRST")
+[[ -n "${LAST:-}" ]] && range+=(--last "$LAST")
 
-echo "== 1/2 synthetic scene (60 RGB-D frames, 640x480, Kinect-like noise) -> $out/dataset"
-"$bin/make_synthetic_dataset" --output "$out/dataset" --detections "$out/detections" --frames 60 \
-  --noise 0.0015 --holes 0.02
+model_dir=""
+gravity=""       # gravity_down for the node, a YAML list; empty = gravity_source:=estimate
+ground_truth=""  # for evaluate; empty = none
+if [[ -z "$dataset_arg" ]]; then
+  # ---- the synthetic scene --------------------------------------------------------------------------------
+  if [[ "$SCENE" == scenenn:* ]]; then
+    room=${SCENE#scenenn:}
+    id="synthetic_$room"  # a SceneNN sequence folder <id>/ holds <id>.xml and <id>.ply
+    echo "== 1/4 synthetic SceneNN sequence, room '$room' (60 RGB-D frames, Kinect v1 noise) -> $out/$id"
+    "$bin/make_synthetic_dataset" --layout scenenn --room "$room" --seed 1 --noise-model kinect --frames 60 \
+      --id "$id" --output "$out/$id"
+    dataset="$out/$id"
+    detector_args=(--detector simulated)
+    gravity="[0, -1, 0]"   # SceneNN is y-up
+    ground_truth="$out/$id"
+    every=5
+  else
+    echo "== 1/4 synthetic room (60 RGB-D frames, 640x480, Kinect-like noise, perfect masks) -> $out/dataset"
+    "$bin/make_synthetic_dataset" --output "$out/dataset" --detections "$out/detections" --frames 60 \
+      --noise 0.0015 --holes 0.02
+    dataset="$out/dataset"
+    detector_args=(--detector files --detections "$out/detections")
+    gravity="[0, 0, -1]"
+    ground_truth="$out/dataset/ground_truth.json"
+    every=5
+  fi
+  node_detector=topic
+  rate=1.0
+else
+  # ---- a real dataset, FastestDet in the node ---------------------------------------------------------------
+  [[ -d "$dataset_arg" ]] || { echo "demo: DATASET=$dataset_arg is not a folder" >&2; exit 1; }
+  dataset=$(cd "$dataset_arg" && pwd)
+  dataset_name=$dataset
+  model_dir=${MVOD_MODEL_DIR:-$HOME/.ros/multiview_object_detection/models}
+  if [[ ! -f "$model_dir/FastestDet.onnx" || ! -f "$model_dir/coco.names" ]]; then
+    echo "demo: no FastestDet model in $model_dir: run scripts/download_models.sh (or set MVOD_MODEL_DIR)" >&2
+    exit 1
+  fi
+  echo "== 1/4 dataset $dataset, FastestDet from $model_dir"
+  if [[ -f "$dataset/camera-intrinsics.txt" && ! -f "$dataset/color-intrinsics.txt" ]] &&
+    compgen -G "$dataset/frame-*.color.*" >/dev/null; then
+    # 7-Scenes does not register colour to depth; take the Kinect v1 colour camera's default intrinsics
+    # (README, Real data). The dataset itself is not touched: a folder of links gets the extra file.
+    echo "   no color-intrinsics.txt: using the Kinect v1 colour default (fx = fy = 525, cx = 320, cy = 240)"
+    mkdir -p "$out/dataset"
+    ln -s "$dataset"/* "$out/dataset/"
+    printf '525 0 320\n0 525 240\n0 0 1\n' >"$out/dataset/color-intrinsics.txt"
+    dataset="$out/dataset"
+  fi
+  if [[ -f "$dataset/gravity-direction.txt" ]]; then
+    gravity=$(awk '{ for (i = 1; i <= NF; i++) v[n++] = $i } END { printf "[%.4f, %.4f, %.4f]", v[0], v[1], v[2] }' \
+      "$dataset/gravity-direction.txt")
+  elif [[ -f "$dataset/trajectory.log" || -d "$dataset/depth" ]]; then
+    gravity="[0, -1, 0]"   # SceneNN is y-up
+  fi
+  detector_args=()
+  node_detector=fastestdet
+  every=10
+  rate=${RATE:-0.5}
+fi
 
 echo
-echo "== 2/2 offline_detection: every 5th frame a keyframe, perfect masks"
-"$bin/offline_detection" --dataset "$out/dataset" --detections "$out/detections" --every 5 \
-  --priors "$root/config/class_priors.yaml" --output "$out/objects.json" \
-  --save-clouds "$out/clouds" --overlays "$out/overlays"
+echo "== 2/4 dataset_to_bag -> $out/demo.bag"
+"$bin/dataset_to_bag" --dataset "$dataset" --output "$out/demo.bag" "${detector_args[@]}" "${range[@]}" --quiet \
+  2>&1 | tee "$out/dataset_to_bag.log"
+# The tool says which gravity the node needs when the dataset knows it.
+said=$(grep -o -E 'gravity_down: \[[^]]*\]' "$out/dataset_to_bag.log" | head -n 1 | sed 's/gravity_down: //' || true)
+[[ -n "$said" ]] && gravity=$said
 
 echo
-echo "ground truth (dataset/ground_truth.json):"
-/usr/bin/python3 - "$out/dataset/ground_truth.json" <<'PY'
-import json, sys
-gt = json.load(open(sys.argv[1]))
-import math
-print("%-16s %-26s %-22s %s" % ("class", "centre (m)", "size (m)", "yaw (deg)"))
-for o in gt["objects"]:
-    c, s = o["center"], o["size"]
-    print("%-16s (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)  %8.1f"
-          % (o["class_name"], *c, *s, math.degrees(o["yaw"])))
-PY
+echo "== 3/4 replay through object_detection_node (every ${every}th frame a keyframe, gravity ${gravity:-estimated})"
+replay=(--bag "$out/demo.bag" --output-dir "$out" --detector "$node_detector" --keyframe-every "$every"
+  --rate "$rate" --rviz-config "$root/rviz/demo.rviz")
+if [[ -n "$gravity" ]]; then replay+=(--gravity-down "$gravity"); else replay+=(--gravity-estimate); fi
+[[ "$node_detector" == topic ]] || replay+=(--model-dir "$model_dir")
+/usr/bin/python3 "$root/scripts/demo_replay.py" "${replay[@]}"
+
 echo
-echo "== accuracy against the ground truth (evaluate; see README, Evaluation)"
-"$bin/evaluate" --objects "$out/objects.json" --ground-truth "$out/dataset/ground_truth.json" \
-  --clouds "$out/clouds" --markdown "$out/accuracy.md" --csv "$out/accuracy.csv"
+if [[ -n "$ground_truth" ]]; then
+  echo "== 4/4 accuracy against the ground truth (evaluate; see README, Evaluation)"
+  "$bin/evaluate" --objects "$out/objects.json" --ground-truth "$ground_truth" \
+    --markdown "$out/accuracy.md" --csv "$out/accuracy.csv" --plot "$out/map.png"
+else
+  echo "== 4/4 no ground truth for $dataset_name: no accuracy table; the bird's-eye map of the objects"
+  "$bin/evaluate" --objects "$out/objects.json" --plot "$out/map.png"
+fi
 echo
-echo "wrote $out/objects.json, object clouds in $out/clouds, keyframe overlays in $out/overlays"
+echo "demo done in $(($(date +%s) - start)) s. In $out:"
+for f in objects.json accuracy.md map.png rviz.png roslaunch.log demo.bag; do
+  if [[ -e "$out/$f" ]]; then echo "  $f"; fi
+done
+if [[ -n "$gravity" ]]; then gravity_arg="gravity_down:=\"$gravity\""; else gravity_arg="gravity_source:=estimate"; fi
+echo "Replay it with rviz on your screen:"
+echo "  roslaunch multiview_object_detection replay.launch bag:=$out/demo.bag pose_source:=topic" \
+  "detector:=$node_detector keyframe_mode:=every_n keyframe_every_n:=$every $gravity_arg" \
+  "${model_dir:+model_dir:=$model_dir}"

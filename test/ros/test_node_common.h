@@ -239,6 +239,17 @@ class NodeOutputs {
     if (subscribe_rosout) rosout_sub_ = nh.subscribe("/rosout", 1000, &NodeOutputs::onLog, this);
   }
 
+  // The subscriptions end before the data their callbacks write is destroyed (members go in
+  // reverse order, the subscribers last): the spinner's threads may still be delivering messages.
+  // Subscriber::shutdown() waits for a callback in progress.
+  ~NodeOutputs() {
+    for (ros::Subscriber* sub : {&objects_sub_, &markers_sub_, &keyframes_sub_, &rosout_sub_}) {
+      sub->shutdown();
+    }
+  }
+  NodeOutputs(const NodeOutputs&) = delete;
+  NodeOutputs& operator=(const NodeOutputs&) = delete;
+
   bool connected() const {
     return objects_sub_.getNumPublishers() > 0 && markers_sub_.getNumPublishers() > 0;
   }

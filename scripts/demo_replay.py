@@ -1,0 +1,437 @@
+#!/usr/bin/python3
+"""Replays a bag through object_detection_node (launch/replay.launch) and collects the result.
+
+Used by `make demo` (scripts/demo.sh); also usable alone:
+
+  scripts/demo_replay.py --bag scene.bag --output-dir DIR [--detector topic|fastestdet] [--model-dir DIR]
+      [--gravity-down "[0, -1, 0]" | --gravity-estimate] [--keyframe-every N] [--rate R] [--no-rviz]
+
+Starts roslaunch (its own master on a free port, so it never meets another master) with the node and, on a
+virtual X display (Xvfb), rviz. Plays the bag with `rosbag play --clock`, waits on /diagnostics until every
+selected keyframe is processed, calls ~refine and ~save_map (DIR/objects.json, with clouds), prints
+~get_objects as a table, shows the map in rviz gravity-up and saves a screenshot (DIR/rviz.png). Everything it
+started is stopped on the way out. Exit status: 0 ok, 1 the node failed or found nothing, 2 bad arguments.
+
+Needs the Python message packages (Debian's python3-{std,geometry,diagnostic,sensor,visualization,tf2}-msgs,
+python3-std-srvs; tools/debian-packages.txt) and this package's own, generated in the catkin devel space.
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+PKG = 'multiview_object_detection'
+NODE = '/object_detection'
+SCREEN = (1280, 960)
+
+
+def log(text):
+    print('[demo_replay] ' + text, flush=True)
+
+
+class DemoError(Exception):
+    pass
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Processes
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(('localhost', 0))
+        return s.getsockname()[1]
+
+
+def stop(process, name, timeout_s=20):
+    """SIGINT to the process group (roslaunch shuts its nodes and master down), then SIGTERM, SIGKILL."""
+    if process is None or process.poll() is not None:
+        return
+    for sig, wait_s in ((signal.SIGINT, timeout_s), (signal.SIGTERM, 5), (signal.SIGKILL, 5)):
+        try:
+            os.killpg(process.pid, sig)
+        except ProcessLookupError:
+            return
+        try:
+            process.wait(timeout=wait_s)
+            return
+        except subprocess.TimeoutExpired:
+            if sig != signal.SIGKILL:
+                log('%s did not stop on %s' % (name, signal.Signals(sig).name))
+
+
+def start_xvfb():
+    """Xvfb on a free display; returns (process, ':N')."""
+    read_fd, write_fd = os.pipe()
+    xvfb = subprocess.Popen(['Xvfb', '-displayfd', str(write_fd), '-screen', '0', '%dx%dx24' % SCREEN,
+                             '-nolisten', 'tcp', '-noreset'], pass_fds=(write_fd,), start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write_fd)
+    with os.fdopen(read_fd) as pipe:
+        number = pipe.readline().strip()
+    if not number:
+        stop(xvfb, 'Xvfb')
+        raise DemoError('Xvfb did not start')
+    return xvfb, ':' + number
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Geometry for the rviz view: a frame with z up (against gravity) and the map's objects around its origin.
+
+def rotation_to_z_up(gravity_down):
+    """Row-major 3x3 R with R * gravity_down = (0, 0, -1): the smallest rotation doing that."""
+    n = math.sqrt(sum(v * v for v in gravity_down))
+    up = [-v / n for v in gravity_down]
+    z = [0.0, 0.0, 1.0]
+    axis = [up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]]
+    s = math.sqrt(sum(v * v for v in axis))
+    c = sum(a * b for a, b in zip(up, z))
+    if s < 1e-9:
+        return [[1, 0, 0], [0, 1, 0], [0, 0, 1]] if c > 0 else [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
+    k = [v / s for v in axis]
+    angle = math.atan2(s, c)
+    K = [[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]]
+    K2 = [[sum(K[i][m] * K[m][j] for m in range(3)) for j in range(3)] for i in range(3)]
+    return [[(1 if i == j else 0) + math.sin(angle) * K[i][j] + (1 - math.cos(angle)) * K2[i][j]
+             for j in range(3)] for i in range(3)]
+
+
+def quaternion(R):
+    """(x, y, z, w) of a rotation matrix."""
+    trace = R[0][0] + R[1][1] + R[2][2]
+    if trace > 0:
+        s = 2 * math.sqrt(trace + 1)
+        return ((R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s, s / 4)
+    i = max(range(3), key=lambda k: R[k][k])
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2 * math.sqrt(1 + R[i][i] - R[j][j] - R[k][k])
+    q = [0.0] * 3
+    q[i] = s / 4
+    q[j] = (R[j][i] + R[i][j]) / s
+    q[k] = (R[k][i] + R[i][k]) / s
+    return (q[0], q[1], q[2], (R[k][j] - R[j][k]) / s)
+
+
+def view_transform(saved_map):
+    """Pose of the map frame in the demo_view frame: gravity along -z, the objects' centre above the origin,
+    the lowest box bottom at z = 0."""
+    R = rotation_to_z_up(saved_map.get('gravity_down', [0, 0, -1]))
+    rotate = lambda p: [sum(R[i][j] * p[j] for j in range(3)) for i in range(3)]
+    centres = [rotate(o['center']) for o in saved_map['objects']]
+    bottoms = []
+    for o, c in zip(saved_map['objects'], centres):
+        # Box axes are the rotation's columns; the half-extent along up of each.
+        axes = [rotate([o['rotation'][r][a] for r in range(3)]) for a in range(3)]
+        half_up = sum(abs(axes[a][2]) * o['size'][a] / 2 for a in range(3))
+        bottoms.append(c[2] - half_up)
+    centre = [sorted(c[i] for c in centres)[len(centres) // 2] for i in range(2)] + [min(bottoms)]
+    return R, [-v for v in centre]
+
+
+# ---------------------------------------------------------------------------------------------------------
+
+class Demo:
+
+    def __init__(self, args):
+        self.args = args
+        self.processes = []  # (Popen, name), stopped in reverse order
+        self.launch_log_path = os.path.join(args.output_dir, 'roslaunch.log')
+        self.diagnostics = None
+        self.diagnostics_count = 0
+
+    # -- helpers -------------------------------------------------------------------------------------
+    def launch_log_tail(self, lines=25):
+        try:
+            with open(self.launch_log_path, errors='replace') as f:
+                return ''.join(f.readlines()[-lines:])
+        except OSError:
+            return ''
+
+    def check_alive(self):
+        if self.launch.poll() is not None:
+            raise DemoError('roslaunch exited (status %s)' % self.launch.returncode)
+        with open(self.launch_log_path, errors='replace') as f:
+            for line in f:
+                if 'process has died' in line or 'process has finished cleanly' in line:
+                    if 'object_detection' in line:
+                        raise DemoError('object_detection_node died: ' + line.strip())
+
+    def wait_for(self, condition, timeout_s, what):
+        deadline = time.time() + timeout_s
+        while time.time() < deadline:
+            self.check_alive()
+            if condition():
+                return
+            time.sleep(0.25)
+        raise DemoError('timed out after %.0f s waiting for %s' % (timeout_s, what))
+
+    def stat(self, key):
+        values = {kv.key: kv.value for status in self.diagnostics.status for kv in status.values}
+        return float(values.get(key, 'nan'))
+
+    def on_diagnostics(self, msg):
+        if any(status.name.startswith('object_detection') for status in msg.status):
+            self.diagnostics = msg
+            self.diagnostics_count += 1
+
+    def progress(self):
+        d = self.diagnostics
+        if d is None:
+            return 'no diagnostics yet'
+        return ('frames %d, keyframes selected %d, processed %d, failed %d, dropped %d, queue %d, objects %d'
+                % tuple(self.stat(k) for k in ('frames received', 'keyframes selected', 'keyframes processed',
+                                               'keyframes failed', 'keyframes dropped', 'queue length',
+                                               'objects')))
+
+    def drained(self):
+        if self.diagnostics is None:
+            return False
+        done = self.stat('keyframes processed') + self.stat('keyframes failed') + \
+            self.stat('keyframes dropped')
+        return self.stat('queue length') == 0 and done >= self.stat('keyframes selected')
+
+    def call(self, name, srv_class, *args):
+        import rospy
+        service = NODE + '/' + name
+        try:
+            return rospy.ServiceProxy(service, srv_class)(*args)
+        except (rospy.ServiceException, rospy.ROSException) as e:
+            raise DemoError('%s failed: %s' % (service, e))
+
+    # -- the run ---------------------------------------------------------------------------------------
+    def run(self):
+        a = self.args
+        port = free_port()
+        os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % port
+        os.environ.setdefault('ROS_HOME', os.path.join(a.output_dir, 'ros_home'))
+        for name in ('ROS_IP', 'ROS_HOSTNAME'):
+            os.environ.pop(name, None)
+        os.environ['ROS_HOSTNAME'] = 'localhost'
+
+        rviz = not a.no_rviz
+        missing = [tool for tool in ('Xvfb', 'rviz', 'import') if shutil.which(tool) is None]
+        if rviz and missing:
+            log('no rviz screenshot: %s not installed' % ', '.join(missing))
+            rviz = False
+        env = dict(os.environ)
+        if rviz:
+            xvfb, display = start_xvfb()
+            self.processes.append((xvfb, 'Xvfb'))
+            env.update(DISPLAY=display, LIBGL_ALWAYS_SOFTWARE='1')
+            self.display = display
+
+        command = ['roslaunch', '-p', str(port), PKG, 'replay.launch', 'bag:=' + a.bag, 'play:=false',
+                   'rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
+                   'pose_source:=topic', 'keyframe_mode:=every_n', 'keyframe_every_n:=%d' % a.keyframe_every,
+                   'processing_queue_size:=%d' % a.queue_size]
+        if a.rviz_config:
+            command.append('rviz_config:=' + a.rviz_config)
+        if a.model_dir:
+            command.append('model_dir:=' + a.model_dir)
+        if a.gravity_estimate:
+            command.append('gravity_source:=estimate')
+        else:
+            command += ['gravity_source:=param', 'gravity_down:=' + a.gravity_down]
+        log('starting the node: ' + ' '.join(command[1:]) + '  (log: %s)' % self.launch_log_path)
+        with open(self.launch_log_path, 'w') as launch_log:
+            self.launch = subprocess.Popen(command, env=env, stdout=launch_log, stderr=subprocess.STDOUT,
+                                           stdin=subprocess.DEVNULL, start_new_session=True)
+        self.processes.append((self.launch, 'roslaunch'))
+
+        import rosgraph
+        self.wait_for(lambda: rosgraph.is_master_online(), 60, 'the ROS master on port %d' % port)
+        import rospy
+        rospy.init_node('demo_replay', anonymous=True, disable_signals=True)
+        from diagnostic_msgs.msg import DiagnosticArray
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics)
+        master = rosgraph.Master('/demo_replay')
+
+        def has_service():
+            try:
+                master.lookupService(NODE + '/get_objects')
+                return True
+            except Exception:
+                return False
+        self.wait_for(has_service, 90, 'the node\'s services (model loading, start-up)')
+        self.wait_for(lambda: self.diagnostics is not None, 30, '/diagnostics from the node')
+        if rviz:
+            def rviz_subscribed():
+                _, subscribers, _ = master.getSystemState()
+                topics = {topic: nodes for topic, nodes in subscribers}
+                return any(n.startswith('/rviz') for n in topics.get(NODE + '/markers', []))
+            self.wait_for(rviz_subscribed, 90, 'rviz to start')
+        log('node ready')
+
+        # -- play ----------------------------------------------------------------------------------------
+        start = time.time()
+        # --delay: time for the node to connect to each topic before the first message.
+        play = ['rosbag', 'play', '--clock', '--quiet', '--delay', '2', '--rate', str(a.rate), a.bag]
+        log('playing the bag: ' + ' '.join(play))
+        player = subprocess.Popen(play, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                  start_new_session=True)
+        self.processes.append((player, 'rosbag play'))
+        last_print = time.time()
+        while player.poll() is None:
+            self.check_alive()
+            if time.time() - start > a.timeout:
+                raise DemoError('timed out after %.0f s playing the bag' % a.timeout)
+            if time.time() - last_print >= 10:
+                log('  %3.0f s: %s' % (time.time() - start, self.progress()))
+                last_print = time.time()
+            time.sleep(0.25)
+        if player.returncode != 0:
+            raise DemoError('rosbag play failed (%d): %s' % (player.returncode,
+                                                              player.stderr.read().decode(errors='replace')))
+        log('bag played in %.0f s; waiting for the node to finish its keyframes' % (time.time() - start))
+
+        # -- drain: two diagnostics in a row with an empty queue and every selected keyframe done ----------
+        time.sleep(1.0)
+        seen = [self.diagnostics_count]
+        stable = [0]
+
+        def settled():
+            if self.diagnostics_count == seen[0]:
+                return False
+            seen[0] = self.diagnostics_count
+            if time.time() - last_print_box[0] >= 10:
+                log('  %3.0f s: %s' % (time.time() - start, self.progress()))
+                last_print_box[0] = time.time()
+            stable[0] = stable[0] + 1 if self.drained() else 0
+            return stable[0] >= 2
+        last_print_box = [time.time()]
+        self.wait_for(settled, max(30.0, a.timeout - (time.time() - start)), 'the keyframe queue to drain')
+        log('done in %.0f s: %s' % (time.time() - start, self.progress()))
+        if self.stat('keyframes dropped') > 0:
+            log('WARNING: %d keyframes dropped (the node was slower than the bag: lower --rate)'
+                % self.stat('keyframes dropped'))
+        if self.stat('keyframes processed') == 0:
+            raise DemoError('no keyframe was processed (%s)' % self.progress())
+
+        # -- results -------------------------------------------------------------------------------------
+        from std_srvs.srv import Trigger
+        from multiview_object_detection.srv import GetObjects, MapFile
+        reply = self.call('refine', Trigger)
+        log('~refine: ' + reply.message)
+        objects_path = os.path.join(a.output_dir, 'objects.json')
+        reply = self.call('save_map', MapFile, os.path.abspath(objects_path))
+        if not reply.success:
+            raise DemoError('~save_map: ' + reply.message)
+        log('~save_map: ' + reply.message)
+        objects = self.call('get_objects', GetObjects, '', []).objects.objects
+        print_objects(objects)
+        if not objects:
+            raise DemoError('the node found no objects (%s)' % self.progress())
+
+        if rviz:
+            self.screenshot(objects_path)
+        return 0
+
+    def screenshot(self, objects_path):
+        """Puts the map gravity-up in rviz's demo_view frame, republishes the markers, saves a screenshot."""
+        import rospy
+        from geometry_msgs.msg import TransformStamped
+        from std_srvs.srv import Trigger
+        from tf2_msgs.msg import TFMessage
+        from visualization_msgs.msg import Marker, MarkerArray
+        with open(objects_path) as f:
+            saved = json.load(f)
+        R, t = view_transform(saved)
+        transform = TransformStamped()
+        transform.header.stamp = rospy.Time.now()
+        transform.header.frame_id = 'demo_view'
+        transform.child_frame_id = 'map'
+        transform.transform.translation.x, transform.transform.translation.y, \
+            transform.transform.translation.z = t
+        q = quaternion(R)
+        r = transform.transform.rotation
+        r.x, r.y, r.z, r.w = q
+        publisher = rospy.Publisher('/tf_static', TFMessage, queue_size=1, latch=True)
+        publisher.publish(TFMessage(transforms=[transform]))
+        self.tf_publisher = publisher  # latched while we run
+        # Until now rviz had no transform to its fixed frame and queued the node's markers, dropping some
+        # (the DELETEs of merged and refined objects among them): clear them, then have the node republish.
+        clear = rospy.Publisher(NODE + '/markers', MarkerArray, queue_size=1, latch=True)
+        self.wait_for(lambda: clear.get_num_connections() > 0, 10, 'rviz to subscribe to the demo\'s markers')
+        marker = Marker(action=3)  # DELETEALL
+        marker.header.frame_id = 'map'
+        time.sleep(1.0)
+        clear.publish(MarkerArray(markers=[marker]))
+        time.sleep(1.0)
+        self.call('refine', Trigger)  # republishes markers and cloud
+        time.sleep(self.args.rviz_wait)
+        path = os.path.join(self.args.output_dir, 'rviz.png')
+        subprocess.run(['import', '-display', self.display, '-window', 'root', path], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=60)
+        log('rviz screenshot: ' + path)
+
+    def shutdown(self):
+        try:
+            import rospy
+            if rospy.core.is_initialized():
+                rospy.signal_shutdown('demo done')
+        except ImportError:
+            pass
+        for process, name in reversed(self.processes):
+            stop(process, name)
+
+
+def print_objects(objects):
+    print()
+    print('  id  class             prob  obs  centre (m)                 size (m)               yaw (deg)')
+    for o in sorted(objects, key=lambda o: o.id):
+        p = o.pose.position
+        print('%4d  %-16s %5.2f %4d  (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)   %8.1f'
+              % (o.id, o.class_name, o.probability, o.observations, p.x, p.y, p.z, o.size.x, o.size.y,
+                 o.size.z, math.degrees(o.yaw)))
+    print('%d objects' % len(objects))
+    print(flush=True)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--bag', required=True)
+    parser.add_argument('--output-dir', required=True, help='objects.json, rviz.png, roslaunch.log')
+    parser.add_argument('--detector', default='topic', help='topic (detections in the bag), fastestdet, maskrcnn')
+    parser.add_argument('--model-dir', default='')
+    parser.add_argument('--gravity-down', default='[0, 0, -1]', help='YAML list, world frame, pointing down')
+    parser.add_argument('--gravity-estimate', action='store_true', help='gravity_source:=estimate')
+    parser.add_argument('--keyframe-every', type=int, default=10)
+    parser.add_argument('--queue-size', type=int, default=200, help='processing_queue_size: keep every keyframe')
+    parser.add_argument('--rate', type=float, default=1.0, help='rosbag play rate')
+    parser.add_argument('--timeout', type=float, default=600, help='seconds for play + processing')
+    parser.add_argument('--no-rviz', action='store_true', help='no rviz, no screenshot')
+    parser.add_argument('--rviz-config', default='')
+    parser.add_argument('--rviz-wait', type=float, default=5.0, help='seconds rviz renders before the shot')
+    args = parser.parse_args()
+    if not os.path.isfile(args.bag):
+        parser.error('no bag at ' + args.bag)
+    args.bag = os.path.abspath(args.bag)
+    os.makedirs(args.output_dir, exist_ok=True)
+
+    demo = Demo(args)
+    # SIGTERM (e.g. from make) stops the children too.
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    status = 1
+    try:
+        status = demo.run()
+    except DemoError as e:
+        log('FAILED: %s' % e)
+        tail = demo.launch_log_tail()
+        if tail:
+            log('last lines of %s:\n%s' % (demo.launch_log_path, tail))
+    except KeyboardInterrupt:
+        log('interrupted')
+        status = 130
+    finally:
+        log('stopping the node, rviz and the master')
+        demo.shutdown()
+    return status
+
+
+if __name__ == '__main__':
+    sys.exit(main())
