@@ -18,6 +18,7 @@
 
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/evaluation.h"
+#include "multiview_object_detection/split_mix.h"
 
 namespace mvod {
 namespace {
@@ -33,33 +34,6 @@ enum class Draw : uint64_t {
   kScore = 5,
   kPart = 6,
   kFalsePositive = 7,
-};
-
-class SplitMix64 {
- public:
-  explicit SplitMix64(uint64_t state) : state_(state) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  // [0, 1) with 53 random bits.
-  double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
-  bool bernoulli(double probability) { return uniform() < probability; }
-  // [lo, hi]; the modulo bias is below 1e-15 for these ranges.
-  int uniformInt(int lo, int hi) {
-    return lo + static_cast<int>(next() % static_cast<uint64_t>(hi - lo + 1));
-  }
-  // Irwin-Hall: the sum of 12 uniforms has mean 6 and variance 1.
-  double normal(double mean, double stddev) {
-    double sum = 0.0;
-    for (int i = 0; i < 12; ++i) sum += uniform();
-    return mean + stddev * (sum - 6.0);
-  }
-
- private:
-  uint64_t state_;
 };
 
 uint64_t hashCombine(uint64_t hash, uint64_t value) {
@@ -473,9 +447,11 @@ Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::s
     if (cv::countNonZero(mask) == 0) continue;  // jitter ate a sliver
 
     SplitMix64 score_rng = stream(c.seed, frame_number, id, Draw::kScore);
-    const double true_score = score_rng.normal(c.true_score_mean, c.true_score_stddev);
-    const double confused_score = score_rng.normal(c.confused_score_mean, c.confused_score_stddev);
-    const double part_score = score_rng.normal(c.confused_score_mean, c.confused_score_stddev);
+    const double true_score = score_rng.irwinHallNormal(c.true_score_mean, c.true_score_stddev);
+    const double confused_score =
+        score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
+    const double part_score =
+        score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
     const float score = clipScore(confused ? confused_score : true_score);
 
     // A part of a real object as a separate detection of a confusable class.

@@ -17,6 +17,7 @@
 
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/file_instance_segmenter.h"
+#include "multiview_object_detection/split_mix.h"
 
 namespace mvod {
 namespace {
@@ -28,30 +29,7 @@ constexpr double kMaxDepthM = 10.0;  // farther hits read as 0 (no measurement),
 
 double deg2rad(double deg) { return deg * kPi / 180.0; }
 
-// splitmix64: a tiny portable generator, so a seed gives the same scene and noise on every
-// platform and standard library (std::normal_distribution is implementation defined).
-class Rng {
- public:
-  explicit Rng(uint64_t seed) : state_(seed) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, 1).
-  double uniform() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  // Standard normal (Box-Muller).
-  double gaussian() {
-    const double u1 = 1.0 - uniform();  // (0, 1]
-    const double u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
-  }
-
- private:
-  uint64_t state_;
-};
+using Rng = SplitMix64;
 
 uint64_t mixSeed(uint64_t a, uint64_t b) {
   Rng rng(a * 0x2545f4914f6cdd1dULL + b + 0x632be59bd9b4e019ULL);

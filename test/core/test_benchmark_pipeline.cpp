@@ -15,6 +15,7 @@
 #include "multiview_object_detection/evaluation.h"
 #include "multiview_object_detection/json_io.h"
 #include "multiview_object_detection/synthetic_scene.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -23,13 +24,6 @@ namespace fs = std::filesystem;
 
 const std::string kOfflineDetection = MVOD_OFFLINE_DETECTION_BIN;
 const std::string kSourceDir = MVOD_SOURCE_DIR;
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
 
 struct RunResult {
   int exit_code = -1;
@@ -42,7 +36,7 @@ RunResult run(const std::string& command_line, const fs::path& work_dir) {
   const int status = std::system(command.c_str());
   RunResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.err = readText(err);
+  result.err = test::readText(err);
   return result;
 }
 
@@ -94,7 +88,7 @@ TEST_F(BenchmarkPipelineTest, OfflineDetectionOnSceneNNWithSimulatedDetector) {
 
   std::vector<MapObject> objects;
   MapSummary summary;
-  ASSERT_TRUE(objectsFromJson(readText(out / "objects.json"), &objects, &summary).ok());
+  ASSERT_TRUE(objectsFromJson(test::readText(out / "objects.json"), &objects, &summary).ok());
   // SceneNN's world is y-up: the run used gravity (0, -1, 0) and the boxes stand on y.
   EXPECT_LT((summary.gravity_down_W - Eigen::Vector3d(0, -1, 0)).norm(), 1e-9);
   ASSERT_FALSE(objects.empty());
@@ -141,7 +135,7 @@ TEST_F(BenchmarkPipelineTest, AblationScriptRunsTheFiveConfigurations) {
               "' --every 6 --jobs 1 --bin-dir '" + bin_dir + "' --output '" + out.string() + "'",
           *work_);
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  const std::string markdown = readText(out / "ablation.md");
+  const std::string markdown = test::readText(out / "ablation.md");
   EXPECT_NE(markdown.find("| Class | #GT | full | single-frame | -Filter | -LCCP | -both |"),
             std::string::npos)
       << markdown;
@@ -151,8 +145,8 @@ TEST_F(BenchmarkPipelineTest, AblationScriptRunsTheFiveConfigurations) {
   auto summary_of = [&](const std::string& config) {
     MapSummary summary;
     std::vector<MapObject> objects;
-    const Status read =
-        objectsFromJson(readText(out / config / "dining_3" / "objects.json"), &objects, &summary);
+    const Status read = objectsFromJson(test::readText(out / config / "dining_3" / "objects.json"),
+                                        &objects, &summary);
     EXPECT_TRUE(read.ok()) << config << ": " << read.message();
     return summary;
   };
@@ -168,7 +162,7 @@ TEST_F(BenchmarkPipelineTest, AblationScriptRunsTheFiveConfigurations) {
   EXPECT_LT(no_lccp.stage_ms_median.lccp_ms, 0.2 * full.stage_ms_median.lccp_ms);
 
   // One CSV row per configuration and class, AP as fractions.
-  const std::string csv = readText(out / "ablation.csv");
+  const std::string csv = test::readText(out / "ablation.csv");
   for (const char* config : {"full,", "single-frame,", "-Filter,", "-LCCP,", "-both,"}) {
     EXPECT_NE(csv.find(std::string("\n") + config + "mean,"), std::string::npos) << csv;
   }

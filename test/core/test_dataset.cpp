@@ -12,6 +12,7 @@
 
 #include "multiview_object_detection/dataset.h"
 #include "shared_data.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -55,13 +56,7 @@ cv::Mat testColour(int index, int width = 8, int height = 6) {
 
 class SevenScenesDatasetTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("mvod_dataset_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshTestDir("mvod_dataset"); }
   void TearDown() override { fs::remove_all(dir_); }
 
   void writeText(const std::string& file, const std::string& text) {

@@ -10,6 +10,7 @@
 
 #include "multiview_object_detection/evaluation.h"
 #include "multiview_object_detection/json_io.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -18,13 +19,7 @@ namespace fs = std::filesystem;
 
 class EvaluationFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("mvod_evaluation_" + std::to_string(getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshTestDir("mvod_evaluation"); }
   void TearDown() override { fs::remove_all(dir_); }
   std::string write(const std::string& name, const std::string& content) {
     const fs::path path = dir_ / name;

@@ -10,6 +10,7 @@
 
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/file_instance_segmenter.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -19,11 +20,7 @@ namespace fs = std::filesystem;
 class FileInstanceSegmenterTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("mvod_file_segmenter_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::freshTestDir("mvod_file_segmenter");
     image_ = cv::Mat(24, 32, CV_8UC3, cv::Scalar(10, 20, 30));
   }
   void TearDown() override { fs::remove_all(dir_); }

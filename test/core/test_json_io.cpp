@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "multiview_object_detection/json_io.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -285,13 +286,7 @@ TEST_F(JsonIoErrorTest, InvalidValues) {
 
 class AtomicWriteTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("mvod_json_io_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshTestDir("mvod_json_io"); }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
 };

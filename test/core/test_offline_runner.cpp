@@ -19,6 +19,7 @@
 #include "multiview_object_detection/object_cloud_extractor.h"
 #include "multiview_object_detection/synthetic_scene.h"
 #include "shared_data.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -44,13 +45,6 @@ std::string quote(const std::string& arg) {
   return quoted + "'";
 }
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
 struct RunResult {
   int exit_code = -1;
   std::string out;
@@ -66,20 +60,14 @@ RunResult runTool(const std::vector<std::string>& args, const fs::path& work_dir
   const int status = std::system(command.c_str());
   RunResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = readText(out);
-  result.err = readText(err);
+  result.out = test::readText(out);
+  result.err = test::readText(err);
   return result;
 }
 
 class OfflineRunnerTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    work_ = fs::temp_directory_path() /
-            ("mvod_runner_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(work_);
-    fs::create_directories(work_);
-  }
+  void SetUp() override { work_ = test::freshTestDir("mvod_runner"); }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(work_);
   }
@@ -207,7 +195,7 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   int plys = 0;
   for (const auto& entry : fs::directory_iterator(work_ / "clouds")) {
     plys += entry.path().extension() == ".ply";
-    EXPECT_EQ(readText(entry.path()).rfind("ply\nformat ascii 1.0\n", 0), 0u);
+    EXPECT_EQ(test::readText(entry.path()).rfind("ply\nformat ascii 1.0\n", 0), 0u);
   }
   EXPECT_EQ(plys, 2 * static_cast<int>(objects.size()));
   int overlays = 0;
@@ -329,7 +317,7 @@ TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
   // horizontal surface), ~0.73 m above the floor.
   const fs::path segment_ply =
       work_ / "clouds" / ("object_" + std::to_string(table->id) + "_dining_table_segment.ply");
-  std::istringstream ply(readText(segment_ply));
+  std::istringstream ply(test::readText(segment_ply));
   std::string line;
   while (std::getline(ply, line) && line != "end_header") {
   }

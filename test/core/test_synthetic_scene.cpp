@@ -16,6 +16,7 @@
 #include "multiview_object_detection/class_priors.h"
 #include "multiview_object_detection/file_instance_segmenter.h"
 #include "multiview_object_detection/synthetic_scene.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -56,22 +57,9 @@ int countClass(const SyntheticScene& scene, const std::string& class_name) {
   return count;
 }
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
 class SyntheticSceneTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    work_ = fs::temp_directory_path() /
-            ("mvod_synthetic_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(work_);
-    fs::create_directories(work_);
-  }
+  void SetUp() override { work_ = test::freshTestDir("mvod_synthetic"); }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(work_);
   }
@@ -492,19 +480,19 @@ TEST_F(SyntheticSceneTest, WritesSevenScenesLayout) {
   }
 
   // Pose back: 4x4 row-major camera to world.
-  std::istringstream pose_text(readText(dataset / "frame-000002.pose.txt"));
+  std::istringstream pose_text(test::readText(dataset / "frame-000002.pose.txt"));
   Eigen::Matrix4d pose;
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) ASSERT_TRUE(pose_text >> pose(r, c));
   }
   EXPECT_TRUE(pose.isApprox(scene.cameraPose(2).matrix(), 1e-8)) << pose;
-  std::istringstream k_text(readText(dataset / "camera-intrinsics.txt"));
+  std::istringstream k_text(test::readText(dataset / "camera-intrinsics.txt"));
   Eigen::Matrix3d K;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) ASSERT_TRUE(k_text >> K(r, c));
   }
   EXPECT_TRUE(K.isApprox(config.K.K()));
-  std::istringstream gravity_text(readText(dataset / "gravity-direction.txt"));
+  std::istringstream gravity_text(test::readText(dataset / "gravity-direction.txt"));
   Eigen::Vector3d gravity;
   ASSERT_TRUE(gravity_text >> gravity.x() >> gravity.y() >> gravity.z());
   EXPECT_EQ(gravity, Eigen::Vector3d(0, 0, -1));
@@ -542,7 +530,7 @@ TEST_F(SyntheticSceneTest, WritesSevenScenesLayout) {
   }
 
   // Ground truth.
-  const nlohmann::json truth = nlohmann::json::parse(readText(dataset / "ground_truth.json"));
+  const nlohmann::json truth = nlohmann::json::parse(test::readText(dataset / "ground_truth.json"));
   ASSERT_EQ(truth.at("objects").size(), scene.objects().size());
   for (size_t i = 0; i < scene.objects().size(); ++i) {
     const nlohmann::json& object = truth["objects"][i];

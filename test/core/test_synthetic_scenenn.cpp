@@ -16,6 +16,7 @@
 #include "multiview_object_detection/evaluation.h"
 #include "multiview_object_detection/scenenn_dataset.h"
 #include "multiview_object_detection/synthetic_scene.h"
+#include "test_files.h"
 
 namespace mvod {
 namespace {
@@ -29,13 +30,6 @@ Eigen::Matrix3d zUpToYUp() {
   Eigen::Matrix3d M;
   M << 1, 0, 0, 0, 0, 1, 0, -1, 0;
   return M;
-}
-
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
 }
 
 OrientedBox inflated(const OrientedBox& box, double margin_m) {
@@ -69,13 +63,7 @@ bool interpenetrate(const OrientedBox& a, const OrientedBox& b, double tol = 1e-
 
 class SyntheticSceneNNTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    work_ = fs::temp_directory_path() /
-            ("mvod_synthetic_scenenn_" + std::to_string(::getpid()) + "_" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(work_);
-    fs::create_directories(work_);
-  }
+  void SetUp() override { work_ = test::freshTestDir("mvod_synthetic_scenenn"); }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(work_);
   }
@@ -504,13 +492,13 @@ TEST_F(SyntheticSceneNNTest, WritesSceneNNThatReadsBack) {
   for (const std::string file :
        {"synth_a.xml", "synth_a.ply", "trajectory.log", "timestamp.txt", "asus.ini",
         "depth/depth00003.png", "label/label00003.png", "image/image00003.png"}) {
-    EXPECT_EQ(readText(dir / file), readText(again / file)) << file;
+    EXPECT_EQ(test::readText(dir / file), test::readText(again / file)) << file;
   }
   config.seed = 4;
   config.num_frames = 1;
   const SyntheticScene other = SyntheticScene::makeRoom(config, RoomType::kDiningRoom);
   ASSERT_TRUE(other.writeSceneNN((work_ / "other").string(), "other").ok());
-  EXPECT_NE(readText(dir / "synth_a.xml"), readText(work_ / "other" / "other.xml"));
+  EXPECT_NE(test::readText(dir / "synth_a.xml"), test::readText(work_ / "other" / "other.xml"));
   EXPECT_FALSE(scene.writeSceneNN((work_ / "x").string(), "bad/id").ok());
   EXPECT_FALSE(scene.writeSceneNN("", "id").ok());
 }
@@ -522,7 +510,7 @@ TEST_F(SyntheticSceneNNTest, SevenScenesGroundTruthHasObservedSurfacePoints) {
   const SyntheticScene scene = SyntheticScene::makeDefault(config);
   const fs::path dataset = work_ / "dataset";
   ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), "").ok());
-  const nlohmann::json truth = nlohmann::json::parse(readText(dataset / "ground_truth.json"));
+  const nlohmann::json truth = nlohmann::json::parse(test::readText(dataset / "ground_truth.json"));
   ASSERT_EQ(truth.at("objects").size(), scene.objects().size());
   for (size_t k = 0; k < scene.objects().size(); ++k) {
     const nlohmann::json& points = truth["objects"][k].at("points");
