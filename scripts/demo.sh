@@ -5,7 +5,8 @@
 #   3. scripts/demo_replay.py: roslaunch replay.launch (object_detection_node with detector:=topic, rviz on a
 #      virtual display), rosbag play, ~refine, ~save_map, the objects as a table, an rviz screenshot;
 #   4. evaluate: AP against the ground truth, and a bird's-eye plot of the boxes over the ground truth.
-# `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with FastestDet in the
+# `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with Mask R-CNN (when
+# its weights are in the model folder) or else FastestDet in the
 # node (models in $MVOD_MODEL_DIR, else ~/.ros/multiview_object_detection/models: scripts/download_models.sh),
 # without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames.
 #   usage: scripts/demo.sh WORKSPACE [DATASET]
@@ -66,16 +67,25 @@ if [[ -z "$dataset_arg" ]]; then
   node_detector=topic
   rate=1.0
 else
-  # ---- a real dataset, FastestDet in the node ---------------------------------------------------------------
+  # ---- a real dataset, Mask R-CNN or FastestDet in the node --------------------------------------------------
   [[ -d "$dataset_arg" ]] || { echo "demo: DATASET=$dataset_arg is not a folder" >&2; exit 1; }
   dataset=$(cd "$dataset_arg" && pwd)
   dataset_name=$dataset
   model_dir=${MVOD_MODEL_DIR:-$HOME/.ros/multiview_object_detection/models}
-  if [[ ! -f "$model_dir/FastestDet.onnx" || ! -f "$model_dir/coco.names" ]]; then
-    echo "demo: no FastestDet model in $model_dir: run scripts/download_models.sh (or set MVOD_MODEL_DIR)" >&2
+  if [[ -f "$model_dir/frozen_inference_graph.pb" &&
+    -f "$model_dir/mask_rcnn_inception_v2_coco_2018_01_28.pbtxt" &&
+    -f "$model_dir/object_detection_classes_coco.txt" ]]; then
+    node_detector=maskrcnn
+    detector_name="Mask R-CNN"
+  elif [[ -f "$model_dir/FastestDet.onnx" && -f "$model_dir/coco.names" ]]; then
+    node_detector=fastestdet
+    detector_name=FastestDet
+  else
+    echo "demo: no Mask R-CNN or FastestDet model in $model_dir: run scripts/download_models.sh" \
+      "(or set MVOD_MODEL_DIR)" >&2
     exit 1
   fi
-  echo "== 1/4 dataset $dataset, FastestDet from $model_dir"
+  echo "== 1/4 dataset $dataset, $detector_name from $model_dir"
   if [[ -f "$dataset/camera-intrinsics.txt" && ! -f "$dataset/color-intrinsics.txt" ]] &&
     compgen -G "$dataset/frame-*.color.*" >/dev/null; then
     # 7-Scenes does not register colour to depth; take the Kinect v1 colour camera's default intrinsics
@@ -93,7 +103,6 @@ else
     gravity="[0, -1, 0]"   # SceneNN is y-up
   fi
   detector_args=()
-  node_detector=fastestdet
   every=10
   rate=${RATE:-0.5}
 fi
