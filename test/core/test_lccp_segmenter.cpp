@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "box_scene.h"
 #include "multiview_object_detection/lccp_segmenter.h"
 #include "multiview_object_detection/point_cloud_filter.h"
 
@@ -20,77 +21,13 @@ constexpr double kPi = 3.14159265358979323846;
 // together then hold more points than the box, each of them alone fewer (Eq. 2 keeps the largest).
 constexpr double kMaskMargin = 0.15;
 
-enum class Surface { kNone, kFloor, kWall, kBox };
+using test::Surface;
 
-// World: z up, floor z = 0, a wall at y = wall_y_m, one box yawed about z standing on the floor.
-struct LccpTestScene {
-  Eigen::Vector3d box_center = Eigen::Vector3d(0.0, 2.0, 0.25);
-  Eigen::Vector3d box_half_size = Eigen::Vector3d(0.25, 0.2, 0.25);  // 0.5 x 0.4 x 0.5 m
-  double box_yaw_rad = 30.0 * kPi / 180.0;
-  double wall_y_m = 2.5;
-
-  Eigen::Matrix3d boxRotation() const {
-    return Eigen::AngleAxisd(box_yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  }
-
-  std::vector<Eigen::Vector3d> boxCorners() const {
-    std::vector<Eigen::Vector3d> corners;
-    for (int i = 0; i < 8; ++i) {
-      const Eigen::Vector3d sign((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1);
-      corners.push_back(box_center + boxRotation() * sign.cwiseProduct(box_half_size));
-    }
-    return corners;
-  }
-
-  // Distance along the ray (o + t d) to the nearest surface, and which surface it is.
-  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, Surface* surface) const {
-    double best = std::numeric_limits<double>::infinity();
-    *surface = Surface::kNone;
-    if (d.z() < -1e-9) {
-      best = -o.z() / d.z();
-      *surface = Surface::kFloor;
-    }
-    if (d.y() > 1e-9 && (wall_y_m - o.y()) / d.y() < best) {
-      best = (wall_y_m - o.y()) / d.y();
-      *surface = Surface::kWall;
-    }
-    // Slab test in the box frame.
-    const Eigen::Matrix3d R = boxRotation();
-    const Eigen::Vector3d o_B = R.transpose() * (o - box_center);
-    const Eigen::Vector3d d_B = R.transpose() * d;
-    double t_near = -std::numeric_limits<double>::infinity();
-    double t_far = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < 3; ++i) {
-      if (std::abs(d_B[i]) < 1e-12) {
-        if (std::abs(o_B[i]) > box_half_size[i]) return best;
-        continue;
-      }
-      double t1 = (-box_half_size[i] - o_B[i]) / d_B[i];
-      double t2 = (box_half_size[i] - o_B[i]) / d_B[i];
-      if (t1 > t2) std::swap(t1, t2);
-      t_near = std::max(t_near, t1);
-      t_far = std::min(t_far, t2);
-    }
-    if (t_near <= t_far && t_near > 0.0 && t_near < best) {
-      best = t_near;
-      *surface = Surface::kBox;
-    }
-    return best;
-  }
-};
-
-// Camera optical frame (x right, y down, z forward) at `position`, looking along world +y, pitched
-// down by pitch_deg.
-Eigen::Isometry3d lccpCameraPose(const Eigen::Vector3d& position, double pitch_deg) {
-  const double p = pitch_deg * kPi / 180.0;
-  Eigen::Matrix3d R;
-  R.col(0) = Eigen::Vector3d(1, 0, 0);
-  R.col(1) = Eigen::Vector3d(0, -std::sin(p), -std::cos(p));
-  R.col(2) = Eigen::Vector3d(0, std::cos(p), -std::sin(p));
-  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-  T_W_C.linear() = R;
-  T_W_C.translation() = position;
-  return T_W_C;
+// The LCCP scenes: a box yawed 30 degrees in front of a wall 0.5 m behind it.
+test::BoxScene lccpScene() {
+  test::BoxScene scene;
+  scene.box_yaw_rad = 30.0 * kPi / 180.0;
+  return scene;
 }
 
 struct LabeledCloud {
@@ -101,7 +38,7 @@ struct LabeledCloud {
 // The view a 2D detector's mask gives: every pixel in the box's image rectangle grown by
 // `mask_margin` on each side (so floor and wall bleed in), Kinect-like depth noise, then the 0.01 m
 // grid of the pipeline (per surface, so that every point keeps its true label).
-LabeledCloud renderMaskedView(const LccpTestScene& scene, const Eigen::Isometry3d& T_W_C,
+LabeledCloud renderMaskedView(const test::BoxScene& scene, const Eigen::Isometry3d& T_W_C,
                               double mask_margin, double noise_scale) {
   const double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
   const int width = 640, height = 480;
@@ -181,10 +118,10 @@ SegmentStats segmentStats(const LabeledCloud& cloud, const PointCloud& segment) 
 class LccpSegmenterBoxScene : public ::testing::Test {
  protected:
   void SetUp() override {
-    T_W_C_ = lccpCameraPose(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
+    T_W_C_ = test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
     cloud_ = renderMaskedView(scene_, T_W_C_, kMaskMargin, 1.0);
   }
-  LccpTestScene scene_;
+  test::BoxScene scene_ = lccpScene();
   Eigen::Isometry3d T_W_C_;
   LabeledCloud cloud_;
 };
@@ -264,9 +201,9 @@ TEST_F(LccpSegmenterBoxScene, LogTransformFlagChangesSupervoxels) {
 TEST(LccpSegmenterPassThrough, DisabledKeepsWholeCloud) {
   LccpSegmenter::Config config;
   config.enable = false;
-  const LccpTestScene scene;
+  const test::BoxScene scene = lccpScene();
   const LabeledCloud cloud = renderMaskedView(
-      scene, lccpCameraPose(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0), kMaskMargin, 1.0);
+      scene, test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0), kMaskMargin, 1.0);
   LccpSegmenter::Result result;
   ASSERT_TRUE(LccpSegmenter(config).segment(cloud.points_C, true, &result).ok());
   ASSERT_EQ(result.largest_segment.size(), cloud.points_C.size());

@@ -7,6 +7,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
+#include "box_scene.h"
 #include "multiview_object_detection/object_mapper.h"
 
 namespace mvod {
@@ -16,59 +17,16 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kRows = 480;
 constexpr int kCols = 640;
 
-// World: z up, floor z = 0, a wall at y = wall_y_m; one axis-aligned box.
-struct TestScene {
-  Eigen::Vector3d box_min = Eigen::Vector3d(-0.25, 1.8, 0.0);
-  Eigen::Vector3d box_max = Eigen::Vector3d(0.25, 2.2, 0.5);
-  double wall_y_m = 3.0;
-  bool with_box = true;
-
-  // Nearest hit along a ray; *on_box tells whether it is the box.
-  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, bool* on_box) const {
-    double best = std::numeric_limits<double>::infinity();
-    *on_box = false;
-    if (d.z() < -1e-9) best = std::min(best, -o.z() / d.z());
-    if (d.y() > 1e-9) best = std::min(best, (wall_y_m - o.y()) / d.y());
-    if (with_box) {
-      double t_near = -std::numeric_limits<double>::infinity();
-      double t_far = std::numeric_limits<double>::infinity();
-      for (int i = 0; i < 3; ++i) {
-        if (std::abs(d[i]) < 1e-12) {
-          if (o[i] < box_min[i] || o[i] > box_max[i])
-            t_near = std::numeric_limits<double>::infinity();
-          continue;
-        }
-        double t1 = (box_min[i] - o[i]) / d[i];
-        double t2 = (box_max[i] - o[i]) / d[i];
-        if (t1 > t2) std::swap(t1, t2);
-        t_near = std::max(t_near, t1);
-        t_far = std::min(t_far, t2);
-      }
-      if (t_near <= t_far && t_near > 0.0 && t_near < best) {
-        best = t_near;
-        *on_box = true;
-      }
-    }
-    return best;
-  }
-};
-
-// Camera at `position`, looking along world +y, pitched down by pitch_deg.
-Eigen::Isometry3d cameraPose(const Eigen::Vector3d& position, double pitch_deg) {
-  const double p = pitch_deg * kPi / 180.0;
-  Eigen::Matrix3d R;
-  R.col(0) = Eigen::Vector3d(1, 0, 0);
-  R.col(1) = Eigen::Vector3d(0, -std::sin(p), -std::cos(p));
-  R.col(2) = Eigen::Vector3d(0, std::cos(p), -std::sin(p));
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = position;
-  return T;
+// The mapper's world: an axis-aligned 0.5 x 0.4 x 0.5 m box at y = 2, a wall at y = 3.
+test::BoxScene mapperScene() {
+  test::BoxScene scene;
+  scene.wall_y_m = 3.0;
+  return scene;
 }
 
 // Renders a 640x480 frame (16-bit mm depth, Kinect-like intrinsics) and the perfect mask of the
 // box. (At 320x240 the grazing-angle box top is sampled too sparsely for 1-2 cm supervoxels.)
-RgbdFrame renderFrame(const TestScene& scene, const Eigen::Isometry3d& T_W_D, int index,
+RgbdFrame renderFrame(const test::BoxScene& scene, const Eigen::Isometry3d& T_W_D, int index,
                       cv::Mat* mask) {
   RgbdFrame frame;
   frame.index = index;
@@ -85,8 +43,9 @@ RgbdFrame renderFrame(const TestScene& scene, const Eigen::Isometry3d& T_W_D, in
     for (int u = 0; u < kCols; ++u) {
       const Eigen::Vector3d ray_D((u - frame.K_depth.cx) / frame.K_depth.fx,
                                   (v - frame.K_depth.cy) / frame.K_depth.fy, 1.0);
-      bool on_box = false;
-      const double t = scene.cast(T_W_D.translation(), T_W_D.linear() * ray_D, &on_box);
+      test::Surface surface = test::Surface::kNone;
+      const double t = scene.cast(T_W_D.translation(), T_W_D.linear() * ray_D, &surface);
+      const bool on_box = surface == test::Surface::kBox;
       if (!std::isfinite(t) || t > 10.0) continue;
       frame.depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(t * 1000.0));
       if (on_box) {
@@ -129,14 +88,14 @@ class ObjectMapperTest : public ::testing::Test {
     cup.fusion_distance_m = 0.1;
     priors_.set(cup);
     config_.gravity_down_W = Eigen::Vector3d(0, 0, -1);
-    pose_ = cameraPose(Eigen::Vector3d(0.0, 0.0, 1.0), 20.0);
+    pose_ = test::cameraLookingAlongY(Eigen::Vector3d(0.0, 0.0, 1.0), 20.0);
     frame_ = renderFrame(scene_, pose_, 1, &mask_);
   }
 
   // Compares with the true box; the horizontal axes may come out in either order.
   void expectNearTruth(const OrientedBox& box) {
-    const Eigen::Vector3d true_center = 0.5 * (scene_.box_min + scene_.box_max);
-    const Eigen::Vector3d true_size = scene_.box_max - scene_.box_min;
+    const Eigen::Vector3d true_center = scene_.box_center;
+    const Eigen::Vector3d true_size = 2.0 * scene_.box_half_size;
     EXPECT_LT((box.center_m - true_center).norm(), 0.05) << "centre " << box.center_m.transpose();
     EXPECT_NEAR(box.size_m.z(), true_size.z(), 0.05);
     const double a = std::max(box.size_m.x(), box.size_m.y());
@@ -149,7 +108,7 @@ class ObjectMapperTest : public ::testing::Test {
 
   ClassPriors priors_;
   ObjectMapper::Config config_;
-  TestScene scene_;
+  test::BoxScene scene_ = mapperScene();
   Eigen::Isometry3d pose_;
   RgbdFrame frame_;
   cv::Mat mask_;
@@ -187,8 +146,8 @@ TEST_F(ObjectMapperTest, SecondViewFusesIntoTheSameObject) {
   ASSERT_TRUE(
       mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
   cv::Mat mask2;
-  const RgbdFrame second =
-      renderFrame(scene_, cameraPose(Eigen::Vector3d(0.4, 0.1, 1.0), 25.0), 2, &mask2);
+  const RgbdFrame second = renderFrame(
+      scene_, test::cameraLookingAlongY(Eigen::Vector3d(0.4, 0.1, 1.0), 25.0), 2, &mask2);
   ASSERT_TRUE(
       mapper.processKeyframe(second, {detectionFromMask(mask2, "chair", 0.7f)}, &report).ok());
   EXPECT_EQ(report.fused, 1);
@@ -334,11 +293,11 @@ TEST_F(ObjectMapperTest, WaitsForGravityWhenNoneIsConfigured) {
   ObjectMapper mapper(config_, priors_);
   EXPECT_FALSE(mapper.hasGravity());
   // Facing the wall from 1 m, level: no horizontal plane in view.
-  TestScene wall_only = scene_;
+  test::BoxScene wall_only = scene_;
   wall_only.with_box = false;
   cv::Mat unused;
-  const RgbdFrame wall =
-      renderFrame(wall_only, cameraPose(Eigen::Vector3d(0, 2.0, 1.0), 0.0), 0, &unused);
+  const RgbdFrame wall = renderFrame(
+      wall_only, test::cameraLookingAlongY(Eigen::Vector3d(0, 2.0, 1.0), 0.0), 0, &unused);
   KeyframeReport report;
   ASSERT_TRUE(
       mapper.processKeyframe(wall, {detectionFromMask(mask_, "chair", 0.9f)}, &report).ok());
