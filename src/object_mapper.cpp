@@ -291,7 +291,10 @@ bool ObjectMapper::processFused(const PointCloud& points_W, PointCloud* segment_
                                 double* yaw_rad, StageTimes* times) const {
   // Eq. 7's fused cloud goes through the same filter, LCCP and box stages, in the world frame.
   Clock::time_point t = Clock::now();
-  const PointCloud filtered_W = config_.filter.enable ? filter_.filterFused(points_W) : points_W;
+  // points_W comes from the database, already on its fusion grid: no second voxel pass.
+  const PointCloud filtered_W =
+      config_.filter.enable ? filter_.filterFused(points_W, config_.database.fusion_voxel_size_m)
+                            : points_W;
   times->filter_ms += msSince(t);
   if (static_cast<int>(filtered_W.size()) < config_.min_object_points) return false;
 

@@ -70,9 +70,12 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   return removeStatisticalOutliers(voxelized, config_.sor_mean_k, config_.sor_stddev_mul);
 }
 
-PointCloud PointCloudFilter::filterFused(const PointCloud& points_W) const {
+PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
   if (!config_.enable) return points_W;
   // No pass-through: the fused cloud (Eq. 7) is in the world frame, depth means nothing there.
+  if (on_grid_m == config_.voxel_leaf_size_m) {
+    return removeStatisticalOutliers(points_W, config_.sor_mean_k, config_.sor_stddev_mul);
+  }
   const PointCloud voxelized = voxelize(points_W, config_.voxel_leaf_size_m);
   return removeStatisticalOutliers(voxelized, config_.sor_mean_k, config_.sor_stddev_mul);
 }

@@ -27,7 +27,10 @@ class PointCloudFilter {
   // Single view, camera frame: pass-through on z, voxel grid, statistical outlier removal.
   PointCloud filterCameraFrame(const PointCloud& points_C) const;
   // Fused multi-view cloud, world frame (Eq. 7): voxel grid and statistical outlier removal.
-  PointCloud filterFused(const PointCloud& points_W) const;
+  // on_grid_m: the voxel size the cloud already lies on (the object database keeps fused clouds on
+  // its fusion grid, anchored at the origin like this one); when it equals voxel_leaf_size_m the
+  // grid would return the cloud unchanged and is skipped. 0 = not on a grid.
+  PointCloud filterFused(const PointCloud& points_W, double on_grid_m = 0.0) const;
 
   // Voxel grid: one point (the centroid) per occupied voxel. Hash-based, no PCL, no index overflow.
   static PointCloud voxelize(const PointCloud& points, double leaf_size_m);

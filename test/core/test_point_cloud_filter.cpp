@@ -153,6 +153,12 @@ TEST(PointCloudFilterPipeline, CameraFrameAndFusedChains) {
   const PointCloud fused = filter.filterFused(points);
   EXPECT_GT(fused.size(), 800u);
   EXPECT_LE(fused.size(), 900u);
+  // A cloud already on the same grid (the database's fusion grid) skips the voxel pass with the
+  // same result, point for point; on another grid it is re-gridded.
+  const PointCloud on_grid = PointCloudFilter::voxelize(points, config.voxel_leaf_size_m);
+  EXPECT_EQ(filter.filterFused(on_grid, config.voxel_leaf_size_m), filter.filterFused(on_grid));
+  EXPECT_EQ(filter.filterFused(points, 0.0), fused);
+  EXPECT_GT(filter.filterFused(points, config.voxel_leaf_size_m).size(), fused.size());
   // enable = false is the "-Filter" ablation: the cloud passes through.
   config.enable = false;
   EXPECT_EQ(PointCloudFilter(config).filterCameraFrame(points).size(), points.size());
