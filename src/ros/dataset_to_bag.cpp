@@ -13,6 +13,7 @@
 // Where colour and depth come from two cameras (7-Scenes with color-intrinsics.txt) the depth is
 // registered to the colour camera (registerDepthToColor), as a driver's depth_registered topic is.
 // Exit status: 0 done, 1 bad or missing data (the partial bag is removed), 2 bad usage.
+#include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <rosbag/bag.h>
@@ -25,7 +26,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <iostream>
@@ -207,22 +207,6 @@ Status openDataset(const Options& options, DatasetSource* source, std::vector<st
   return Status::Ok();
 }
 
-sensor_msgs::Image imageToMsg(const cv::Mat& image, const std::string& encoding,
-                              const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.encoding = encoding;
-  msg.height = static_cast<uint32_t>(image.rows);
-  msg.width = static_cast<uint32_t>(image.cols);
-  msg.is_bigendian = 0;
-  msg.step = static_cast<uint32_t>(image.cols * image.elemSize());
-  msg.data.resize(static_cast<size_t>(msg.step) * image.rows);
-  for (int r = 0; r < image.rows; ++r) {
-    std::memcpy(msg.data.data() + static_cast<size_t>(r) * msg.step, image.ptr(r), msg.step);
-  }
-  return msg;
-}
-
 sensor_msgs::CameraInfo cameraInfoMsg(const CameraIntrinsics& K, const std_msgs::Header& header) {
   sensor_msgs::CameraInfo msg;
   msg.header = header;
@@ -233,19 +217,6 @@ sensor_msgs::CameraInfo cameraInfoMsg(const CameraIntrinsics& K, const std_msgs:
   msg.K = {K.fx, 0.0, K.cx, 0.0, K.fy, K.cy, 0.0, 0.0, 1.0};
   msg.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
   msg.P = {K.fx, 0.0, K.cx, 0.0, 0.0, K.fy, K.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
-  return msg;
-}
-
-geometry_msgs::Pose poseMsg(const Eigen::Isometry3d& T) {
-  geometry_msgs::Pose msg;
-  const Eigen::Quaterniond q(T.linear());
-  msg.position.x = T.translation().x();
-  msg.position.y = T.translation().y();
-  msg.position.z = T.translation().z();
-  msg.orientation.w = q.w();
-  msg.orientation.x = q.x();
-  msg.orientation.y = q.y();
-  msg.orientation.z = q.z();
   return msg;
 }
 
@@ -394,15 +365,12 @@ int convert(const Options& options) {
     geometry_msgs::PoseStamped pose;
     pose.header = header;
     pose.header.frame_id = options.world_frame;
-    pose.pose = poseMsg(T_W_C);
+    pose.pose = poseToMsg(T_W_C);
 
     geometry_msgs::TransformStamped transform;
     transform.header = pose.header;
     transform.child_frame_id = optical_frame;
-    transform.transform.translation.x = pose.pose.position.x;
-    transform.transform.translation.y = pose.pose.position.y;
-    transform.transform.translation.z = pose.pose.position.z;
-    transform.transform.rotation = pose.pose.orientation;
+    transform.transform = transformToMsg(T_W_C);
     tf2_msgs::TFMessage tf;
     tf.transforms.push_back(transform);
 
@@ -412,10 +380,10 @@ int convert(const Options& options) {
       bag.write(options.pose_topic, header.stamp, pose);
       bag.write(color_info_topic, header.stamp, cameraInfoMsg(K_color, header));
       bag.write(depth_info_topic, header.stamp, cameraInfoMsg(K_color, header));
-      bag.write(color_topic, header.stamp,
-                imageToMsg(frame.color_bgr, sensor_msgs::image_encodings::BGR8, header));
+      bag.write(color_topic, header.stamp, *colorImageToMsg(frame.color_bgr, header));
       bag.write(depth_topic, header.stamp,
-                imageToMsg(depth_mm, sensor_msgs::image_encodings::TYPE_16UC1, header));
+                *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
+                     .toImageMsg());
     } catch (const std::exception& e) {
       return fail(options.output_path + ": cannot write: " + e.what());
     }
