@@ -14,6 +14,8 @@ BUILD_TYPE ?= Release
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
 	-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON
 export CCACHE_DIR ?= $(ROOT)/build/ccache
+# Paths under the checkout are hashed relative to it, so checkouts can share one cache (CCACHE_DIR).
+export CCACHE_BASEDIR ?= $(ROOT)
 export PATH := /usr/bin:$(PATH)
 
 .PHONY: all deps build test demo clean format

@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 
 namespace {
 

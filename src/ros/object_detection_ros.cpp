@@ -13,10 +13,10 @@
 #include <sstream>
 #include <utility>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/json_io.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/ros/ros_params.h"
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 
 namespace mvod {
 namespace {

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "cli_args.h"
-#include "multiview_object_detection/evaluation.h"
-#include "multiview_object_detection/json_io.h"
-#include "multiview_object_detection/map_plot.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/evaluation/map_plot.h"
 
 namespace fs = std::filesystem;
 

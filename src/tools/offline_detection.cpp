@@ -22,11 +22,11 @@
 #include <vector>
 
 #include "cli_args.h"
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/dataset_source.h"
-#include "multiview_object_detection/json_io.h"
-#include "multiview_object_detection/object_mapper.h"
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/datasets/dataset_source.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 
 namespace fs = std::filesystem;
 
@@ -320,7 +320,7 @@ int main(int argc, char** argv) {
   }
 
   // Bad options are usage errors (exit 2), found before any file is touched.
-  mvod::SegmenterOptions segmenter_options;
+  mvod::BenchmarkSegmenterOptions segmenter_options;
   segmenter_options.detector = options.detector;
   segmenter_options.detections_dir = options.detections.empty() && options.detector == "simulated"
                                          ? options.dataset
@@ -368,7 +368,7 @@ int main(int argc, char** argv) {
   }
 
   std::unique_ptr<mvod::InstanceSegmenter> segmenter;
-  const mvod::Status created = mvod::createInstanceSegmenter(segmenter_options, &segmenter);
+  const mvod::Status created = mvod::createBenchmarkSegmenter(segmenter_options, &segmenter);
   if (!created) {
     std::cerr << "offline_detection: " << created.message() << "\n";
     return kExitFailure;

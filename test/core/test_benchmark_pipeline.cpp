@@ -12,9 +12,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "multiview_object_detection/evaluation.h"
-#include "multiview_object_detection/json_io.h"
-#include "multiview_object_detection/synthetic_scene.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {

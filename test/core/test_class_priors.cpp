@@ -7,8 +7,8 @@
 #include <fstream>
 #include <set>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/refinement.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/refinement.h"
 
 namespace mvod {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "multiview_object_detection/object_database.h"
+#include "multiview_object_detection/pipeline/object_database.h"
 
 namespace mvod {
 namespace {

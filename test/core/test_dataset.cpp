@@ -10,7 +10,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "multiview_object_detection/dataset.h"
+#include "multiview_object_detection/datasets/dataset.h"
 #include "shared_data.h"
 #include "test_files.h"
 

@@ -12,9 +12,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/dnn_instance_segmenter.h"
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/detectors/dnn_instance_segmenter.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "shared_data.h"
 
 namespace mvod {

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "multiview_object_detection/evaluation.h"
-#include "multiview_object_detection/json_io.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/io/json_io.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
-#include "multiview_object_detection/evaluation.h"
-#include "multiview_object_detection/map_plot.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/evaluation/map_plot.h"
 
 namespace mvod {
 namespace {

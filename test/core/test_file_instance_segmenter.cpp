@@ -8,8 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/file_instance_segmenter.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "multiview_object_detection/gravity_estimator.h"
+#include "multiview_object_detection/pipeline/gravity_estimator.h"
 
 namespace mvod {
 namespace {

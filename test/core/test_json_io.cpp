@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "multiview_object_detection/json_io.h"
+#include "multiview_object_detection/io/json_io.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "multiview_object_detection/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/keyframe_selector.h"
 
 namespace mvod {
 namespace {

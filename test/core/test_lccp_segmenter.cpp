@@ -10,8 +10,8 @@
 #include <random>
 
 #include "box_scene.h"
-#include "multiview_object_detection/lccp_segmenter.h"
-#include "multiview_object_detection/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/point_cloud_filter.h"
 
 namespace mvod {
 namespace {

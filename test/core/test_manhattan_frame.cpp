@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "multiview_object_detection/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/manhattan_frame.h"
 
 namespace mvod {
 namespace {

@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "box_scene.h"
-#include "multiview_object_detection/object_mapper.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
 
 namespace mvod {
 namespace {

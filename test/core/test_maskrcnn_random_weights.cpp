@@ -1,4 +1,4 @@
-// Mask R-CNN through OpenCV DNN without the real weights: tools/make_random_maskrcnn_graph writes a
+// Mask R-CNN through OpenCV DNN without the real weights: test/tools/make_random_maskrcnn_graph writes a
 // frozen graph with random weights for the shared text graph (../shared/models); the "maskrcnn"
 // segmenter must load it, run a forward pass on a real 640x480 photo and decode the outputs.
 // Skipped when the text graph, labels or photo are absent. The layers are made 4x thinner
@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "shared_data.h"
 
 namespace mvod {

@@ -7,7 +7,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/object_cloud_extractor.h"
+#include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 
 namespace mvod {
 namespace {

@@ -14,10 +14,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "multiview_object_detection/dataset.h"
-#include "multiview_object_detection/json_io.h"
-#include "multiview_object_detection/object_cloud_extractor.h"
-#include "multiview_object_detection/synthetic_scene.h"
+#include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/object_cloud_extractor.h"
+#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "shared_data.h"
 #include "test_files.h"
 

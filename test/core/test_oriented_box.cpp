@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "multiview_object_detection/oriented_box.h"
+#include "multiview_object_detection/pipeline/oriented_box.h"
 
 namespace mvod {
 namespace {

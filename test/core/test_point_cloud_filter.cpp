@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "multiview_object_detection/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/point_cloud_filter.h"
 
 namespace mvod {
 namespace {

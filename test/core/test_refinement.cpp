@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "multiview_object_detection/refinement.h"
+#include "multiview_object_detection/pipeline/refinement.h"
 
 namespace mvod {
 namespace {

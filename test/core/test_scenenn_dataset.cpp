@@ -10,7 +10,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "multiview_object_detection/scenenn_dataset.h"
+#include "multiview_object_detection/datasets/scenenn_dataset.h"
 
 namespace mvod {
 namespace {

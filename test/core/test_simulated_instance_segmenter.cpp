@@ -11,9 +11,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/class_priors.h"
-#include "multiview_object_detection/segmenter_factory.h"
-#include "multiview_object_detection/simulated_instance_segmenter.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
+#include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
 
 namespace mvod {
 namespace {
@@ -507,7 +508,7 @@ TEST(SimulatedSegmenterConfigTest, Validation) {
 }
 
 TEST_F(SimulatedSegmenterTest, FactoryCreatesSimulatedByName) {
-  SegmenterOptions options;
+  BenchmarkSegmenterOptions options;
   options.detector = "simulated";
   options.simulated = Config::perfect();
   std::unique_ptr<InstanceSegmenter> segmenter;
@@ -516,19 +517,19 @@ TEST_F(SimulatedSegmenterTest, FactoryCreatesSimulatedByName) {
   EXPECT_NE(options.isValid().message().find("simulated"), std::string::npos);
 
   options.detections_dir = (root_ / "missing").string();
-  Status status = createInstanceSegmenter(options, &segmenter);
+  Status status = createBenchmarkSegmenter(options, &segmenter);
   EXPECT_FALSE(status.ok());
   EXPECT_FALSE(segmenter);
   EXPECT_NE(status.message().find(options.detections_dir), std::string::npos) << status.message();
 
   options.detections_dir = dir_.string() + "/";  // a trailing slash still finds seq01.xml
   options.simulated.miss_probability = -1.0;
-  status = createInstanceSegmenter(options, &segmenter);
+  status = createBenchmarkSegmenter(options, &segmenter);
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.message().find("miss_probability"), std::string::npos) << status.message();
 
   options.simulated.miss_probability = 0.0;
-  status = createInstanceSegmenter(options, &segmenter);
+  status = createBenchmarkSegmenter(options, &segmenter);
   ASSERT_TRUE(status.ok()) << status.message();
   ASSERT_TRUE(segmenter);
   EXPECT_EQ(segmenter->name(), "simulated");
@@ -538,6 +539,14 @@ TEST_F(SimulatedSegmenterTest, FactoryCreatesSimulatedByName) {
 
   options.detector = "simulate";
   EXPECT_NE(options.isValid().message().find("simulated"), std::string::npos);
+
+  // The deployable factory (the node's) refuses the benchmark detector and says where it is.
+  SegmenterOptions deployable;
+  deployable.detector = "simulated";
+  deployable.detections_dir = dir_.string();
+  EXPECT_FALSE(createInstanceSegmenter(deployable, &segmenter).ok());
+  EXPECT_FALSE(segmenter);
+  EXPECT_NE(deployable.isValid().message().find("offline_detection"), std::string::npos);
 }
 
 }  // namespace

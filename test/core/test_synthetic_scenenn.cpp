@@ -13,9 +13,9 @@
 #include <set>
 #include <sstream>
 
-#include "multiview_object_detection/evaluation.h"
-#include "multiview_object_detection/scenenn_dataset.h"
-#include "multiview_object_detection/synthetic_scene.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/datasets/scenenn_dataset.h"
+#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -21,11 +21,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "multiview_object_detection/dataset.h"
-#include "multiview_object_detection/file_instance_segmenter.h"
+#include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/ros/conversions.h"
-#include "multiview_object_detection/scenenn_dataset.h"
-#include "multiview_object_detection/synthetic_scene.h"
+#include "multiview_object_detection/datasets/scenenn_dataset.h"
+#include "multiview_object_detection/evaluation/synthetic_scene.h"
 
 #ifndef MVOD_DATASET_TO_BAG_BIN
 #error "MVOD_DATASET_TO_BAG_BIN must be the path of the dataset_to_bag executable"

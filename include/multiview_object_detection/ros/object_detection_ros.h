@@ -41,8 +41,8 @@
 #include <thread>
 #include <vector>
 
-#include "multiview_object_detection/keyframe_selector.h"
-#include "multiview_object_detection/object_mapper.h"
+#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 

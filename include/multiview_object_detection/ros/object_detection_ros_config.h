@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "multiview_object_detection/keyframe_selector.h"
-#include "multiview_object_detection/object_mapper.h"
-#include "multiview_object_detection/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 
 namespace mvod {
 

@@ -1,0 +1,56 @@
+// A dataset folder in the 7-Scenes layout:
+//   frame-NNNNNN.color.{jpg,png}, frame-NNNNNN.depth.png (16-bit mm), frame-NNNNNN.pose.txt (4x4
+//   camera to world, row-major), camera-intrinsics.txt (3x3 depth K), optional color-intrinsics.txt
+//   (3x3; present = colour not registered to depth), optional depth-to-color.txt (4x4 depth camera
+//   -> colour camera, row-major, T_C_D; only with color-intrinsics.txt; identity when absent),
+//   optional gravity-direction.txt (3 numbers: world gravity, pointing down; normalised on
+//   reading).
+// A frame is listed when its frame-NNNNNN.depth.png exists; its colour image (.png or .jpg) and
+// pose are checked by load(). Time stamps are index / 30 s (7-Scenes is 30 Hz).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/rgbd_frame.h"
+
+namespace mvod {
+
+class SevenScenesDataset {
+ public:
+  // Lists the frames and reads the intrinsics; fails on a missing folder or camera-intrinsics.txt.
+  static Status open(const std::string& directory, SevenScenesDataset* dataset);
+
+  size_t size() const { return frame_indices_.size(); }
+  const std::vector<int>& frameIndices() const { return frame_indices_; }
+  static std::string frameName(int index);  // "frame-000010"
+  // Loads one frame (images, pose); the message names the file on any problem.
+  Status load(int index, RgbdFrame* frame) const;
+
+  const std::string& directory() const { return directory_; }
+  const CameraIntrinsics& depthIntrinsics() const { return K_depth_; }
+  const CameraIntrinsics& colorIntrinsics() const { return K_color_; }
+  bool registered() const { return registered_; }
+  // Depth camera -> colour camera (identity when registered or without depth-to-color.txt).
+  const Eigen::Isometry3d& depthToColor() const { return T_C_D_; }
+  bool hasGravity() const { return has_gravity_; }
+  Eigen::Vector3d gravityDown_W() const { return gravity_down_W_; }
+
+  // File parsers, public for tests. readMatrix3: exactly 9 finite numbers. readPose: exactly 16
+  // finite numbers, last row 0 0 0 1 (within 1e-3), a rigid transform within 1e-2; the rotation is
+  // then re-orthonormalised. The message names the file.
+  static Status readMatrix3(const std::string& path, Eigen::Matrix3d* K);
+  static Status readPose(const std::string& path, Eigen::Isometry3d* T_W_C);
+
+ private:
+  std::string directory_;
+  std::vector<int> frame_indices_;
+  CameraIntrinsics K_depth_;
+  CameraIntrinsics K_color_;
+  bool registered_ = true;
+  Eigen::Isometry3d T_C_D_ = Eigen::Isometry3d::Identity();
+  bool has_gravity_ = false;
+  Eigen::Vector3d gravity_down_W_ = Eigen::Vector3d(0, 0, -1);
+};
+
+}  // namespace mvod

@@ -1,0 +1,50 @@
+// objects.json: the object database as JSON, the offline runner's output and the map file format.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
+
+namespace mvod {
+
+struct MapSummary {
+  int frames = 0;
+  int keyframes = 0;
+  int removed_atypical = 0;
+  int removed_intersecting = 0;
+  StageTimes stage_ms_median;  // medians per keyframe
+  // Table 4's counts over the whole run (sums of the KeyframeReports). Optional in the file: maps
+  // written without them read as zeros.
+  struct Counts {
+    int detections = 0;         // 2D detections the detector reported
+    int above_threshold = 0;    // probability >= lambda (Eq. 5)
+    int with_box = 0;           // survived extraction, filters and LCCP, got a box
+    int inserted = 0;           // became a new database object
+    int fused = 0;              // fused into an existing object (Eq. 6)
+    int before_refinement = 0;  // database size before Sec. 3.5
+  } counts;
+  Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
+};
+
+// {"frames", "keyframes", "gravity_down", "objects": [{"id", "class_name", "class_id",
+// "probability",
+//  "observations", "center", "size", "rotation" (3x3, columns = box axes), "yaw", "num_points",
+//  ...}], "removed": {"atypical", "intersecting"}, "stage_ms": {...}, "counts": {...}}. With
+//  include_clouds the fused and segmented
+// clouds are stored too (a map that can be reloaded and fused into).
+std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
+                          bool include_clouds);
+// Parses what objectsToJson wrote; a malformed document is an error naming the field, and leaves
+// the outputs untouched.
+Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
+                       MapSummary* summary);
+
+// Atomic write (temporary file + rename) and whole-file read.
+Status writeFileAtomic(const std::string& path, const std::string& content);
+Status readFile(const std::string& path, std::string* content);
+
+std::vector<MapObject> databaseObjects(const ObjectDatabase& database);
+
+}  // namespace mvod

@@ -1,0 +1,45 @@
+// Eq. 1: instance masks + depth -> object point clouds.
+#pragma once
+
+#include <vector>
+
+#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/rgbd_frame.h"
+
+namespace mvod {
+
+class ObjectCloudExtractor {
+ public:
+  struct Config {
+    // Depth values outside this range are invalid (besides 0, 65535 and NaN) (m).
+    double min_valid_depth_m = 0.1;
+    double max_valid_depth_m = 10.0;
+    // Erode each mask by this many pixels first: mask borders bleed into the background.
+    int mask_erosion_px = 0;
+    // Use every n-th depth pixel in u and v (1 = all).
+    int pixel_stride = 1;
+    Status isValid() const;
+    std::string print() const;
+  };
+
+  ObjectCloudExtractor() = default;
+  explicit ObjectCloudExtractor(const Config& config) : config_(config) {}
+  const Config& config() const { return config_; }
+
+  // One cloud per detection, in the DEPTH camera frame (points_D); the caller transforms with T_W_D.
+  // Each valid depth pixel is back-projected once; if the frame is not registered it is projected into the
+  // colour image (T_C_D, K_color) to look up the masks. An empty cloud means the mask held no valid depth.
+  Status extract(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
+                 std::vector<PointCloud>* clouds_D) const;
+
+  // Back-projects the whole depth image (every `stride`-th pixel), depth frame.
+  static PointCloud backProjectDepth(const cv::Mat& depth, const CameraIntrinsics& K, int stride,
+                                     double min_depth_m, double max_depth_m);
+  // Depth in metres at (u, v), or NaN when invalid (0, 65535, NaN, out of range).
+  static float depthAt(const cv::Mat& depth, int u, int v, double min_depth_m, double max_depth_m);
+
+ private:
+  Config config_;
+};
+
+}  // namespace mvod

@@ -1,0 +1,105 @@
+// Sec. 3.4: the object database - insert (Eq. 5), same-class nearest-centre fusion (Eq. 6), fused
+// clouds re-processed (Eq. 7) and probabilities averaged (Eq. 8).
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/oriented_box.h"
+
+namespace mvod {
+
+// An object detected in one keyframe, after extraction, filtering, LCCP and box estimation.
+struct ObjectObservation {
+  int class_id = -1;
+  std::string class_name;
+  double probability = 0.0;  // ψ
+  PointCloud points_W;       // filtered object cloud before LCCP (Eq. 7 fuses these)
+  PointCloud segment_W;      // LCCP's largest segment (Eq. 2)
+  OrientedBox box;           // from segment_W (Eq. 4)
+  double yaw_rad = 0.0;      // yaw of box column 0 about gravity (GravityFrame::yawOf)
+  int keyframe = 0;
+  double stamp_s = 0.0;
+};
+
+struct MapObject {
+  int id = 0;  // α, never reused
+  int class_id = -1;
+  std::string class_name;
+  double probability = 0.0;  // Eq. 8 running value
+  int observations = 0;
+  PointCloud points_W;   // fused cloud, voxelised (bounded memory)
+  PointCloud segment_W;  // largest LCCP segment of the fused cloud
+  OrientedBox box;
+  double yaw_rad = 0.0;
+  int first_keyframe = 0;
+  int last_keyframe = 0;
+  double first_seen_s = 0.0;
+  double last_seen_s = 0.0;
+};
+
+// Re-runs filter + LCCP + box on a fused world-frame cloud (Eq. 7). Returns false when nothing
+// usable is left, in which case the object keeps its previous segment and box.
+using FusedCloudProcessor = std::function<bool(const PointCloud& points_W, PointCloud* segment_W,
+                                               OrientedBox* box, double* yaw_rad)>;
+
+class ObjectDatabase {
+ public:
+  struct Config {
+    // Fused clouds are voxelised at this size after each fusion so memory stays bounded (m).
+    double fusion_voxel_size_m = 0.01;
+    // Objects inserted in the current keyframe are not fusion candidates for other detections of
+    // the same keyframe (Sec. 3.4.1: two same-class detections in one image are two objects).
+    bool no_fusion_within_keyframe = true;
+    // Table 2's single-frame baseline: every observation is inserted as a new object, nothing is
+    // fused.
+    bool disable_fusion = false;
+    Status isValid() const;
+    std::string print() const;
+  };
+
+  enum class Decision { kInserted, kFused };
+  struct FusionResult {
+    Decision decision = Decision::kInserted;
+    int object_id = 0;
+    double distance_m = 0.0;  // min(d_i) of Eq. 6, infinity when no same-class object exists
+  };
+
+  ObjectDatabase() = default;
+  ObjectDatabase(const Config& config, const ClassPriors& priors)
+      : config_(config), priors_(priors) {}
+  const Config& config() const { return config_; }
+  // New settings for the next fusions; objects and ids are kept.
+  void setConfig(const Config& config) { config_ = config; }
+  const ClassPriors& priors() const { return priors_; }
+
+  // Eq. 6: nearest same-class object by box-centre distance; fuse if within the class threshold
+  // Γ_C, else insert. On fusion the clouds are merged (Eq. 7), voxelised, re-processed by
+  // `process`, and the probability becomes mean(ψ_new, ψ_j) (Eq. 8).
+  FusionResult fuseOrInsert(const ObjectObservation& observation,
+                            const FusedCloudProcessor& process);
+
+  const std::map<int, MapObject>& objects() const { return objects_; }
+  const MapObject* find(int id) const;
+  std::vector<const MapObject*> findByClass(const std::string& class_name) const;
+  bool remove(int id);
+  // Removes every object. Ids are still never reused: next_id_ keeps counting.
+  void clear();
+  // Replaces the content (map loading); next ids continue after the largest loaded id.
+  void setObjects(const std::vector<MapObject>& objects);
+  int nextId() const { return next_id_; }
+  size_t size() const { return objects_.size(); }
+
+ private:
+  Config config_;
+  ClassPriors priors_;
+  std::map<int, MapObject> objects_;
+  int next_id_ = 1;
+  int current_keyframe_ = -1;
+  std::vector<int> inserted_this_keyframe_;
+};
+
+}  // namespace mvod

@@ -1,0 +1,122 @@
+// The whole per-keyframe pipeline (Sec. 3.1-3.5) behind one class: the offline runner, the ROS node
+// and the tests all drive it.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/gravity_estimator.h"
+#include "multiview_object_detection/pipeline/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/object_cloud_extractor.h"
+#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/refinement.h"
+
+namespace mvod {
+
+// Wall-clock time of each stage (ms), the split of the paper's Table 5.
+struct StageTimes {
+  double extraction_ms = 0.0;
+  double filter_ms = 0.0;
+  double lccp_ms = 0.0;
+  double manhattan_ms = 0.0;
+  double fusion_ms = 0.0;
+  double refinement_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+// What happened to one keyframe (Table 4's counts, per keyframe).
+struct KeyframeReport {
+  int detections = 0;       // given to processKeyframe
+  int above_threshold = 0;  // ψ >= λ (Eq. 5)
+  int with_box = 0;         // survived extraction, filters, LCCP and got a box
+  int inserted = 0;
+  int fused = 0;
+  bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
+  std::vector<std::string>
+      warnings;  // per-detection problems (empty mask, no depth, unknown class ...)
+  StageTimes times;
+};
+
+class ObjectMapper {
+ public:
+  struct Config {
+    double min_probability = 0.5;  // λ
+    // World gravity, pointing down. Zero vector = estimate it from the dominant horizontal plane.
+    Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
+    int min_object_points = 50;  // fewer points after filtering: the detection is dropped
+    ObjectCloudExtractor::Config extractor;
+    PointCloudFilter::Config filter;
+    LccpSegmenter::Config lccp;
+    BoxEstimator::Config box;
+    ObjectDatabase::Config database;
+    PriorSizeFilter::Config prior_filter;
+    IntersectionFilter::Config intersection_filter;
+    GravityEstimator::Config gravity;
+    Status isValid() const;  // checks every sub-config
+    std::string print() const;
+  };
+
+  struct RefinementReport {
+    std::vector<int> atypical_ids;
+    std::vector<int> intersecting_ids;
+    double time_ms = 0.0;
+  };
+
+  ObjectMapper(const Config& config, const ClassPriors& priors);
+  const Config& config() const { return config_; }
+  // Replaces the configuration at run time (the ROS node's dynamic reconfigure, gravity from TF):
+  // the stage objects are rebuilt, the database keeps its objects and ids, the gravity estimator
+  // keeps its state (new gravity settings apply from the next reset()). An invalid config returns
+  // the isValid() error and changes nothing.
+  Status updateConfig(const Config& config);
+
+  // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes
+  // nothing; problems with single detections are warnings in the report. Warnings name the frame.
+  // Until gravity is known (configured or estimated) detections are skipped with a "waiting for
+  // gravity" warning.
+  Status processKeyframe(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
+                         KeyframeReport* report);
+  // Sec. 3.5: removes atypical and intersecting objects from the database.
+  RefinementReport refine();
+
+  // Single-view processing of one object cloud in the depth camera frame: filter, LCCP, box. Used
+  // by processKeyframe; public for tests and the single-frame baseline.
+  bool processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                         ObjectObservation* observation, StageTimes* times) const;
+
+  const ObjectDatabase& database() const { return database_; }
+  ObjectDatabase& mutableDatabase() { return database_; }
+  // The configured gravity, else the estimate, else the default (0, 0, -1) until one exists.
+  GravityFrame gravity() const;
+  bool hasGravity() const;
+  int keyframesProcessed() const { return keyframes_; }
+  // Empties the database and forgets the gravity estimate; ids keep counting (never reused).
+  void reset();
+
+ private:
+  bool processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
+                    double* yaw_rad, StageTimes* times) const;
+  // processSingleView with the reason a detection was dropped.
+  Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                       ObjectObservation* observation, StageTimes* times) const;
+  // Updates the gravity estimate from the frame's depth when none is configured; false while
+  // unknown.
+  bool updateGravity(const RgbdFrame& frame);
+
+  Config config_;
+  ObjectCloudExtractor extractor_;
+  PointCloudFilter filter_;
+  LccpSegmenter lccp_;
+  BoxEstimator box_estimator_;
+  ObjectDatabase database_;
+  PriorSizeFilter prior_filter_;
+  IntersectionFilter intersection_filter_;
+  GravityEstimator gravity_estimator_;
+  int keyframes_ = 0;
+};
+
+}  // namespace mvod

@@ -1,0 +1,63 @@
+// Sec. 3.5: database refinement - atypical sizes (Eq. 9) and objects mostly inside others (Eq. 10, 11,
+// Algorithm 1).
+#pragma once
+
+#include <vector>
+
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/object_database.h"
+
+namespace mvod {
+
+class PriorSizeFilter {
+ public:
+  struct Config {
+    bool enable = true;
+    double volume_min_ratio = 0.05;   // Γ_Vmin
+    double volume_max_ratio = 8.0;    // Γ_Vmax
+    double edge_min_ratio = 0.2;      // Γ_E
+    bool keep_classes_without_prior = true;
+    Status isValid() const;
+    std::string print() const;
+  };
+  PriorSizeFilter() = default;
+  explicit PriorSizeFilter(const Config& config) : config_(config) {}
+  const Config& config() const { return config_; }
+
+  // Eq. 9: true when the box of `object` is a plausible size for its class.
+  bool isTypical(const MapObject& object, const ClassPriors& priors) const;
+  // Ids of the objects Eq. 9 rejects.
+  std::vector<int> atypicalObjects(const ObjectDatabase& database) const;
+
+ private:
+  Config config_;
+};
+
+class IntersectionFilter {
+ public:
+  struct Config {
+    bool enable = true;
+    double volume_ratio_threshold = 0.5;   // Γ_V∩ of Eq. 11
+    Status isValid() const;
+    std::string print() const;
+  };
+  // The case of Eq. 11 a pair falls in.
+  enum class Case { kNoIntersection = 1, kTiny = 2, kLarge = 3, kFull = 4 };
+
+  IntersectionFilter() = default;
+  explicit IntersectionFilter(const Config& config) : config_(config) {}
+  const Config& config() const { return config_; }
+
+  // Eq. 10, 11 for one ordered pair (η_A = V∩/V_A, η_B = V∩/V_B); Full when B lies entirely inside A.
+  Case classify(const OrientedBox& a, const OrientedBox& b, const Eigen::Vector3d& up,
+                double* eta_a = nullptr, double* eta_b = nullptr) const;
+  // Algorithm 1 over the objects in id order: for each σ, ξ is the later object whose containment ratio
+  // with σ is largest; whichever of the two is more contained (ratio above the threshold) is deleted.
+  std::vector<int> intersectingObjects(const ObjectDatabase& database,
+                                       const Eigen::Vector3d& up) const;
+
+ private:
+  Config config_;
+};
+
+}  // namespace mvod

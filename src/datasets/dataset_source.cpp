@@ -1,0 +1,90 @@
+#include "multiview_object_detection/datasets/dataset_source.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <system_error>
+
+#include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/datasets/scenenn_dataset.h"
+
+namespace mvod {
+
+Status openDatasetSource(const std::string& directory, const std::string& format,
+                         DatasetSource* source) {
+  namespace fs = std::filesystem;
+  const fs::path dir(directory);
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) {
+    return Status::Error(
+        directory + ": " +
+        (fs::exists(dir, error) ? "not a folder" : "dataset folder does not exist"));
+  }
+  std::string layout = format;
+  if (layout == "auto") {
+    if (fs::exists(dir / "trajectory.log", error) || fs::is_directory(dir / "depth", error)) {
+      layout = "scenenn";
+    } else if (fs::exists(dir / "camera-intrinsics.txt", error)) {
+      layout = "7scenes";
+    } else {
+      return Status::Error(directory +
+                           ": neither a SceneNN sequence (trajectory.log, depth/) nor a 7-Scenes "
+                           "folder (camera-intrinsics.txt); say which layout it has");
+    }
+  }
+  if (layout != "7scenes" && layout != "scenenn") {
+    return Status::Error("unknown dataset format '" + format + "' (auto, 7scenes or scenenn)");
+  }
+
+  DatasetSource opened;
+  opened.format = layout;
+  opened.directory = directory;
+  if (layout == "7scenes") {
+    auto dataset = std::make_shared<SevenScenesDataset>();
+    const Status status = SevenScenesDataset::open(directory, dataset.get());
+    if (!status) return status;
+    opened.indices = dataset->frameIndices();
+    opened.frame_name = [](int index) { return SevenScenesDataset::frameName(index); };
+    opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    opened.check = [](int) { return Status::Ok(); };
+    opened.has_gravity = dataset->hasGravity();
+    opened.gravity_down_W = dataset->gravityDown_W();
+    if (dataset->hasGravity()) {
+      const Eigen::Vector3d g = dataset->gravityDown_W();
+      char text[160];
+      std::snprintf(text, sizeof(text), "world gravity (gravity-direction.txt) [%.4f, %.4f, %.4f]",
+                    g.x(), g.y(), g.z());
+      opened.notes.push_back(text);
+    }
+    if (!dataset->registered()) {
+      opened.notes.push_back(
+          "colour and depth are two cameras (color-intrinsics.txt): depth is registered to the "
+          "colour camera");
+    }
+  } else {
+    auto dataset = std::make_shared<SceneNNDataset>();
+    const Status status = SceneNNDataset::open(directory, dataset.get());
+    if (!status) return status;
+    opened.indices = dataset->frameIndices();
+    opened.frame_name = [](int index) { return SceneNNDataset::frameName(index); };
+    opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    opened.check = [dataset](int index) { return dataset->checkFrame(index); };
+    opened.has_timestamps = dataset->hasTimestamps();
+    // The SceneNN mesh and trajectory frame is y-up (shared/formats/scenenn.md).
+    opened.has_gravity = true;
+    opened.gravity_down_W = Eigen::Vector3d(0, -1, 0);
+    const CameraIntrinsics& K = dataset->intrinsics();
+    char text[200];
+    std::snprintf(text, sizeof(text), "intrinsics fx %.3f fy %.3f cx %.2f cy %.2f from %s", K.fx,
+                  K.fy, K.cx, K.cy,
+                  dataset->intrinsicsPath().empty() ? "SceneNN defaults (no asus.ini)"
+                                                    : dataset->intrinsicsPath().c_str());
+    opened.notes.push_back(text);
+    opened.notes.push_back("SceneNN's world is y-up: gravity (0, -1, 0)");
+    if (!dataset->hasTimestamps()) opened.notes.push_back("no timestamp.txt");
+  }
+  *source = std::move(opened);
+  return Status::Ok();
+}
+
+}  // namespace mvod

@@ -1,0 +1,316 @@
+#include "multiview_object_detection/detectors/dnn_instance_segmenter.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "multiview_object_detection/pipeline/class_priors.h"
+
+namespace mvod {
+namespace {
+
+constexpr int kFastestDetInputPx = 352;
+
+float sigmoid(float x) { return 1.f / (1.f + std::exp(-x)); }
+
+bool isReadableFile(const std::string& path, long* size_bytes) {
+  struct stat info;
+  if (::stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) return false;
+  *size_bytes = static_cast<long>(info.st_size);
+  return std::ifstream(path).good();
+}
+
+// Per-class non-maximum suppression; keeps the input order of the survivors by score.
+std::vector<Detection2D> suppressNonMaxima(std::vector<Detection2D> candidates, float nms_iou) {
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Detection2D& a, const Detection2D& b) { return a.score > b.score; });
+  std::vector<Detection2D> kept;
+  for (Detection2D& candidate : candidates) {
+    bool suppressed = false;
+    for (const Detection2D& k : kept) {
+      if (k.class_id != candidate.class_id) continue;
+      const double inter = (k.box_px & candidate.box_px).area();
+      const double uni = k.box_px.area() + candidate.box_px.area() - inter;
+      if (uni > 0.0 && inter / uni > nms_iou) {
+        suppressed = true;
+        break;
+      }
+    }
+    if (!suppressed) kept.push_back(std::move(candidate));
+  }
+  return kept;
+}
+
+cv::Rect clippedBox(double x1, double y1, double x2, double y2, const cv::Size& image_size) {
+  const int left = std::clamp(static_cast<int>(std::floor(x1)), 0, image_size.width);
+  const int top = std::clamp(static_cast<int>(std::floor(y1)), 0, image_size.height);
+  const int right = std::clamp(static_cast<int>(std::ceil(x2)), 0, image_size.width);
+  const int bottom = std::clamp(static_cast<int>(std::ceil(y2)), 0, image_size.height);
+  return cv::Rect(left, top, std::max(0, right - left), std::max(0, bottom - top));
+}
+
+// Label files spell some classes differently (darknet's coco.names: "diningtable", "tvmonitor");
+// outputs always carry this package's COCO spelling, or the label as it is when it is no COCO
+// class.
+void setClass(const std::string& label, Detection2D* detection) {
+  detection->class_id = cocoClassId(label);
+  detection->class_name = detection->class_id >= 0 ? cocoClassNames()[detection->class_id] : label;
+}
+
+std::string missingModelHelp(const std::string& what) {
+  return what +
+         ". Model files are looked up by name in the model folder (the model_dir parameter, the "
+         "--model-dir option or $MVOD_MODEL_DIR); scripts/download_models.sh fetches them and "
+         "checks "
+         "their sha256 (see README, 'Detector models').";
+}
+
+}  // namespace
+
+Status readLabelFile(const std::string& path, std::vector<std::string>* labels) {
+  std::ifstream in(path);
+  if (!in) return Status::Error("cannot read label file " + path);
+  std::vector<std::string> names;
+  std::string line;
+  while (std::getline(in, line)) {
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    names.push_back(line);
+  }
+  while (!names.empty() && names.back().empty()) names.pop_back();
+  if (names.empty()) return Status::Error("label file " + path + " holds no names");
+  *labels = std::move(names);
+  return Status::Ok();
+}
+
+Status decodeFastestDet(const cv::Mat& output, const cv::Size& image_size,
+                        const std::vector<std::string>& labels, const DnnDecodeConfig& config,
+                        std::vector<Detection2D>* detections) {
+  detections->clear();
+  if (output.dims != 4 || output.size[0] != 1 || output.type() != CV_32F || output.size[1] < 6) {
+    return Status::Error("FastestDet output must be a [1, 5 + classes, H, W] float blob");
+  }
+  const int channels = output.size[1];
+  const int grid_h = output.size[2];
+  const int grid_w = output.size[3];
+  const int num_classes = channels - 5;
+  if (grid_h < 1 || grid_w < 1) return Status::Error("FastestDet output has an empty grid");
+  if (static_cast<int>(labels.size()) < num_classes) {
+    return Status::Error("FastestDet gives " + std::to_string(num_classes) + " classes but the " +
+                         "label file has " + std::to_string(labels.size()) + " names");
+  }
+  if (image_size.width <= 0 || image_size.height <= 0) {
+    return Status::Error("FastestDet: empty image size");
+  }
+  const cv::Mat blob = output.isContinuous() ? output : output.clone();
+  const float* data = blob.ptr<float>();
+  const size_t plane = static_cast<size_t>(grid_h) * grid_w;
+  auto at = [&](int c, int h, int w) {
+    return data[c * plane + static_cast<size_t>(h) * grid_w + w];
+  };
+
+  std::vector<Detection2D> candidates;
+  for (int h = 0; h < grid_h; ++h) {
+    for (int w = 0; w < grid_w; ++w) {
+      const float objectness = at(0, h, w);
+      int best_class = 0;
+      float best_score = at(5, h, w);
+      for (int c = 1; c < num_classes; ++c) {
+        const float s = at(5 + c, h, w);
+        if (s > best_score) {
+          best_score = s;
+          best_class = c;
+        }
+      }
+      const float score = objectness * best_score;
+      if (!(score >= config.score_threshold)) continue;
+      const double cx = (w + std::tanh(at(1, h, w))) / grid_w * image_size.width;
+      const double cy = (h + std::tanh(at(2, h, w))) / grid_h * image_size.height;
+      const double bw = sigmoid(at(3, h, w)) * image_size.width;
+      const double bh = sigmoid(at(4, h, w)) * image_size.height;
+      Detection2D detection;
+      detection.box_px =
+          clippedBox(cx - 0.5 * bw, cy - 0.5 * bh, cx + 0.5 * bw, cy + 0.5 * bh, image_size);
+      if (detection.box_px.area() <= 0) continue;
+      setClass(labels[best_class], &detection);
+      detection.score = score;
+      candidates.push_back(std::move(detection));
+    }
+  }
+  *detections = suppressNonMaxima(std::move(candidates), config.nms_threshold);
+  for (Detection2D& detection : *detections) {
+    detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
+    detection.mask(detection.box_px).setTo(255);
+  }
+  return Status::Ok();
+}
+
+Status decodeMaskRcnn(const cv::Mat& detection_out, const cv::Mat& detection_masks,
+                      const cv::Size& image_size, const std::vector<std::string>& labels,
+                      const DnnDecodeConfig& config, std::vector<Detection2D>* detections) {
+  detections->clear();
+  if (detection_out.dims != 4 || detection_out.size[3] != 7 || detection_out.type() != CV_32F) {
+    return Status::Error("Mask R-CNN detection_out_final must be a [1, 1, N, 7] float blob");
+  }
+  const int num = detection_out.size[2];
+  if (num == 0) return Status::Ok();
+  if (detection_masks.dims != 4 || detection_masks.type() != CV_32F ||
+      detection_masks.size[0] < num) {
+    return Status::Error(
+        "Mask R-CNN detection_masks must be a [N, classes, h, w] float blob with "
+        "at least as many masks as detections (" +
+        std::to_string(num) + ")");
+  }
+  if (image_size.width <= 0 || image_size.height <= 0) {
+    return Status::Error("Mask R-CNN: empty image size");
+  }
+  const int mask_classes = detection_masks.size[1];
+  const int mask_h = detection_masks.size[2];
+  const int mask_w = detection_masks.size[3];
+  const cv::Mat out = detection_out.isContinuous() ? detection_out : detection_out.clone();
+  const cv::Mat masks = detection_masks.isContinuous() ? detection_masks : detection_masks.clone();
+  const float* rows = out.ptr<float>();
+  std::vector<Detection2D> candidates;
+  for (int i = 0; i < num; ++i) {
+    const float* r = rows + 7 * i;
+    const float score = r[2];
+    if (!(score >= config.score_threshold)) continue;
+    const int class_index = static_cast<int>(std::lround(r[1]));
+    if (class_index < 0 || class_index >= mask_classes) continue;
+    Detection2D detection;
+    detection.score = score;
+    setClass(class_index < static_cast<int>(labels.size()) ? labels[class_index] : std::string(),
+             &detection);
+    detection.box_px = clippedBox(r[3] * image_size.width, r[4] * image_size.height,
+                                  r[5] * image_size.width, r[6] * image_size.height, image_size);
+    if (detection.box_px.area() <= 0) continue;
+    // The class's low-resolution mask, stretched over the box (OpenCV's mask_rcnn sample does the
+    // same), thresholded into the full-size binary mask.
+    const cv::Mat small(
+        mask_h, mask_w, CV_32F,
+        const_cast<float*>(masks.ptr<float>()) +
+            (static_cast<size_t>(i) * mask_classes + class_index) * mask_h * mask_w);
+    cv::Mat stretched;
+    cv::resize(small, stretched, detection.box_px.size(), 0, 0, cv::INTER_LINEAR);
+    detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
+    cv::Mat roi = detection.mask(detection.box_px);
+    roi.setTo(255, stretched > config.mask_threshold);
+    candidates.push_back(std::move(detection));
+  }
+  // The network already applies NMS; this only removes exact repeats the graph may emit.
+  *detections = suppressNonMaxima(std::move(candidates), std::max(config.nms_threshold, 0.9f));
+  return Status::Ok();
+}
+
+struct DnnInstanceSegmenter::Network {
+  cv::dnn::Net net;
+};
+
+DnnInstanceSegmenter::DnnInstanceSegmenter(Model model, const DnnModelOptions& options)
+    : model_(model), options_(options), network_(std::make_unique<Network>()) {}
+
+DnnInstanceSegmenter::~DnnInstanceSegmenter() = default;
+
+std::string DnnInstanceSegmenter::name() const {
+  return model_ == Model::kFastestDet ? "fastestdet" : "maskrcnn";
+}
+
+Status DnnInstanceSegmenter::create(Model model, const DnnModelOptions& options,
+                                    std::unique_ptr<DnnInstanceSegmenter>* segmenter) {
+  segmenter->reset();
+  const std::string model_name = model == Model::kFastestDet ? "FastestDet" : "Mask R-CNN";
+  long size_bytes = 0;
+  if (!isReadableFile(options.model_path, &size_bytes)) {
+    return Status::Error(
+        missingModelHelp(model_name + " weights not found: '" + options.model_path + "'"));
+  }
+  if (model == Model::kMaskRcnn && !isReadableFile(options.config_path, &size_bytes)) {
+    return Status::Error(
+        missingModelHelp("Mask R-CNN text graph not found: '" + options.config_path + "'"));
+  }
+  std::unique_ptr<DnnInstanceSegmenter> result(new DnnInstanceSegmenter(model, options));
+  Status labels_read = readLabelFile(options.labels_path, &result->labels_);
+  if (!labels_read) {
+    // The class names are part of the model: without the file use the built-in COCO list of the
+    // same length when there is one.
+    if (model == Model::kFastestDet) {
+      result->labels_ = cocoClassNames();
+    } else {
+      return Status::Error(missingModelHelp(labels_read.message()));
+    }
+  }
+  try {
+    if (model == Model::kFastestDet) {
+      result->network_->net = cv::dnn::readNetFromONNX(options.model_path);
+    } else {
+      result->network_->net =
+          cv::dnn::readNetFromTensorflow(options.model_path, options.config_path);
+    }
+  } catch (const cv::Exception& e) {
+    return Status::Error(missingModelHelp(model_name + " model '" + options.model_path +
+                                          "' could not be loaded (corrupt or not the expected " +
+                                          "model?): " + e.what()));
+  }
+  if (result->network_->net.empty()) {
+    return Status::Error(missingModelHelp(model_name + " model '" + options.model_path +
+                                          "' loaded as an empty network"));
+  }
+  if (options.backend == "cuda") {
+    result->network_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_CUDA);
+    result->network_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CUDA);
+  } else {
+    result->network_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+    result->network_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  }
+  *segmenter = std::move(result);
+  return Status::Ok();
+}
+
+Status DnnInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string& frame_name,
+                                    std::vector<Detection2D>* detections,
+                                    std::vector<std::string>* warnings) {
+  detections->clear();
+  if (image_bgr.empty() || image_bgr.type() != CV_8UC3) {
+    return Status::Error(frame_name + ": " + name() + " needs a non-empty 8-bit BGR image");
+  }
+  std::vector<Detection2D> decoded;
+  try {
+    cv::dnn::Net& net = network_->net;
+    if (model_ == Model::kFastestDet) {
+      net.setInput(cv::dnn::blobFromImage(image_bgr, 1.0 / 255.0,
+                                          cv::Size(kFastestDetInputPx, kFastestDetInputPx),
+                                          cv::Scalar(), false, false));
+      const cv::Mat output = net.forward();
+      const Status status =
+          decodeFastestDet(output, image_bgr.size(), labels_, options_.decode, &decoded);
+      if (!status) return Status::Error(frame_name + ": " + status.message());
+    } else {
+      // The text graph resizes internally (keep_aspect_ratio_resizer); feed the image as it is.
+      net.setInput(cv::dnn::blobFromImage(image_bgr, 1.0, cv::Size(image_bgr.cols, image_bgr.rows),
+                                          cv::Scalar(), true, false));
+      std::vector<cv::Mat> outputs;
+      net.forward(outputs, std::vector<std::string>{"detection_out_final", "detection_masks"});
+      const Status status = decodeMaskRcnn(outputs[0], outputs[1], image_bgr.size(), labels_,
+                                           options_.decode, &decoded);
+      if (!status) return Status::Error(frame_name + ": " + status.message());
+    }
+  } catch (const cv::Exception& e) {
+    return Status::Error(frame_name + ": " + name() + " forward pass failed: " + e.what());
+  }
+  for (Detection2D& detection : decoded) {
+    if (detection.class_id < 0) {
+      if (warnings != nullptr) {
+        warnings->push_back(name() + ": class '" + detection.class_name +
+                            "' is not one of the 80 COCO classes; detection dropped");
+      }
+      continue;
+    }
+    detections->push_back(std::move(detection));
+  }
+  return Status::Ok();
+}
+
+}  // namespace mvod

@@ -1,0 +1,381 @@
+#include "multiview_object_detection/io/json_io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace mvod {
+namespace {
+
+using nlohmann::json;
+
+// Clouds are stored at 1 mm: finer than any sensor here and it keeps map files small.
+double roundToMillimetre(float value) {
+  return std::round(static_cast<double>(value) * 1000.0) / 1000.0;
+}
+
+json vectorToJson(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json cloudToJson(const PointCloud& cloud) {
+  json points = json::array();
+  for (const Eigen::Vector3f& p : cloud) {
+    points.push_back(json::array(
+        {roundToMillimetre(p.x()), roundToMillimetre(p.y()), roundToMillimetre(p.z())}));
+  }
+  return points;
+}
+
+json stageTimesToJson(const StageTimes& t) {
+  return json{{"extraction", t.extraction_ms},
+              {"filter", t.filter_ms},
+              {"lccp", t.lccp_ms},
+              {"manhattan", t.manhattan_ms},
+              {"fusion", t.fusion_ms},
+              {"refinement", t.refinement_ms},
+              {"total", t.total_ms}};
+}
+
+// Field readers: each names the field (path) it failed on.
+Status fieldError(const std::string& path, const std::string& what) {
+  return Status::Error("objects.json: " + path + ": " + what);
+}
+
+Status member(const json& parent, const std::string& path, const char* key, const json** value) {
+  const auto it = parent.find(key);
+  if (it == parent.end()) return fieldError(path + key, "missing");
+  *value = &*it;
+  return Status::Ok();
+}
+
+Status readInt(const json& parent, const std::string& path, const char* key, int min_value,
+               int* out) {
+  const json* value = nullptr;
+  Status status = member(parent, path, key, &value);
+  if (!status) return status;
+  if (!value->is_number_integer()) return fieldError(path + key, "expected an integer");
+  const long long v = value->get<long long>();
+  if (v < min_value || v > std::numeric_limits<int>::max()) {
+    return fieldError(path + key, "out of range (" + std::to_string(v) + ")");
+  }
+  *out = static_cast<int>(v);
+  return Status::Ok();
+}
+
+Status readNumber(const json& parent, const std::string& path, const char* key, double* out) {
+  const json* value = nullptr;
+  Status status = member(parent, path, key, &value);
+  if (!status) return status;
+  if (!value->is_number()) return fieldError(path + key, "expected a number");
+  const double v = value->get<double>();
+  if (!std::isfinite(v)) return fieldError(path + key, "not finite");
+  *out = v;
+  return Status::Ok();
+}
+
+Status readVector3(const json& value, const std::string& path, Eigen::Vector3d* out) {
+  if (!value.is_array() || value.size() != 3) return fieldError(path, "expected [x, y, z]");
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) {
+    if (!value[i].is_number()) return fieldError(path, "expected numbers");
+    v[i] = value[i].get<double>();
+    if (!std::isfinite(v[i])) return fieldError(path, "not finite");
+  }
+  *out = v;
+  return Status::Ok();
+}
+
+Status readVector3(const json& parent, const std::string& path, const char* key,
+                   Eigen::Vector3d* out) {
+  const json* value = nullptr;
+  Status status = member(parent, path, key, &value);
+  if (!status) return status;
+  return readVector3(*value, path + key, out);
+}
+
+Status readCloud(const json& value, const std::string& path, PointCloud* out) {
+  if (!value.is_array()) return fieldError(path, "expected an array of [x, y, z]");
+  PointCloud cloud;
+  cloud.reserve(value.size());
+  for (size_t i = 0; i < value.size(); ++i) {
+    Eigen::Vector3d p;
+    const Status status = readVector3(value[i], path + "[" + std::to_string(i) + "]", &p);
+    if (!status) return status;
+    cloud.push_back(p.cast<float>());
+  }
+  *out = std::move(cloud);
+  return Status::Ok();
+}
+
+Status readObject(const json& value, const std::string& path, MapObject* out) {
+  if (!value.is_object()) return fieldError(path, "expected an object");
+  const std::string prefix = path + ".";
+  MapObject object;
+  Status status;
+  if (!(status = readInt(value, prefix, "id", 0, &object.id))) return status;
+  const json* name = nullptr;
+  if (!(status = member(value, prefix, "class_name", &name))) return status;
+  if (!name->is_string()) return fieldError(prefix + "class_name", "expected a string");
+  object.class_name = name->get<std::string>();
+  if (object.class_name.empty()) return fieldError(prefix + "class_name", "empty");
+  if (!(status = readInt(value, prefix, "class_id", -1, &object.class_id))) return status;
+  if (!(status = readNumber(value, prefix, "probability", &object.probability))) return status;
+  if (object.probability < 0.0 || object.probability > 1.0) {
+    return fieldError(prefix + "probability", "must be in [0, 1]");
+  }
+  if (!(status = readInt(value, prefix, "observations", 0, &object.observations))) return status;
+  if (!(status = readVector3(value, prefix, "center", &object.box.center_m))) return status;
+  if (!(status = readVector3(value, prefix, "size", &object.box.size_m))) return status;
+  if ((object.box.size_m.array() < 0.0).any()) return fieldError(prefix + "size", "negative");
+
+  const json* rotation = nullptr;
+  if (!(status = member(value, prefix, "rotation", &rotation))) return status;
+  if (!rotation->is_array() || rotation->size() != 3) {
+    return fieldError(prefix + "rotation", "expected a 3x3 array of rows");
+  }
+  for (int r = 0; r < 3; ++r) {
+    Eigen::Vector3d row;
+    if (!(status =
+              readVector3((*rotation)[r], prefix + "rotation[" + std::to_string(r) + "]", &row))) {
+      return status;
+    }
+    object.box.rotation.row(r) = row.transpose();
+  }
+  const Eigen::Matrix3d& R = object.box.rotation;
+  if (!(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-3) ||
+      std::abs(R.determinant() - 1.0) > 1e-3) {
+    return fieldError(prefix + "rotation", "not a rotation (orthonormal, determinant +1)");
+  }
+
+  if (!(status = readNumber(value, prefix, "yaw", &object.yaw_rad))) return status;
+  int num_points = 0;
+  if (!(status = readInt(value, prefix, "num_points", 0, &num_points))) return status;
+  if (!(status = readInt(value, prefix, "first_keyframe", std::numeric_limits<int>::min(),
+                         &object.first_keyframe))) {
+    return status;
+  }
+  if (!(status = readInt(value, prefix, "last_keyframe", std::numeric_limits<int>::min(),
+                         &object.last_keyframe))) {
+    return status;
+  }
+  if (!(status = readNumber(value, prefix, "first_seen", &object.first_seen_s))) return status;
+  if (!(status = readNumber(value, prefix, "last_seen", &object.last_seen_s))) return status;
+
+  // Clouds are optional (include_clouds); when present, num_points must match.
+  const auto points = value.find("points");
+  if (points != value.end()) {
+    if (!(status = readCloud(*points, prefix + "points", &object.points_W))) return status;
+    if (static_cast<int>(object.points_W.size()) != num_points) {
+      return fieldError(prefix + "num_points", "does not match the number of points");
+    }
+  }
+  const auto segment = value.find("segment");
+  if (segment != value.end()) {
+    if (!(status = readCloud(*segment, prefix + "segment", &object.segment_W))) return status;
+  }
+  *out = std::move(object);
+  return Status::Ok();
+}
+
+}  // namespace
+
+std::vector<MapObject> databaseObjects(const ObjectDatabase& database) {
+  std::vector<MapObject> objects;
+  objects.reserve(database.size());
+  for (const auto& entry : database.objects()) objects.push_back(entry.second);
+  return objects;
+}
+
+std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
+                          bool include_clouds) {
+  json doc;
+  doc["frames"] = summary.frames;
+  doc["keyframes"] = summary.keyframes;
+  doc["gravity_down"] = vectorToJson(summary.gravity_down_W);
+  json list = json::array();
+  for (const MapObject& object : objects) {
+    json rotation = json::array();
+    for (int r = 0; r < 3; ++r) {
+      rotation.push_back(json::array(
+          {object.box.rotation(r, 0), object.box.rotation(r, 1), object.box.rotation(r, 2)}));
+    }
+    json entry = {{"id", object.id},
+                  {"class_name", object.class_name},
+                  {"class_id", object.class_id},
+                  {"probability", object.probability},
+                  {"observations", object.observations},
+                  {"center", vectorToJson(object.box.center_m)},
+                  {"size", vectorToJson(object.box.size_m)},
+                  {"rotation", rotation},
+                  {"yaw", object.yaw_rad},
+                  {"num_points", object.points_W.size()},
+                  {"first_keyframe", object.first_keyframe},
+                  {"last_keyframe", object.last_keyframe},
+                  {"first_seen", object.first_seen_s},
+                  {"last_seen", object.last_seen_s}};
+    if (include_clouds) {
+      entry["points"] = cloudToJson(object.points_W);
+      entry["segment"] = cloudToJson(object.segment_W);
+    }
+    list.push_back(std::move(entry));
+  }
+  doc["objects"] = std::move(list);
+  doc["removed"] = {{"atypical", summary.removed_atypical},
+                    {"intersecting", summary.removed_intersecting}};
+  doc["stage_ms"] = stageTimesToJson(summary.stage_ms_median);
+  const MapSummary::Counts& c = summary.counts;
+  doc["counts"] = {{"detections", c.detections}, {"above_threshold", c.above_threshold},
+                   {"with_box", c.with_box},     {"inserted", c.inserted},
+                   {"fused", c.fused},           {"before_refinement", c.before_refinement}};
+  // With clouds the document is large: compact. Without, indented for people to read.
+  return doc.dump(include_clouds ? -1 : 2) + "\n";
+}
+
+Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
+                       MapSummary* summary) {
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::exception& e) {
+    return Status::Error(std::string("objects.json: not valid JSON: ") + e.what());
+  }
+  if (!doc.is_object()) return fieldError("(document)", "expected a JSON object");
+
+  MapSummary parsed;
+  Status status;
+  if (!(status = readInt(doc, "", "frames", 0, &parsed.frames))) return status;
+  if (!(status = readInt(doc, "", "keyframes", 0, &parsed.keyframes))) return status;
+  if (!(status = readVector3(doc, "", "gravity_down", &parsed.gravity_down_W))) return status;
+
+  const json* removed = nullptr;
+  if (!(status = member(doc, "", "removed", &removed))) return status;
+  if (!removed->is_object()) return fieldError("removed", "expected an object");
+  if (!(status = readInt(*removed, "removed.", "atypical", 0, &parsed.removed_atypical))) {
+    return status;
+  }
+  if (!(status = readInt(*removed, "removed.", "intersecting", 0, &parsed.removed_intersecting))) {
+    return status;
+  }
+
+  const json* stages = nullptr;
+  if (!(status = member(doc, "", "stage_ms", &stages))) return status;
+  if (!stages->is_object()) return fieldError("stage_ms", "expected an object");
+  StageTimes& t = parsed.stage_ms_median;
+  const std::pair<const char*, double*> stage_fields[] = {{"extraction", &t.extraction_ms},
+                                                          {"filter", &t.filter_ms},
+                                                          {"lccp", &t.lccp_ms},
+                                                          {"manhattan", &t.manhattan_ms},
+                                                          {"fusion", &t.fusion_ms},
+                                                          {"refinement", &t.refinement_ms},
+                                                          {"total", &t.total_ms}};
+  for (const auto& field : stage_fields) {
+    if (!(status = readNumber(*stages, "stage_ms.", field.first, field.second))) return status;
+    if (*field.second < 0.0) return fieldError(std::string("stage_ms.") + field.first, "negative");
+  }
+
+  if (doc.contains("counts")) {
+    const json& counts = doc["counts"];
+    if (!counts.is_object()) return fieldError("counts", "expected an object");
+    MapSummary::Counts& c = parsed.counts;
+    const std::pair<const char*, int*> count_fields[] = {
+        {"detections", &c.detections}, {"above_threshold", &c.above_threshold},
+        {"with_box", &c.with_box},     {"inserted", &c.inserted},
+        {"fused", &c.fused},           {"before_refinement", &c.before_refinement}};
+    for (const auto& field : count_fields) {
+      if (!(status = readInt(counts, "counts.", field.first, 0, field.second))) return status;
+    }
+  }
+
+  const json* list = nullptr;
+  if (!(status = member(doc, "", "objects", &list))) return status;
+  if (!list->is_array()) return fieldError("objects", "expected an array");
+  std::vector<MapObject> parsed_objects;
+  std::set<int> ids;
+  for (size_t i = 0; i < list->size(); ++i) {
+    MapObject object;
+    const std::string path = "objects[" + std::to_string(i) + "]";
+    if (!(status = readObject((*list)[i], path, &object))) return status;
+    if (!ids.insert(object.id).second) {
+      return fieldError(path + ".id", "duplicate id " + std::to_string(object.id));
+    }
+    parsed_objects.push_back(std::move(object));
+  }
+
+  if (objects != nullptr) *objects = std::move(parsed_objects);
+  if (summary != nullptr) *summary = parsed;
+  return Status::Ok();
+}
+
+Status writeFileAtomic(const std::string& path, const std::string& content) {
+  // The temporary lives in the target's folder so rename() stays on one filesystem (atomic).
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash);
+  std::string tmp_path = path + ".tmp.XXXXXX";
+  std::vector<char> tmp_name(tmp_path.begin(), tmp_path.end());
+  tmp_name.push_back('\0');
+  const int fd = ::mkstemp(tmp_name.data());
+  if (fd < 0) {
+    return Status::Error("cannot create a temporary file next to " + path + ": " +
+                         std::strerror(errno));
+  }
+  tmp_path = tmp_name.data();
+  auto fail = [&](const std::string& what) {
+    const std::string message = what + " " + tmp_path + ": " + std::strerror(errno);
+    ::close(fd);
+    ::unlink(tmp_path.c_str());
+    return Status::Error(message);
+  };
+  size_t written = 0;
+  while (written < content.size()) {
+    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return fail("cannot write");
+    }
+    written += static_cast<size_t>(n);
+  }
+  // mkstemp creates 0600; give the file the usual permissions.
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::fchmod(fd, 0666 & ~mask);
+  if (::fsync(fd) != 0) return fail("cannot fsync");
+  if (::close(fd) != 0) {
+    const std::string message = "cannot close " + tmp_path + ": " + std::strerror(errno);
+    ::unlink(tmp_path.c_str());
+    return Status::Error(message);
+  }
+  if (::rename(tmp_path.c_str(), path.c_str()) != 0) {
+    const std::string message =
+        "cannot rename " + tmp_path + " to " + path + ": " + std::strerror(errno);
+    ::unlink(tmp_path.c_str());
+    return Status::Error(message);
+  }
+  // Make the rename itself durable.
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+  return Status::Ok();
+}
+
+Status readFile(const std::string& path, std::string* content) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error("cannot open " + path + ": " + std::strerror(errno));
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) return Status::Error("cannot read " + path);
+  *content = buffer.str();
+  return Status::Ok();
+}
+
+}  // namespace mvod

@@ -1,0 +1,209 @@
+#include "multiview_object_detection/pipeline/lccp_segmenter.h"
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/segmentation/lccp_segmentation.h>
+#include <pcl/segmentation/supervoxel_clustering.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace mvod {
+namespace {
+
+constexpr double kMaxVoxelsPerAxis = 1.0e6;
+
+bool finitePositive(double value) { return std::isfinite(value) && value > 0.0; }
+bool finiteNonNegative(double value) { return std::isfinite(value) && value >= 0.0; }
+
+}  // namespace
+
+Status LccpSegmenter::Config::isValid() const {
+  if (!finitePositive(voxel_resolution_m)) {
+    return Status::Error("voxel_resolution_m must be a finite value > 0 (got " +
+                         std::to_string(voxel_resolution_m) + ")");
+  }
+  if (!(finitePositive(seed_resolution_m) && seed_resolution_m >= voxel_resolution_m)) {
+    return Status::Error("seed_resolution_m must be finite and >= voxel_resolution_m (got " +
+                         std::to_string(seed_resolution_m) + ")");
+  }
+  if (!finiteNonNegative(spatial_importance) || !finiteNonNegative(normal_importance) ||
+      !finiteNonNegative(color_importance)) {
+    return Status::Error("spatial/normal/color_importance must be finite values >= 0");
+  }
+  if (!(finiteNonNegative(concavity_tolerance_deg) && concavity_tolerance_deg < 90.0)) {
+    return Status::Error("concavity_tolerance_deg must be in [0, 90) (got " +
+                         std::to_string(concavity_tolerance_deg) + ")");
+  }
+  if (!finiteNonNegative(smoothness_threshold)) {
+    return Status::Error("smoothness_threshold must be a finite value >= 0 (got " +
+                         std::to_string(smoothness_threshold) + ")");
+  }
+  if (min_segment_size < 0) {
+    return Status::Error("min_segment_size must be >= 0 (got " + std::to_string(min_segment_size) +
+                         ")");
+  }
+  if (min_points < 1) {
+    return Status::Error("min_points must be >= 1 (got " + std::to_string(min_points) + ")");
+  }
+  return Status::Ok();
+}
+
+std::string LccpSegmenter::Config::print() const {
+  std::ostringstream out;
+  out << "enable: " << (enable ? "true" : "false") << "\n"
+      << "voxel_resolution_m: " << voxel_resolution_m << "\n"
+      << "seed_resolution_m: " << seed_resolution_m << "\n"
+      << "spatial_importance: " << spatial_importance << "\n"
+      << "normal_importance: " << normal_importance << "\n"
+      << "color_importance: " << color_importance << "\n"
+      << "log_depth_transform: " << (log_depth_transform ? "true" : "false") << "\n"
+      << "concavity_tolerance_deg: " << concavity_tolerance_deg << "\n"
+      << "smoothness_threshold: " << smoothness_threshold << "\n"
+      << "min_segment_size: " << min_segment_size << "\n"
+      << "use_extended_convexity: " << (use_extended_convexity ? "true" : "false") << "\n"
+      << "use_sanity_criterion: " << (use_sanity_criterion ? "true" : "false") << "\n"
+      << "min_points: " << min_points << "\n";
+  return out.str();
+}
+
+Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_frame,
+                              Result* result) const {
+  if (result == nullptr) return Status::Error("result must not be null");
+  *result = Result();
+  // Table 3's "-LCCP" ablation: the whole cloud is the object.
+  if (!config_.enable) {
+    result->largest_segment = points;
+    return Status::Ok();
+  }
+  const Status valid = config_.isValid();
+  if (!valid) return valid;
+
+  // PCL gets only finite points; `source_index` maps them back to the caller's points.
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(points.size());
+  std::vector<std::size_t> source_index;
+  source_index.reserve(points.size());
+  float min_z = std::numeric_limits<float>::infinity();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    source_index.push_back(i);
+    min_z = std::min(min_z, p.z());
+  }
+  if (cloud->empty()) {
+    return Status::Error("no finite points to segment (" + std::to_string(points.size()) +
+                         " points in)");
+  }
+  if (static_cast<int>(cloud->size()) < config_.min_points) {
+    // Too small to split into supervoxels: keep it whole.
+    for (const std::size_t i : source_index) result->largest_segment.push_back(points[i]);
+    return Status::Ok();
+  }
+
+  // Sec. 3.2: the paper's logarithmic depth transform (x/z, y/z, log z) keeps supervoxels fair
+  // to the depth-dependent density of a single view; only defined in front of the camera.
+  const bool log_transform = config_.log_depth_transform && points_in_camera_frame && min_z > 1e-3f;
+
+  // PCL's octree keys are 32-bit (and it asserts on overflow): refuse absurd extents.
+  Eigen::Array3d lower = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Array3d upper = -lower;
+  for (const pcl::PointXYZ& p : *cloud) {
+    const Eigen::Array3d q = log_transform ? Eigen::Array3d(p.x / p.z, p.y / p.z, std::log(p.z))
+                                           : Eigen::Array3d(p.x, p.y, p.z);
+    lower = lower.min(q);
+    upper = upper.max(q);
+  }
+  if ((upper - lower).maxCoeff() / config_.voxel_resolution_m > kMaxVoxelsPerAxis) {
+    return Status::Error("cloud extent " + std::to_string((upper - lower).maxCoeff()) +
+                         " is too large for voxel_resolution_m " +
+                         std::to_string(config_.voxel_resolution_m));
+  }
+
+  try {
+    pcl::SupervoxelClustering<pcl::PointXYZ> supervoxels(
+        static_cast<float>(config_.voxel_resolution_m),
+        static_cast<float>(config_.seed_resolution_m));
+    supervoxels.setUseSingleCameraTransform(log_transform);
+    supervoxels.setInputCloud(cloud);
+    supervoxels.setSpatialImportance(static_cast<float>(config_.spatial_importance));
+    supervoxels.setNormalImportance(static_cast<float>(config_.normal_importance));
+    supervoxels.setColorImportance(static_cast<float>(config_.color_importance));
+    std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZ>::Ptr> clusters;
+    supervoxels.extract(clusters);
+    result->num_supervoxels = static_cast<int>(clusters.size());
+    if (clusters.empty()) {
+      return Status::Error("supervoxel clustering found no supervoxels in " +
+                           std::to_string(cloud->size()) + " points (too sparse?)");
+    }
+    std::multimap<std::uint32_t, std::uint32_t> adjacency;
+    supervoxels.getSupervoxelAdjacency(adjacency);
+
+    // Eq. 2: merge supervoxels across convex (and, with the sanity criterion, not singular)
+    // edges; concave edges separate an object from the floor and wall it stands against.
+    pcl::LCCPSegmentation<pcl::PointXYZ> lccp;
+    lccp.setConcavityToleranceThreshold(static_cast<float>(config_.concavity_tolerance_deg));
+    lccp.setSanityCheck(config_.use_sanity_criterion);
+    lccp.setSmoothnessCheck(true, static_cast<float>(config_.voxel_resolution_m),
+                            static_cast<float>(config_.seed_resolution_m),
+                            static_cast<float>(config_.smoothness_threshold));
+    lccp.setKFactor(config_.use_extended_convexity ? 1 : 0);
+    lccp.setMinSegmentSize(static_cast<std::uint32_t>(config_.min_segment_size));
+    lccp.setInputSupervoxels(clusters, adjacency);
+    lccp.segment();
+
+    std::map<std::uint32_t, std::uint32_t> supervoxel_to_segment;
+    lccp.getSupervoxelToSegmentMap(supervoxel_to_segment);
+    std::map<std::uint32_t, std::set<std::uint32_t>> segment_to_supervoxels;
+    lccp.getSegmentToSupervoxelMap(segment_to_supervoxels);
+    result->num_segments = static_cast<int>(segment_to_supervoxels.size());
+
+    // Each input point takes its supervoxel's segment; label 0 = not in any supervoxel.
+    const pcl::PointCloud<pcl::PointXYZL>::Ptr labeled = supervoxels.getLabeledCloud();
+    if (labeled == nullptr || labeled->size() != cloud->size()) {
+      return Status::Error("supervoxel labels do not match the input cloud");
+    }
+    std::vector<std::uint32_t> point_segment(cloud->size(), 0);
+    std::map<std::uint32_t, std::size_t> segment_points;
+    for (std::size_t i = 0; i < labeled->size(); ++i) {
+      const std::uint32_t supervoxel = (*labeled)[i].label;
+      if (supervoxel == 0) continue;
+      const auto it = supervoxel_to_segment.find(supervoxel);
+      if (it == supervoxel_to_segment.end() || it->second == 0) continue;
+      point_segment[i] = it->second;
+      ++segment_points[it->second];
+    }
+    if (segment_points.empty()) {
+      return Status::Error("LCCP assigned no point to a segment");
+    }
+
+    // The largest segment by point count is the object; ties go to the lower label.
+    std::uint32_t largest = 0;
+    std::size_t largest_count = 0;
+    for (const auto& entry : segment_points) {
+      if (entry.second > largest_count) {
+        largest = entry.first;
+        largest_count = entry.second;
+      }
+    }
+    result->largest_segment.reserve(largest_count);
+    for (std::size_t i = 0; i < point_segment.size(); ++i) {
+      if (point_segment[i] == largest) result->largest_segment.push_back(points[source_index[i]]);
+    }
+  } catch (const std::exception& e) {
+    *result = Result();
+    return Status::Error(std::string("PCL supervoxel/LCCP failed: ") + e.what());
+  } catch (...) {
+    *result = Result();
+    return Status::Error("PCL supervoxel/LCCP failed with an unknown exception");
+  }
+  return Status::Ok();
+}
+
+}  // namespace mvod

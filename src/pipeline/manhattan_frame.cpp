@@ -1,0 +1,626 @@
+#include "multiview_object_detection/pipeline/manhattan_frame.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+
+namespace mvod {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kHalfPi = 0.5 * kPi;
+constexpr double kQuarterPi = 0.25 * kPi;
+
+// SO(3) search (Eq. 3 over all rotations): how many normals propose a first axis, how many of the
+// best proposals are polished and scored on all normals, and how many normals score the proposals.
+constexpr int kNumAxisCandidates = 64;
+constexpr int kNumRefinedCandidates = 4;
+constexpr int kMaxScoringNormals = 600;
+constexpr int kPolishIterations = 10;
+
+// A Manhattan yaw is trusted only if its horizontal inliers clearly stand out from the yaw-averaged
+// count (a cylinder or a flat slab gives a nearly flat inlier-vs-yaw curve); otherwise BoxEstimator
+// falls back to the minimum-area footprint.
+constexpr double kMinPeakToMeanRatio = 1.5;
+constexpr int kMinHorizontalInliers = 5;
+
+// ---------------------------------------------------------------------------------------------------
+// Neighbour search: a hash grid with cells of the search radius, so a radius query visits 27 cells.
+// Points are stored sorted by cell for cache locality. Cell keys may collide for huge extents;
+// colliding cells are merged, which only adds candidates (every candidate is distance-checked).
+class VoxelNeighbourSearch {
+ public:
+  VoxelNeighbourSearch(const PointCloud& points, double radius_m)
+      : inv_cell_(1.0 / radius_m), radius_sq_(static_cast<float>(radius_m * radius_m)) {
+    std::vector<std::pair<uint64_t, int>> keyed;
+    keyed.reserve(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!points[i].allFinite()) continue;
+      keyed.emplace_back(key(cellOf(points[i])), static_cast<int>(i));
+    }
+    std::sort(keyed.begin(), keyed.end());
+    sorted_points_.reserve(keyed.size());
+    sorted_indices_.reserve(keyed.size());
+    cells_.reserve(keyed.size());
+    for (size_t k = 0; k < keyed.size(); ++k) {
+      sorted_points_.push_back(points[keyed[k].second]);
+      sorted_indices_.push_back(keyed[k].second);
+      if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+        cells_.emplace(keyed[k].first, std::make_pair(static_cast<int>(k), static_cast<int>(k)));
+      }
+      cells_[keyed[k].first].second = static_cast<int>(k + 1);
+    }
+  }
+
+  // The [begin, end) ranges of the stored points in the 27 cells around (and including) `cell`.
+  // Queries that share a cell share these ranges, so callers look them up once per cell.
+  void neighbourRanges(uint64_t cell_key, std::vector<std::pair<int, int>>* ranges) const {
+    ranges->clear();
+    const Eigen::Vector3i c = cellFromKey(cell_key);
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = cells_.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+          if (it != cells_.end()) ranges->push_back(it->second);
+        }
+      }
+    }
+  }
+
+  // Squared distances and indices of the points of `ranges` within the radius of q (q itself
+  // included).
+  void radiusSearch(const Eigen::Vector3f& q, const std::vector<std::pair<int, int>>& ranges,
+                    std::vector<std::pair<float, int>>* out) const {
+    out->clear();
+    for (const std::pair<int, int>& range : ranges) {
+      for (int k = range.first; k < range.second; ++k) {
+        const float d_sq = (sorted_points_[k] - q).squaredNorm();
+        if (d_sq <= radius_sq_) out->emplace_back(d_sq, sorted_indices_[k]);
+      }
+    }
+  }
+
+  uint64_t keyOf(const Eigen::Vector3f& p) const { return key(cellOf(p)); }
+
+ private:
+  Eigen::Vector3i cellOf(const Eigen::Vector3f& p) const {
+    // Clamped so absurd coordinates cannot overflow the integer conversion.
+    const auto index = [this](float v) {
+      const double scaled = std::floor(static_cast<double>(v) * inv_cell_);
+      return static_cast<int>(std::max(-1e9, std::min(1e9, scaled)));
+    };
+    return Eigen::Vector3i(index(p.x()), index(p.y()), index(p.z()));
+  }
+  // Inverse of key() (21-bit two's complement per axis).
+  static Eigen::Vector3i cellFromKey(uint64_t k) {
+    const auto field = [k](int shift) {
+      const int64_t v = static_cast<int64_t>((k >> shift) & ((uint64_t{1} << 21) - 1));
+      return static_cast<int>(v >= (int64_t{1} << 20) ? v - (int64_t{1} << 21) : v);
+    };
+    return Eigen::Vector3i(field(0), field(21), field(42));
+  }
+  static uint64_t key(const Eigen::Vector3i& c) {
+    const uint64_t mask = (uint64_t{1} << 21) - 1;
+    return (static_cast<uint64_t>(c.x()) & mask) | ((static_cast<uint64_t>(c.y()) & mask) << 21) |
+           ((static_cast<uint64_t>(c.z()) & mask) << 42);
+  }
+
+  double inv_cell_;
+  float radius_sq_;
+  PointCloud sorted_points_;
+  std::vector<int> sorted_indices_;
+  std::unordered_map<uint64_t, std::pair<int, int>> cells_;  // key -> [begin, end) in sorted arrays
+};
+
+Eigen::Vector3f nanNormal() {
+  return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+}
+
+// PCA normals of points[queries[i]] (the eigenvector of the smallest eigenvalue of the neighbour
+// covariance). Shared by estimateNormals and BoxEstimator, which only needs normals at a subsample.
+std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vector<int>& queries,
+                                       double radius_m, int max_neighbours) {
+  std::vector<Eigen::Vector3f> normals(queries.size(), nanNormal());
+  if (!(std::isfinite(radius_m) && radius_m > 0.0) || max_neighbours < 3) return normals;
+  const VoxelNeighbourSearch search(points, radius_m);
+  // Queries in cell order, so the 27 neighbour cells are looked up once per occupied cell.
+  std::vector<std::pair<uint64_t, int>> order;
+  order.reserve(queries.size());
+  for (size_t i = 0; i < queries.size(); ++i) {
+    if (points[queries[i]].allFinite()) {
+      order.emplace_back(search.keyOf(points[queries[i]]), static_cast<int>(i));
+    }
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<std::pair<int, int>> ranges;
+  std::vector<std::pair<float, int>> neighbours;
+  for (size_t o = 0; o < order.size(); ++o) {
+    if (o == 0 || order[o].first != order[o - 1].first)
+      search.neighbourRanges(order[o].first, &ranges);
+    const int i = order[o].second;
+    const Eigen::Vector3f& q = points[queries[i]];
+    search.radiusSearch(q, ranges, &neighbours);
+    if (neighbours.size() < 3) continue;
+    if (static_cast<int>(neighbours.size()) > max_neighbours) {
+      std::nth_element(neighbours.begin(), neighbours.begin() + max_neighbours, neighbours.end());
+      neighbours.resize(max_neighbours);
+    }
+    // Moments relative to the query point keep double precision far from the origin.
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+    for (const auto& n : neighbours) {
+      const Eigen::Vector3d d = (points[n.second] - q).cast<double>();
+      sum += d;
+      sum_sq += d * d.transpose();
+    }
+    const double count = static_cast<double>(neighbours.size());
+    const Eigen::Vector3d mean = sum / count;
+    const Eigen::Matrix3d covariance = sum_sq / count - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(covariance);
+    const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
+    // Coincident or collinear neighbours do not define a plane.
+    if (!(eigenvalues[2] > 0.0) || !(eigenvalues[1] > 1e-6 * eigenvalues[2])) continue;
+    const Eigen::Vector3d normal = solver.eigenvectors().col(0);
+    if (normal.allFinite() && normal.norm() > 0.5) normals[i] = normal.normalized().cast<float>();
+  }
+  return normals;
+}
+
+// Deterministic stride so that at most max_count of n items are kept.
+int strideFor(size_t n, int max_count) {
+  if (max_count <= 0 || n <= static_cast<size_t>(max_count)) return 1;
+  return static_cast<int>((n + max_count - 1) / max_count);
+}
+
+// Finite, non-zero normals (normalised, double), subsampled by stride to at most max_normals.
+std::vector<Eigen::Vector3d> prepareNormals(const std::vector<Eigen::Vector3f>& normals,
+                                            int max_normals) {
+  const int stride = strideFor(normals.size(), max_normals);
+  std::vector<Eigen::Vector3d> result;
+  result.reserve(normals.size() / stride + 1);
+  for (size_t i = 0; i < normals.size(); i += stride) {
+    const Eigen::Vector3d n = normals[i].cast<double>();
+    const double norm = n.norm();
+    if (!std::isfinite(norm) || norm < 1e-6) continue;
+    result.push_back(n / norm);
+  }
+  return result;
+}
+
+template <typename T>
+std::vector<T> strided(const std::vector<T>& items, int max_count) {
+  const int stride = strideFor(items.size(), max_count);
+  if (stride == 1) return items;
+  std::vector<T> result;
+  for (size_t i = 0; i < items.size(); i += stride) result.push_back(items[i]);
+  return result;
+}
+
+// Folds an angle into [0, pi/2).
+double foldQuarter(double angle) {
+  double a = std::fmod(angle, kHalfPi);
+  if (a < 0.0) a += kHalfPi;
+  if (a >= kHalfPi) a -= kHalfPi;
+  return a;
+}
+
+// Folds a yaw into [-pi/4, pi/4): the four horizontal axes of a gravity-aligned frame are
+// equivalent.
+double foldYaw(double yaw_rad) {
+  const double a = foldQuarter(yaw_rad);
+  return a >= kQuarterPi ? a - kHalfPi : a;
+}
+
+// Arc of yaw (folded into one quarter turn) over which a normal is an inlier of a horizontal axis.
+struct YawArc {
+  enum Kind { kNever, kAlways, kArc } kind = kNever;
+  double start = 0.0;       // in [0, pi/2)
+  double half_width = 0.0;  // < pi/4 for an arc
+};
+
+YawArc yawArcOf(const Eigen::Vector3d& n, const Eigen::Vector3d& up, const Eigen::Vector3d& x_h,
+                const Eigen::Vector3d& y_h, double cos_delta) {
+  YawArc arc;
+  if (std::abs(n.dot(up)) >= cos_delta) {  // within δ of ±up: an inlier at every yaw
+    arc.kind = YawArc::kAlways;
+    return arc;
+  }
+  const double hx = n.dot(x_h);
+  const double hy = n.dot(y_h);
+  const double h = std::hypot(hx, hy);
+  // angle(n, axis at yaw psi) <= δ  <=>  h cos(theta - psi) >= cos δ.
+  if (h < cos_delta) return arc;
+  arc.half_width = std::acos(std::min(1.0, cos_delta / h));
+  if (2.0 * arc.half_width >= kHalfPi) {  // only for δ >= 45°
+    arc.kind = YawArc::kAlways;
+    return arc;
+  }
+  arc.kind = YawArc::kArc;
+  arc.start = foldQuarter(std::atan2(hy, hx) - arc.half_width);
+  return arc;
+}
+
+struct YawSweepResult {
+  double psi = 0.0;  // in [0, pi/2)
+  int inliers = 0;
+};
+
+// Exact maximiser of the gravity-constrained Eq. 3 over yaw: each normal is an inlier on a closed
+// arc of yaw (mod 90°); a sweep over the sorted arc end points visits every piece of the
+// piecewise-constant count. Among the maximal pieces the widest wins and its middle is returned.
+YawSweepResult sweepYaw(const std::vector<Eigen::Vector3d>& normals, const Eigen::Vector3d& up,
+                        const Eigen::Vector3d& x_h, const Eigen::Vector3d& y_h, double cos_delta) {
+  std::vector<std::pair<double, int>> events;  // (angle, +1 start / -1 end)
+  events.reserve(2 * normals.size());
+  int base = 0;  // count at psi = 0: normals inlier everywhere plus arcs that wrap past pi/2
+  for (const Eigen::Vector3d& n : normals) {
+    const YawArc arc = yawArcOf(n, up, x_h, y_h, cos_delta);
+    if (arc.kind == YawArc::kAlways) {
+      ++base;
+    } else if (arc.kind == YawArc::kArc) {
+      const double end = arc.start + 2.0 * arc.half_width;
+      events.emplace_back(arc.start, +1);
+      if (end < kHalfPi) {
+        events.emplace_back(end, -1);
+      } else {  // wraps: [start, pi/2) and [0, end - pi/2]
+        ++base;
+        events.emplace_back(end - kHalfPi, -1);
+      }
+    }
+  }
+  YawSweepResult result;
+  result.inliers = base;
+  if (events.empty()) return result;  // constant count: any yaw, take 0
+  // Closed arcs: at equal angles, starts come before ends.
+  std::sort(events.begin(), events.end(),
+            [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+              return a.first < b.first || (a.first == b.first && a.second > b.second);
+            });
+
+  // The count on the first piece [0, events[0]] and on the last piece [events.back(), pi/2) is
+  // `base` (every arc that starts also ends); these two pieces are one across the wrap.
+  int best = base;
+  double best_width = events.front().first + (kHalfPi - events.back().first);
+  double best_psi = foldQuarter(events.back().first + 0.5 * best_width);
+  int count = base;
+  for (size_t i = 0; i + 1 < events.size(); ++i) {
+    count += events[i].second;
+    // After event i the count holds on [events[i], events[i+1]] (exactly for a piece of positive
+    // width; a zero-width piece at a shared end point is exact once all its starts and none of its
+    // ends are in).
+    const double width = events[i + 1].first - events[i].first;
+    if (count > best || (count == best && width > best_width)) {
+      best = count;
+      best_width = width;
+      best_psi = events[i].first + 0.5 * width;
+    }
+  }
+  result.psi = foldQuarter(best_psi);
+  result.inliers = best;
+  return result;
+}
+
+bool isInlier(const Eigen::Vector3d& n, const Eigen::Matrix3d& R, double cos_delta) {
+  for (int j = 0; j < 3; ++j) {
+    if (std::abs(n.dot(R.col(j))) >= cos_delta) return true;
+  }
+  return false;
+}
+
+int countInliersUnit(const std::vector<Eigen::Vector3d>& normals, const Eigen::Matrix3d& R,
+                     double cos_delta) {
+  int count = 0;
+  for (const Eigen::Vector3d& n : normals) count += isInlier(n, R, cos_delta) ? 1 : 0;
+  return count;
+}
+
+// Least-squares polish of a consensus frame (Eq. 3's objective is flat over a range of rotations
+// about the optimum, so its argmax alone is imprecise): each axis becomes the mean of its
+// sign-aligned inlier normals, and the three means are projected back onto SO(3) (polar
+// decomposition); repeated a few times.
+Eigen::Matrix3d polishFrame(const std::vector<Eigen::Vector3d>& normals, const Eigen::Matrix3d& R,
+                            double cos_delta) {
+  Eigen::Matrix3d current = R;
+  for (int iteration = 0; iteration < kPolishIterations; ++iteration) {
+    Eigen::Matrix3d sums = Eigen::Matrix3d::Zero();
+    for (const Eigen::Vector3d& n : normals) {
+      for (int j = 0; j < 3; ++j) {
+        const double d = n.dot(current.col(j));
+        if (std::abs(d) >= cos_delta) {
+          sums.col(j) += d > 0.0 ? n : Eigen::Vector3d(-n);
+          break;
+        }
+      }
+    }
+    for (int j = 0; j < 3; ++j) {
+      if (sums.col(j).norm() < 1e-9) sums.col(j) = current.col(j);  // an axis without inliers stays
+    }
+    const Eigen::Matrix3d polished = nearestRotation(sums);
+    if (!polished.allFinite()) break;
+    const double change = (polished - current).norm();
+    current = polished;
+    if (change < 1e-9) break;
+  }
+  return current;
+}
+
+// The same polish for a gravity-aligned frame: the yaw moves to the mean (folded) horizontal angle
+// of the normals that are inliers of a horizontal axis, repeated a few times (a flat-kernel mean
+// shift).
+double polishYaw(const std::vector<Eigen::Vector3d>& normals, const GravityFrame& gravity,
+                 double yaw_rad, double cos_delta) {
+  double psi = yaw_rad;
+  for (int iteration = 0; iteration < kPolishIterations; ++iteration) {
+    double sum = 0.0;
+    int count = 0;
+    for (const Eigen::Vector3d& n : normals) {
+      const double hx = n.dot(gravity.x_h);
+      const double hy = n.dot(gravity.y_h);
+      const double h = std::hypot(hx, hy);
+      if (std::abs(n.dot(gravity.up)) >= cos_delta || h < cos_delta) continue;
+      const double offset = foldYaw(std::atan2(hy, hx) - psi);
+      if (h * std::cos(offset) < cos_delta) continue;
+      sum += offset;
+      ++count;
+    }
+    if (count == 0) break;
+    const double step = sum / count;
+    psi += step;
+    if (std::abs(step) < 1e-9) break;
+  }
+  return foldYaw(psi);
+}
+
+// True if, at this yaw, the horizontal inliers stand out from their average over all yaws (see
+// kMinPeakToMeanRatio): the Manhattan yaw is then meaningful.
+bool hasHorizontalStructure(const std::vector<Eigen::Vector3d>& normals,
+                            const GravityFrame& gravity, double yaw_rad, double cos_delta) {
+  const double psi = foldQuarter(yaw_rad);
+  double total_arc = 0.0;
+  int inliers = 0;
+  for (const Eigen::Vector3d& n : normals) {
+    const YawArc arc = yawArcOf(n, gravity.up, gravity.x_h, gravity.y_h, cos_delta);
+    if (arc.kind != YawArc::kArc) continue;
+    total_arc += 2.0 * arc.half_width;
+    const double offset = foldQuarter(psi - arc.start);
+    if (offset <= 2.0 * arc.half_width) ++inliers;
+  }
+  const double mean_inliers = total_arc / kHalfPi;
+  return inliers >= kMinHorizontalInliers && inliers >= kMinPeakToMeanRatio * mean_inliers;
+}
+
+// Fallback when the normals carry no Manhattan structure: the yaw of the minimum-area rectangle
+// around the footprint (the optimal rectangle has a side on a convex hull edge, so every edge
+// direction is tried).
+double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
+  std::vector<Eigen::Vector2d> footprint;
+  footprint.reserve(points_W.size());
+  for (const Eigen::Vector3f& p : points_W) {
+    const Eigen::Vector3d q = p.cast<double>();
+    footprint.emplace_back(q.dot(gravity.x_h), q.dot(gravity.y_h));
+  }
+  return foldYaw(minimumAreaRectangle(footprint).yaw_rad);
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3f> estimateNormals(const PointCloud& points, double radius_m,
+                                             int max_neighbours) {
+  std::vector<int> queries(points.size());
+  for (size_t i = 0; i < points.size(); ++i) queries[i] = static_cast<int>(i);
+  return normalsAt(points, queries, radius_m, max_neighbours);
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+Status ManhattanFrameEstimator::Config::isValid() const {
+  // Above 45° the six axes' cones overlap and Eq. 3 stops distinguishing orientations.
+  if (!(std::isfinite(inlier_angle_deg) && inlier_angle_deg > 0.0 && inlier_angle_deg <= 45.0)) {
+    return Status::Error("manhattan inlier_angle_deg must be in (0, 45] (got " +
+                         std::to_string(inlier_angle_deg) + ")");
+  }
+  if (!(std::isfinite(normal_radius_m) && normal_radius_m > 0.0)) {
+    return Status::Error("manhattan normal_radius_m must be a finite value > 0 (got " +
+                         std::to_string(normal_radius_m) + ")");
+  }
+  if (max_normals < 3) {
+    return Status::Error("manhattan max_normals must be >= 3 (got " + std::to_string(max_normals) +
+                         ")");
+  }
+  return Status::Ok();
+}
+
+std::string ManhattanFrameEstimator::Config::print() const {
+  std::ostringstream out;
+  out << "inlier_angle_deg: " << inlier_angle_deg << "\n"
+      << "normal_radius_m: " << normal_radius_m << "\n"
+      << "max_normals: " << max_normals << "\n"
+      << "gravity_constrained: " << (gravity_constrained ? "true" : "false") << "\n";
+  return out.str();
+}
+
+int ManhattanFrameEstimator::countInliers(const std::vector<Eigen::Vector3f>& normals,
+                                          const Eigen::Matrix3d& R) const {
+  const double cos_delta = std::cos(config_.inlier_angle_deg * kPi / 180.0);
+  int count = 0;
+  for (const Eigen::Vector3f& normal : normals) {
+    const Eigen::Vector3d n = normal.cast<double>();
+    const double norm = n.norm();
+    if (!std::isfinite(norm) || norm < 1e-6) continue;
+    count += isInlier(n / norm, R, cos_delta) ? 1 : 0;
+  }
+  return count;
+}
+
+ManhattanFrameEstimator::Result ManhattanFrameEstimator::estimateYaw(
+    const std::vector<Eigen::Vector3f>& normals_W, const GravityFrame& gravity) const {
+  const double cos_delta = std::cos(config_.inlier_angle_deg * kPi / 180.0);
+  const std::vector<Eigen::Vector3d> normals = prepareNormals(normals_W, config_.max_normals);
+  const YawSweepResult sweep = sweepYaw(normals, gravity.up, gravity.x_h, gravity.y_h, cos_delta);
+  Result result;
+  result.yaw_rad = foldYaw(sweep.psi);
+  result.R_W_MF = gravity.rotationFromYaw(result.yaw_rad);
+  result.inliers = sweep.inliers;
+  result.num_normals = static_cast<int>(normals.size());
+  return result;
+}
+
+// Eq. 3 over SO(3). Not the branch-and-bound of [28]: a first axis is proposed by (a stride
+// subsample of) the normals themselves, the rest of the frame is the exact yaw optimum about it,
+// the best proposals are polished by inlier averaging (polishFrame), and the largest consensus on
+// all (subsampled) normals wins. yaw_rad is the yaw of column 0 about column 2 measured in the
+// GravityFrame built on column 2, i.e. always folded but not relative to any gravity: gravity users
+// convert R_W_MF themselves.
+ManhattanFrameEstimator::Result ManhattanFrameEstimator::estimateSO3(
+    const std::vector<Eigen::Vector3f>& normals_W) const {
+  const double cos_delta = std::cos(config_.inlier_angle_deg * kPi / 180.0);
+  const std::vector<Eigen::Vector3d> normals = prepareNormals(normals_W, config_.max_normals);
+  Result result;
+  result.num_normals = static_cast<int>(normals.size());
+  if (normals.empty()) return result;
+
+  const std::vector<Eigen::Vector3d> scoring = strided(normals, kMaxScoringNormals);
+  const std::vector<Eigen::Vector3d> axes = strided(normals, kNumAxisCandidates);
+  struct Candidate {
+    int score;
+    int index;
+  };
+  std::vector<Candidate> candidates;
+  candidates.reserve(axes.size());
+  for (size_t i = 0; i < axes.size(); ++i) {
+    const GravityFrame frame(-axes[i]);
+    const YawSweepResult sweep = sweepYaw(scoring, frame.up, frame.x_h, frame.y_h, cos_delta);
+    candidates.push_back({sweep.inliers, static_cast<int>(i)});
+  }
+  const size_t num_refined = std::min<size_t>(kNumRefinedCandidates, candidates.size());
+  std::partial_sort(candidates.begin(), candidates.begin() + num_refined, candidates.end(),
+                    [](const Candidate& a, const Candidate& b) {
+                      return a.score > b.score || (a.score == b.score && a.index < b.index);
+                    });
+
+  int best_count = -1;
+  for (size_t c = 0; c < num_refined; ++c) {
+    const GravityFrame frame(-axes[candidates[c].index]);
+    const YawSweepResult sweep = sweepYaw(normals, frame.up, frame.x_h, frame.y_h, cos_delta);
+    const Eigen::Matrix3d R = polishFrame(normals, frame.rotationFromYaw(sweep.psi), cos_delta);
+    const int count = countInliersUnit(normals, R, cos_delta);
+    if (count > best_count) {
+      best_count = count;
+      result.R_W_MF = R;
+      result.yaw_rad = foldYaw(GravityFrame(-R.col(2)).yawOf(R.col(0)));
+    }
+  }
+  result.inliers = best_count;
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+Status BoxEstimator::Config::isValid() const {
+  const Status manhattan_status = manhattan.isValid();
+  if (!manhattan_status.ok()) return manhattan_status;
+  if (min_points < 1) {
+    return Status::Error("box min_points must be >= 1 (got " + std::to_string(min_points) + ")");
+  }
+  return Status::Ok();
+}
+
+std::string BoxEstimator::Config::print() const {
+  std::ostringstream out;
+  std::istringstream manhattan_lines(manhattan.print());
+  for (std::string line; std::getline(manhattan_lines, line);) {
+    out << "manhattan." << line << "\n";
+  }
+  out << "min_points: " << min_points << "\n";
+  return out.str();
+}
+
+Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gravity,
+                              OrientedBox* box, ManhattanFrameEstimator::Result* frame) const {
+  if (box == nullptr) return Status::Error("BoxEstimator::estimate: box is null");
+  const Status config_status = config_.isValid();
+  if (!config_status.ok()) return config_status;
+  if (!gravity.up.allFinite() || !gravity.x_h.allFinite()) {
+    return Status::Error("BoxEstimator::estimate: gravity frame is not finite");
+  }
+
+  // Non-finite points are dropped, not fatal.
+  PointCloud points;
+  points.reserve(points_W.size());
+  for (const Eigen::Vector3f& p : points_W) {
+    if (p.allFinite()) points.push_back(p);
+  }
+  if (points.empty() || static_cast<int>(points.size()) < config_.min_points) {
+    return Status::Error("BoxEstimator::estimate: " + std::to_string(points.size()) +
+                         " finite points, need at least " + std::to_string(config_.min_points));
+  }
+
+  // Normals only at the (stride) subsample that Eq. 3 will use, with the full cloud as neighbours.
+  const ManhattanFrameEstimator::Config& mf_config = config_.manhattan;
+  const int stride = strideFor(points.size(), mf_config.max_normals);
+  std::vector<int> queries;
+  queries.reserve(points.size() / stride + 1);
+  for (size_t i = 0; i < points.size(); i += stride) queries.push_back(static_cast<int>(i));
+  const std::vector<Eigen::Vector3f> normals =
+      normalsAt(points, queries, mf_config.normal_radius_m, 30);
+
+  const double cos_delta = std::cos(mf_config.inlier_angle_deg * kPi / 180.0);
+  const std::vector<Eigen::Vector3d> unit_normals = prepareNormals(normals, mf_config.max_normals);
+  ManhattanFrameEstimator::Result mf;
+  double yaw_rad = 0.0;
+  if (mf_config.gravity_constrained) {
+    mf = manhattan_.estimateYaw(normals, gravity);
+    yaw_rad = mf.yaw_rad;
+  } else {
+    // Sec. 3.3 "R converted to R'": the unconstrained frame's most horizontal axis, projected on
+    // the floor plane, gives the yaw of the gravity-aligned frame.
+    mf = manhattan_.estimateSO3(normals);
+    int most_horizontal = 0;
+    for (int j = 1; j < 3; ++j) {
+      if (std::abs(mf.R_W_MF.col(j).dot(gravity.up)) <
+          std::abs(mf.R_W_MF.col(most_horizontal).dot(gravity.up))) {
+        most_horizontal = j;
+      }
+    }
+    yaw_rad = foldYaw(gravity.yawOf(mf.R_W_MF.col(most_horizontal)));
+  }
+  if (hasHorizontalStructure(unit_normals, gravity, yaw_rad, cos_delta)) {
+    // Eq. 3's count is flat over a few degrees around its maximum: polish on the inliers.
+    yaw_rad = polishYaw(unit_normals, gravity, yaw_rad, cos_delta);
+  } else {
+    // Degenerate normals (cylinders, flat slabs, tiny clouds): the minimum-area footprint instead.
+    yaw_rad = minimumAreaYaw(points, gravity);
+  }
+  // The reported frame is the one the box uses (R' of Sec. 3.3), with its own Eq. 3 count.
+  mf.yaw_rad = yaw_rad;
+  mf.R_W_MF = gravity.rotationFromYaw(yaw_rad);
+  mf.inliers = countInliersUnit(unit_normals, mf.R_W_MF, cos_delta);
+  mf.num_normals = static_cast<int>(unit_normals.size());
+
+  // Eq. 4: the frame at the centroid, the points expressed in it, min/max per axis.
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& p : points) centroid += p.cast<double>();
+  centroid /= static_cast<double>(points.size());
+  const Eigen::Matrix3d R_MF_W = mf.R_W_MF.transpose();
+  Eigen::Vector3d min_MF = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d max_MF = -min_MF;
+  for (const Eigen::Vector3f& p : points) {
+    const Eigen::Vector3d p_MF = R_MF_W * (p.cast<double>() - centroid);
+    min_MF = min_MF.cwiseMin(p_MF);
+    max_MF = max_MF.cwiseMax(p_MF);
+  }
+  box->rotation = mf.R_W_MF;
+  box->size_m = max_MF - min_MF;
+  box->center_m = centroid + mf.R_W_MF * (0.5 * (min_MF + max_MF));
+  if (frame != nullptr) *frame = mf;
+  return Status::Ok();
+}
+
+}  // namespace mvod

@@ -1,0 +1,211 @@
+#include "multiview_object_detection/pipeline/object_cloud_extractor.h"
+
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+namespace mvod {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Depth in metres at one pixel of a CV_16UC1 (mm) or CV_32FC1 (m) image, NaN when invalid. The
+// caller checks type and bounds.
+inline double depthMetres(const cv::Mat& depth, int u, int v, double min_depth_m,
+                          double max_depth_m) {
+  double z;
+  if (depth.type() == CV_16UC1) {
+    const uint16_t mm = depth.ptr<uint16_t>(v)[u];
+    // 0 = no return; 65535 = saturated / invalid on Kinect-style sensors (7-Scenes).
+    if (mm == 0 || mm == 65535) return std::nan("");
+    z = 0.001 * mm;
+  } else {
+    z = depth.ptr<float>(v)[u];
+    if (!std::isfinite(z) || z <= 0.0) return std::nan("");
+  }
+  if (z < min_depth_m || z > max_depth_m) return std::nan("");
+  return z;
+}
+
+bool supportedDepth(const cv::Mat& depth) {
+  return !depth.empty() && (depth.type() == CV_16UC1 || depth.type() == CV_32FC1);
+}
+
+std::string matTypeName(const cv::Mat& m) {
+  static const char* const kDepthNames[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
+  return std::string(kDepthNames[m.depth()]) + "C" + std::to_string(m.channels());
+}
+
+// One detection's mask, prepared for per-pixel lookups: its bounding box of non-zero pixels lets
+// most pixels skip the mask read.
+struct MaskLookup {
+  cv::Mat mask;  // CV_8UC1, colour image size
+  cv::Rect box;  // non-zero pixels; empty = nothing to select
+};
+
+}  // namespace
+
+Status ObjectCloudExtractor::Config::isValid() const {
+  if (!(std::isfinite(min_valid_depth_m) && min_valid_depth_m >= 0.0)) {
+    return Status::Error("min_valid_depth_m must be a finite value >= 0 (got " +
+                         std::to_string(min_valid_depth_m) + ")");
+  }
+  if (!(std::isfinite(max_valid_depth_m) && max_valid_depth_m > min_valid_depth_m)) {
+    return Status::Error("max_valid_depth_m must be finite and > min_valid_depth_m (got " +
+                         std::to_string(max_valid_depth_m) + ")");
+  }
+  if (mask_erosion_px < 0 || mask_erosion_px > 100) {
+    return Status::Error("mask_erosion_px must be in [0, 100] (got " +
+                         std::to_string(mask_erosion_px) + ")");
+  }
+  if (pixel_stride < 1 || pixel_stride > 64) {
+    return Status::Error("pixel_stride must be in [1, 64] (got " + std::to_string(pixel_stride) +
+                         ")");
+  }
+  return Status::Ok();
+}
+
+std::string ObjectCloudExtractor::Config::print() const {
+  std::ostringstream out;
+  out << "min_valid_depth_m: " << min_valid_depth_m << "\n"
+      << "max_valid_depth_m: " << max_valid_depth_m << "\n"
+      << "mask_erosion_px: " << mask_erosion_px << "\n"
+      << "pixel_stride: " << pixel_stride << "\n";
+  return out.str();
+}
+
+float ObjectCloudExtractor::depthAt(const cv::Mat& depth, int u, int v, double min_depth_m,
+                                    double max_depth_m) {
+  if (!supportedDepth(depth) || u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) return kNaN;
+  const double z = depthMetres(depth, u, v, min_depth_m, max_depth_m);
+  return std::isfinite(z) ? static_cast<float>(z) : kNaN;
+}
+
+PointCloud ObjectCloudExtractor::backProjectDepth(const cv::Mat& depth, const CameraIntrinsics& K,
+                                                  int stride, double min_depth_m,
+                                                  double max_depth_m) {
+  PointCloud points_D;
+  if (!supportedDepth(depth) || !K.isValid()) return points_D;
+  if (stride < 1) stride = 1;
+  points_D.reserve(static_cast<size_t>((depth.rows + stride - 1) / stride) *
+                   ((depth.cols + stride - 1) / stride));
+  for (int v = 0; v < depth.rows; v += stride) {
+    for (int u = 0; u < depth.cols; u += stride) {
+      const double z = depthMetres(depth, u, v, min_depth_m, max_depth_m);
+      if (!std::isfinite(z)) continue;
+      // Pinhole back-projection in the depth camera frame.
+      points_D.emplace_back(static_cast<float>((u - K.cx) * z / K.fx),
+                            static_cast<float>((v - K.cy) * z / K.fy), static_cast<float>(z));
+    }
+  }
+  return points_D;
+}
+
+Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
+                                     const std::vector<Detection2D>& detections,
+                                     std::vector<PointCloud>* clouds_D) const {
+  if (clouds_D == nullptr) return Status::Error("extract: clouds_D is null");
+  clouds_D->clear();
+  const Status config_valid = config_.isValid();
+  if (!config_valid) return Status::Error("extractor config: " + config_valid.message());
+  const Status frame_valid = frame.validate();
+  if (!frame_valid) return frame_valid;
+  const std::string label =
+      frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
+
+  // Masks are in colour pixels. Check them all before any work, so a bad one leaves no partial
+  // output.
+  const cv::Size color_size = frame.color_bgr.size();
+  std::vector<MaskLookup> masks(detections.size());
+  cv::Mat kernel;
+  if (config_.mask_erosion_px > 0) {
+    const int k = 2 * config_.mask_erosion_px + 1;
+    kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));
+  }
+  for (size_t i = 0; i < detections.size(); ++i) {
+    const cv::Mat& mask = detections[i].mask;
+    if (mask.empty()) continue;  // no pixels: an empty cloud
+    if (mask.type() != CV_8UC1 || mask.size() != color_size) {
+      return Status::Error(label + ": detection " + std::to_string(i) + " (" +
+                           detections[i].class_name + "): mask is " + std::to_string(mask.cols) +
+                           "x" + std::to_string(mask.rows) + " " + matTypeName(mask) +
+                           ", expected 8UC1 " + std::to_string(color_size.width) + "x" +
+                           std::to_string(color_size.height) + " (the colour image's size)");
+    }
+    if (config_.mask_erosion_px > 0) {
+      // Mask borders bleed into the background; the image border does not erode (OpenCV default).
+      cv::erode(mask, masks[i].mask, kernel);
+    } else {
+      masks[i].mask = mask;
+    }
+    masks[i].box = cv::boundingRect(masks[i].mask);
+  }
+  clouds_D->assign(detections.size(), PointCloud());
+
+  cv::Rect any_box;  // union of all mask boxes
+  for (const MaskLookup& m : masks) any_box |= m.box;
+  if (any_box.empty()) return Status::Ok();
+
+  const cv::Mat& depth = frame.depth;
+  const CameraIntrinsics& K_d = frame.K_depth;
+  const CameraIntrinsics& K_c = frame.K_color;
+  const int stride = config_.pixel_stride;
+  const double min_m = config_.min_valid_depth_m;
+  const double max_m = config_.max_valid_depth_m;
+
+  // Adds p_D to every detection whose mask covers colour pixel (uc, vc).
+  auto assign = [&](int uc, int vc, const Eigen::Vector3f& p_D) {
+    if (!any_box.contains(cv::Point(uc, vc))) return;
+    for (size_t i = 0; i < masks.size(); ++i) {
+      if (!masks[i].box.contains(cv::Point(uc, vc))) continue;
+      if (masks[i].mask.ptr<uint8_t>(vc)[uc] != 0) (*clouds_D)[i].push_back(p_D);
+    }
+  };
+
+  if (frame.registered) {
+    // Same pixel grid: only depth pixels inside some mask's box matter. The stride grid stays
+    // anchored at (0, 0), as in backProjectDepth.
+    const int u0 = (any_box.x + stride - 1) / stride * stride;
+    const int v0 = (any_box.y + stride - 1) / stride * stride;
+    for (int v = v0; v < any_box.br().y; v += stride) {
+      for (int u = u0; u < any_box.br().x; u += stride) {
+        const double z = depthMetres(depth, u, v, min_m, max_m);
+        if (!std::isfinite(z)) continue;
+        const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
+                                  static_cast<float>((v - K_d.cy) * z / K_d.fy),
+                                  static_cast<float>(z));
+        assign(u, v, p_D);
+      }
+    }
+    return Status::Ok();
+  }
+
+  // Not registered (two cameras): each depth point is moved into the colour camera (T_C_D) and
+  // projected with K_color; the mask is read at the nearest colour pixel. Every depth pixel may
+  // land in a mask.
+  const Eigen::Matrix3d R_C_D = frame.T_C_D.linear();
+  const Eigen::Vector3d t_C_D = frame.T_C_D.translation();
+  for (int v = 0; v < depth.rows; v += stride) {
+    for (int u = 0; u < depth.cols; u += stride) {
+      const double z = depthMetres(depth, u, v, min_m, max_m);
+      if (!std::isfinite(z)) continue;
+      const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
+      const Eigen::Vector3d p_C = R_C_D * p_D + t_C_D;
+      if (!(p_C.z() > 0.0)) continue;  // behind the colour camera
+      const double uc = K_c.fx * p_C.x() / p_C.z() + K_c.cx;
+      const double vc = K_c.fy * p_C.y() / p_C.z() + K_c.cy;
+      // Pixel centres at integer coordinates: round to the nearest pixel.
+      const double uc_round = std::floor(uc + 0.5);
+      const double vc_round = std::floor(vc + 0.5);
+      if (!(uc_round >= 0.0 && vc_round >= 0.0 && uc_round < color_size.width &&
+            vc_round < color_size.height)) {
+        continue;  // outside the colour image: in no mask
+      }
+      assign(static_cast<int>(uc_round), static_cast<int>(vc_round), p_D.cast<float>());
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace mvod

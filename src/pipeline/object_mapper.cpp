@@ -1,0 +1,337 @@
+#include "multiview_object_detection/pipeline/object_mapper.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace mvod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Prefixes every line of a sub-config's print() with its section name.
+void appendSection(const std::string& section, const std::string& lines, std::ostringstream* out) {
+  std::istringstream in(lines);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty()) *out << section << "." << line << "\n";
+  }
+}
+
+Status checkSection(const std::string& section, const Status& status) {
+  if (status.ok()) return status;
+  return Status::Error(section + "." + status.message());
+}
+
+std::string frameLabel(const RgbdFrame& frame) {
+  return frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
+}
+
+std::string detectionLabel(size_t index, const Detection2D& detection) {
+  std::ostringstream out;
+  out << "detection " << index << " ('" << detection.class_name << "' " << detection.score << ")";
+  return out.str();
+}
+
+}  // namespace
+
+Status ObjectMapper::Config::isValid() const {
+  if (!(std::isfinite(min_probability) && min_probability >= 0.0 && min_probability <= 1.0)) {
+    return Status::Error("min_probability must be in [0, 1] (got " +
+                         std::to_string(min_probability) + ")");
+  }
+  if (!gravity_down_W.allFinite()) {
+    return Status::Error("gravity_down_W must be finite (zero = estimate it)");
+  }
+  if (min_object_points < 1) {
+    return Status::Error("min_object_points must be >= 1 (got " +
+                         std::to_string(min_object_points) + ")");
+  }
+  Status status;
+  if (!(status = checkSection("extractor", extractor.isValid()))) return status;
+  if (!(status = checkSection("filter", filter.isValid()))) return status;
+  if (!(status = checkSection("lccp", lccp.isValid()))) return status;
+  if (!(status = checkSection("box", box.isValid()))) return status;
+  if (!(status = checkSection("database", database.isValid()))) return status;
+  if (!(status = checkSection("prior_filter", prior_filter.isValid()))) return status;
+  if (!(status = checkSection("intersection_filter", intersection_filter.isValid()))) return status;
+  if (!(status = checkSection("gravity", gravity.isValid()))) return status;
+  return Status::Ok();
+}
+
+std::string ObjectMapper::Config::print() const {
+  std::ostringstream out;
+  out << "min_probability: " << min_probability << "\n"
+      << "gravity_down_W: [" << gravity_down_W.x() << ", " << gravity_down_W.y() << ", "
+      << gravity_down_W.z() << "]" << (gravity_down_W.isZero() ? " (estimated)" : "") << "\n"
+      << "min_object_points: " << min_object_points << "\n";
+  appendSection("extractor", extractor.print(), &out);
+  appendSection("filter", filter.print(), &out);
+  appendSection("lccp", lccp.print(), &out);
+  appendSection("box", box.print(), &out);
+  appendSection("database", database.print(), &out);
+  appendSection("prior_filter", prior_filter.print(), &out);
+  appendSection("intersection_filter", intersection_filter.print(), &out);
+  appendSection("gravity", gravity.print(), &out);
+  return out.str();
+}
+
+ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
+    : config_(config),
+      extractor_(config.extractor),
+      filter_(config.filter),
+      lccp_(config.lccp),
+      box_estimator_(config.box),
+      database_(config.database, priors),
+      prior_filter_(config.prior_filter),
+      intersection_filter_(config.intersection_filter),
+      gravity_estimator_(config.gravity) {}
+
+Status ObjectMapper::updateConfig(const Config& config) {
+  const Status valid = config.isValid();
+  if (!valid) return valid;
+  config_ = config;
+  extractor_ = ObjectCloudExtractor(config.extractor);
+  filter_ = PointCloudFilter(config.filter);
+  lccp_ = LccpSegmenter(config.lccp);
+  box_estimator_ = BoxEstimator(config.box);
+  database_.setConfig(config.database);
+  prior_filter_ = PriorSizeFilter(config.prior_filter);
+  intersection_filter_ = IntersectionFilter(config.intersection_filter);
+  return Status::Ok();
+}
+
+GravityFrame ObjectMapper::gravity() const {
+  if (!config_.gravity_down_W.isZero()) return GravityFrame(config_.gravity_down_W);
+  if (gravity_estimator_.hasEstimate()) return GravityFrame(gravity_estimator_.gravityDown_W());
+  return GravityFrame();
+}
+
+bool ObjectMapper::hasGravity() const {
+  return !config_.gravity_down_W.isZero() || gravity_estimator_.hasEstimate();
+}
+
+bool ObjectMapper::updateGravity(const RgbdFrame& frame) {
+  if (hasGravity()) return true;
+  // Every 4th pixel is plenty for a dominant plane and keeps this cheap.
+  const PointCloud points_D = ObjectCloudExtractor::backProjectDepth(
+      frame.depth, frame.K_depth, 4, config_.extractor.min_valid_depth_m,
+      config_.extractor.max_valid_depth_m);
+  return gravity_estimator_.addFrame(points_D, frame.T_W_D);
+}
+
+void ObjectMapper::reset() {
+  database_.clear();
+  gravity_estimator_ = GravityEstimator(config_.gravity);
+  keyframes_ = 0;
+}
+
+Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
+                                     const std::vector<Detection2D>& detections,
+                                     KeyframeReport* report) {
+  const Clock::time_point start = Clock::now();
+  KeyframeReport local_report;
+  KeyframeReport& out = report != nullptr ? *report : local_report;
+  out = KeyframeReport();
+  out.detections = static_cast<int>(detections.size());
+
+  // A bad frame changes nothing.
+  const Status valid = frame.validate();
+  if (!valid) return valid;
+
+  const std::string label = frameLabel(frame);
+  const int keyframe = keyframes_++;
+
+  if (!updateGravity(frame)) {
+    out.waiting_for_gravity = true;
+    out.warnings.push_back(label +
+                           ": waiting for gravity (no dominant horizontal plane seen yet); " +
+                           std::to_string(detections.size()) + " detection(s) skipped");
+    out.times.total_ms = msSince(start);
+    return Status::Ok();
+  }
+
+  // Eq. 5: only detections with ψ >= λ, of a class we can name.
+  std::vector<Detection2D> kept;
+  std::vector<size_t> kept_index;
+  const std::vector<std::string>& coco = cocoClassNames();
+  for (size_t i = 0; i < detections.size(); ++i) {
+    const Detection2D& detection = detections[i];
+    if (!(detection.score >= config_.min_probability)) continue;
+    ++out.above_threshold;
+    Detection2D named = detection;
+    if (named.class_id < 0 || named.class_id >= static_cast<int>(coco.size())) {
+      named.class_id = cocoClassId(named.class_name);
+    }
+    if (named.class_name.empty() && named.class_id >= 0) named.class_name = coco[named.class_id];
+    if (named.class_id < 0 || named.class_name.empty()) {
+      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
+                             ": unknown class (not a COCO class name), skipped");
+      continue;
+    }
+    kept.push_back(std::move(named));
+    kept_index.push_back(i);
+  }
+
+  // Eq. 1: one cloud per detection, back-projected once for the whole frame.
+  Clock::time_point t = Clock::now();
+  std::vector<PointCloud> clouds_D;
+  const Status extracted = extractor_.extract(frame, kept, &clouds_D);
+  if (!extracted || clouds_D.size() != kept.size()) {
+    // One bad detection (a mask of the wrong size, say) must not cost the others: retry one by one.
+    clouds_D.assign(kept.size(), PointCloud());
+    for (size_t k = 0; k < kept.size(); ++k) {
+      std::vector<PointCloud> single;
+      const Status status = extractor_.extract(frame, {kept[k]}, &single);
+      if (!status || single.size() != 1) {
+        out.warnings.push_back(label + ": " + detectionLabel(kept_index[k], kept[k]) + ": " +
+                               (status ? std::string("extraction failed") : status.message()));
+        continue;
+      }
+      clouds_D[k] = std::move(single[0]);
+    }
+  }
+  out.times.extraction_ms = msSince(t);
+
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const Detection2D& detection = kept[k];
+    const std::string what = label + ": " + detectionLabel(kept_index[k], detection);
+    if (clouds_D[k].empty()) {
+      out.warnings.push_back(what + ": no valid depth inside the mask");
+      continue;
+    }
+    ObjectObservation observation;
+    const Status single = runSingleView(clouds_D[k], frame.T_W_D, &observation, &out.times);
+    if (!single) {
+      out.warnings.push_back(what + ": " + single.message());
+      continue;
+    }
+    ++out.with_box;
+    observation.class_id = detection.class_id;
+    observation.class_name = detection.class_name;
+    observation.probability = detection.score;
+    observation.keyframe = keyframe;
+    observation.stamp_s = frame.stamp_s;
+
+    // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
+    t = Clock::now();
+    StageTimes fused_times;
+    const FusedCloudProcessor process = [this, &fused_times](const PointCloud& points_W,
+                                                             PointCloud* segment_W,
+                                                             OrientedBox* box, double* yaw_rad) {
+      return processFused(points_W, segment_W, box, yaw_rad, &fused_times);
+    };
+    const ObjectDatabase::FusionResult result = database_.fuseOrInsert(observation, process);
+    out.times.fusion_ms += msSince(t);
+    out.times.filter_ms += fused_times.filter_ms;
+    out.times.lccp_ms += fused_times.lccp_ms;
+    out.times.manhattan_ms += fused_times.manhattan_ms;
+    if (result.decision == ObjectDatabase::Decision::kFused) {
+      ++out.fused;
+    } else {
+      ++out.inserted;
+    }
+  }
+  out.times.total_ms = msSince(start);
+  return Status::Ok();
+}
+
+bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                                     ObjectObservation* observation, StageTimes* times) const {
+  return runSingleView(points_D, T_W_D, observation, times).ok();
+}
+
+Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                                   ObjectObservation* observation, StageTimes* times) const {
+  StageTimes local_times;
+  StageTimes& stage = times != nullptr ? *times : local_times;
+
+  // Sec. 3.2: pass-through, voxel grid and outlier removal in the camera frame.
+  Clock::time_point t = Clock::now();
+  const PointCloud filtered_D =
+      config_.filter.enable ? filter_.filterCameraFrame(points_D) : points_D;
+  stage.filter_ms += msSince(t);
+  if (static_cast<int>(filtered_D.size()) < config_.min_object_points) {
+    return Status::Error("only " + std::to_string(filtered_D.size()) + " of " +
+                         std::to_string(points_D.size()) +
+                         " points left after filtering (min_object_points " +
+                         std::to_string(config_.min_object_points) + ")");
+  }
+
+  // Eq. 2 in the camera frame, where LCCP's log-depth transform applies.
+  t = Clock::now();
+  LccpSegmenter::Result segmentation;
+  const Status segmented = lccp_.segment(filtered_D, true, &segmentation);
+  stage.lccp_ms += msSince(t);
+  if (!segmented) return Status::Error("LCCP failed: " + segmented.message());
+  if (segmentation.largest_segment.empty()) return Status::Error("LCCP left no segment");
+
+  // Eq. 1: into the world frame, then Eq. 3/4 on the segment.
+  PointCloud points_W = transformCloud(filtered_D, T_W_D);
+  PointCloud segment_W = transformCloud(segmentation.largest_segment, T_W_D);
+  t = Clock::now();
+  const GravityFrame gravity_frame = gravity();
+  OrientedBox box;
+  const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box);
+  stage.manhattan_ms += msSince(t);
+  if (!boxed) return Status::Error("no box: " + boxed.message());
+
+  observation->points_W = std::move(points_W);
+  observation->segment_W = std::move(segment_W);
+  observation->box = box;
+  observation->yaw_rad = gravity_frame.yawOf(box.rotation.col(0));
+  return Status::Ok();
+}
+
+bool ObjectMapper::processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
+                                double* yaw_rad, StageTimes* times) const {
+  // Eq. 7's fused cloud goes through the same filter, LCCP and box stages, in the world frame.
+  Clock::time_point t = Clock::now();
+  // points_W comes from the database, already on its fusion grid: no second voxel pass.
+  const PointCloud filtered_W =
+      config_.filter.enable ? filter_.filterFused(points_W, config_.database.fusion_voxel_size_m)
+                            : points_W;
+  times->filter_ms += msSince(t);
+  if (static_cast<int>(filtered_W.size()) < config_.min_object_points) return false;
+
+  t = Clock::now();
+  LccpSegmenter::Result segmentation;
+  const Status segmented = lccp_.segment(filtered_W, false, &segmentation);
+  times->lccp_ms += msSince(t);
+  if (!segmented || segmentation.largest_segment.empty()) return false;
+
+  t = Clock::now();
+  const GravityFrame gravity_frame = gravity();
+  OrientedBox fused_box;
+  const Status boxed =
+      box_estimator_.estimate(segmentation.largest_segment, gravity_frame, &fused_box);
+  times->manhattan_ms += msSince(t);
+  if (!boxed) return false;
+
+  *segment_W = std::move(segmentation.largest_segment);
+  *box = fused_box;
+  *yaw_rad = gravity_frame.yawOf(fused_box.rotation.col(0));
+  return true;
+}
+
+ObjectMapper::RefinementReport ObjectMapper::refine() {
+  const Clock::time_point start = Clock::now();
+  RefinementReport report;
+  // Sec. 3.5.1 first; Algorithm 1 then only sees the survivors.
+  if (config_.prior_filter.enable) {
+    report.atypical_ids = prior_filter_.atypicalObjects(database_);
+    for (const int id : report.atypical_ids) database_.remove(id);
+  }
+  if (config_.intersection_filter.enable) {
+    report.intersecting_ids = intersection_filter_.intersectingObjects(database_, gravity().up);
+    for (const int id : report.intersecting_ids) database_.remove(id);
+  }
+  report.time_ms = msSince(start);
+  return report;
+}
+
+}  // namespace mvod

@@ -1,0 +1,436 @@
+// dataset_to_bag: a 7-Scenes-layout folder or a SceneNN sequence -> a rosbag with what a Kinect
+// driver and an ORB-SLAM2 wrapper would publish, so replay.launch can play it through the node:
+//   /<camera>/rgb/image_raw                  sensor_msgs/Image bgr8
+//   /<camera>/depth_registered/image_raw     sensor_msgs/Image 16UC1 (mm), in the colour camera
+//   /<camera>/rgb/camera_info                sensor_msgs/CameraInfo (colour K)
+//   /<camera>/depth_registered/camera_info   the same K (registered depth)
+//   /detections (with --detector)            InstanceDetections of the colour image, for the
+//                                            node's detector:=topic (an external detector)
+//   /orb_slam2_rgbd/pose                     geometry_msgs/PoseStamped, colour camera in
+//   world_frame /tf                                      world_frame -> <camera>_rgb_optical_frame
+// all stamped with the dataset's time (7-Scenes: index / rate; SceneNN: timestamp.txt) plus
+// --time-offset (default 1 s: rosbag rejects time 0, and tf reads stamp 0 as "latest").
+// Where colour and depth come from two cameras (7-Scenes with color-intrinsics.txt) the depth is
+// registered to the colour camera (registerDepthToColor), as a driver's depth_registered topic is.
+// Exit status: 0 done, 1 bad or missing data (the partial bag is removed), 2 bad usage.
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cli_args.h"
+#include "multiview_object_detection/datasets/dataset_source.h"
+#include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/datasets/scenenn_dataset.h"
+#include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
+
+namespace mvod {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kExitData = 1;
+constexpr int kExitUsage = 2;
+
+const char kUsage[] =
+    "Usage: dataset_to_bag --dataset DIR --output OUT.bag [options]\n"
+    "  Converts a 7-Scenes-layout folder or a SceneNN sequence (image/, depth/, trajectory.log,\n"
+    "  timestamp.txt, asus.ini) into a rosbag for replay.launch.\n"
+    "Options:\n"
+    "  --format auto|7scenes|scenenn  dataset layout (auto: trajectory.log or depth/ -> SceneNN,\n"
+    "                                 camera-intrinsics.txt -> 7-Scenes) [auto]\n"
+    "  --camera NAME                  topic namespace and frame prefix [camera]\n"
+    "  --world-frame FRAME            parent frame of the pose and TF [map]\n"
+    "  --pose-topic TOPIC             [/orb_slam2_rgbd/pose]\n"
+    "  --rate-hz HZ                   frame rate where the dataset has no time stamps (7-Scenes,\n"
+    "                                 SceneNN without timestamp.txt) [30]\n"
+    "  --time-offset S                added to every stamp (> 0: rosbag rejects time 0) [1]\n"
+    "  --first N, --last N            only frames whose number is in [N, M] (inclusive; 7-Scenes\n"
+    "                                 frame-NNNNNN, SceneNN imageNNNNN) [all]\n"
+    "  --detector NAME                also record 2D detections of every frame as\n"
+    "                                 InstanceDetections (replay with detector:=topic): files\n"
+    "                                 (JSON + masks in --detections DIR), simulated (the\n"
+    "                                 synthetic benchmark's label images), fastestdet, maskrcnn\n"
+    "  --detections DIR               folder for files / simulated [the dataset folder]\n"
+    "  --model-dir DIR                DNN model folder [$MVOD_MODEL_DIR]\n"
+    "  --detections-topic TOPIC       [/detections]\n"
+    "  --lz4                          compress the bag (LZ4)\n"
+    "  --quiet                        no progress bar\n";
+
+struct Options {
+  std::string dataset_dir;
+  std::string output_path;
+  std::string format = "auto";
+  std::string camera = "camera";
+  std::string world_frame = "map";
+  std::string pose_topic = "/orb_slam2_rgbd/pose";
+  double rate_hz = 30.0;
+  double time_offset_s = 1.0;
+  long first = 0;
+  long last = -1;        // -1 = no limit
+  std::string detector;  // empty = no detections in the bag
+  std::string detections_dir;
+  std::string model_dir;
+  std::string detections_topic = "/detections";
+  bool lz4 = false;
+  bool quiet = false;
+};
+
+int usageError(const std::string& message) {
+  std::cerr << "dataset_to_bag: " << message << "\n" << kUsage;
+  return kExitUsage;
+}
+
+BenchmarkSegmenterOptions segmenterOptions(const Options& options) {
+  BenchmarkSegmenterOptions segmenter;
+  segmenter.detector = options.detector;
+  segmenter.detections_dir =
+      options.detections_dir.empty() ? options.dataset_dir : options.detections_dir;
+  segmenter.model_dir = options.model_dir;
+  return segmenter;
+}
+
+// Returns -1 when the options are fine, else the exit status.
+int parseOptions(int argc, char** argv, Options* options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-h" || arg == "--help") {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (arg == "--lz4") {
+      options->lz4 = true;
+      continue;
+    }
+    if (arg == "--quiet") {
+      options->quiet = true;
+      continue;
+    }
+    if (i + 1 >= argc) return usageError(arg + " needs a value");
+    const std::string value = argv[++i];
+    long number = 0;
+    if (arg == "--dataset") {
+      options->dataset_dir = value;
+    } else if (arg == "--output") {
+      options->output_path = value;
+    } else if (arg == "--format") {
+      if (value != "auto" && value != "7scenes" && value != "scenenn") {
+        return usageError("--format must be auto, 7scenes or scenenn, not '" + value + "'");
+      }
+      options->format = value;
+    } else if (arg == "--detector") {
+      options->detector = value;
+    } else if (arg == "--detections") {
+      options->detections_dir = value;
+    } else if (arg == "--model-dir") {
+      options->model_dir = value;
+    } else if (arg == "--detections-topic") {
+      if (value.empty()) return usageError("--detections-topic must not be empty");
+      options->detections_topic = value;
+    } else if (arg == "--camera") {
+      options->camera = value;
+    } else if (arg == "--world-frame") {
+      options->world_frame = value;
+    } else if (arg == "--pose-topic") {
+      options->pose_topic = value;
+    } else if (arg == "--rate-hz") {
+      if (!cli::parseDouble(value, &options->rate_hz) || !(options->rate_hz > 0.0)) {
+        return usageError("--rate-hz needs a number > 0, not '" + value + "'");
+      }
+    } else if (arg == "--time-offset") {
+      if (!cli::parseDouble(value, &options->time_offset_s) || options->time_offset_s < 0.0) {
+        return usageError("--time-offset needs a number >= 0, not '" + value + "'");
+      }
+    } else if (arg == "--first") {
+      if (!cli::parseLong(value, 0, 999999999, &number)) {
+        return usageError("--first needs a frame number >= 0, not '" + value + "'");
+      }
+      options->first = number;
+    } else if (arg == "--last") {
+      if (!cli::parseLong(value, 0, 999999999, &number)) {
+        return usageError("--last needs a frame number >= 0, not '" + value + "'");
+      }
+      options->last = number;
+    } else {
+      return usageError("unknown option '" + arg + "'");
+    }
+  }
+  if (options->dataset_dir.empty()) return usageError("--dataset is required");
+  if (options->output_path.empty()) return usageError("--output is required");
+  if (options->camera.empty() || options->world_frame.empty() || options->pose_topic.empty()) {
+    return usageError("--camera, --world-frame and --pose-topic must not be empty");
+  }
+  if (options->last >= 0 && options->last < options->first) {
+    return usageError("--last " + std::to_string(options->last) + " is before --first " +
+                      std::to_string(options->first));
+  }
+  if (!options->detector.empty()) {
+    const Status valid = segmenterOptions(*options).isValid();
+    if (!valid) return usageError(valid.message());
+  } else if (!options->detections_dir.empty()) {
+    return usageError("--detections needs --detector");
+  }
+  return -1;
+}
+
+// The dataset, with what a user must tell the node to replay it.
+Status openDataset(const Options& options, DatasetSource* source, std::vector<std::string>* notes) {
+  const Status status = openDatasetSource(options.dataset_dir, options.format, source);
+  if (!status) return status;
+  *notes = source->notes;
+  if (source->has_gravity) {
+    const Eigen::Vector3d& g = source->gravity_down_W;
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "give the node gravity_down: [%.4f, %.4f, %.4f] (or gravity_source:=estimate)",
+                  g.x(), g.y(), g.z());
+    notes->push_back(text);
+  }
+  if (source->format == "7scenes" || !source->has_timestamps) {
+    notes->push_back("frames are stamped at --rate-hz");
+  }
+  return Status::Ok();
+}
+
+sensor_msgs::CameraInfo cameraInfoMsg(const CameraIntrinsics& K, const std_msgs::Header& header) {
+  sensor_msgs::CameraInfo msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(K.width);
+  msg.height = static_cast<uint32_t>(K.height);
+  msg.distortion_model = "plumb_bob";
+  msg.D.assign(5, 0.0);  // the datasets' images are undistorted
+  msg.K = {K.fx, 0.0, K.cx, 0.0, K.fy, K.cy, 0.0, 0.0, 1.0};
+  msg.R = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+  msg.P = {K.fx, 0.0, K.cx, 0.0, 0.0, K.fy, K.cy, 0.0, 0.0, 0.0, 1.0, 0.0};
+  return msg;
+}
+
+// A bar redrawn in place on a terminal; in a log (stderr not a terminal) a line every 10 %.
+void printProgress(size_t done, size_t total, double elapsed_s) {
+  constexpr int kWidth = 30;
+  static const bool terminal = ::isatty(STDERR_FILENO) != 0;
+  const double fraction = total == 0 ? 1.0 : static_cast<double>(done) / total;
+  if (!terminal) {
+    const size_t step = std::max<size_t>(1, total / 10);
+    if (done % step != 0 && done != total) return;
+    std::fprintf(stderr, "dataset_to_bag: %zu/%zu frames %3d%% %.1f s\n", done, total,
+                 static_cast<int>(fraction * 100.0), elapsed_s);
+    return;
+  }
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::string bar(filled, '#');
+  bar.resize(kWidth, '.');
+  std::fprintf(stderr, "\r[%s] %zu/%zu frames %3d%% %.1f s", bar.c_str(), done, total,
+               static_cast<int>(fraction * 100.0), elapsed_s);
+  if (done == total) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
+}
+
+// Writes every selected frame; returns the exit status.
+int convert(const Options& options) {
+  DatasetSource source;
+  std::vector<std::string> notes;
+  Status status = openDataset(options, &source, &notes);
+  if (!status) {
+    std::cerr << "dataset_to_bag: " << status.message() << "\n";
+    return kExitData;
+  }
+  std::vector<int> indices;
+  for (int index : source.indices) {
+    if (index >= options.first && (options.last < 0 || index <= options.last)) {
+      indices.push_back(index);
+    }
+  }
+  if (indices.empty()) {
+    std::cerr << "dataset_to_bag: " << options.dataset_dir << ": no frames in the range --first "
+              << options.first << " --last " << options.last << " (the dataset has "
+              << source.indices.size() << " frames)\n";
+    return kExitData;
+  }
+  for (int index : indices) {
+    status = source.check(index);
+    if (!status) {
+      std::cerr << "dataset_to_bag: " << status.message() << " (use --first/--last to convert "
+                << "the frames that have one)\n";
+      return kExitData;
+    }
+  }
+  if (!options.quiet) {
+    std::cerr << "dataset_to_bag: " << options.dataset_dir << " (" << source.format << "), "
+              << indices.size() << " frames -> " << options.output_path << "\n";
+    for (const std::string& note : notes) std::cerr << "dataset_to_bag: " << note << "\n";
+  }
+
+  std::unique_ptr<InstanceSegmenter> segmenter;
+  if (!options.detector.empty()) {
+    status = createBenchmarkSegmenter(segmenterOptions(options), &segmenter);
+    if (!status) {
+      std::cerr << "dataset_to_bag: detector " << options.detector << ": " << status.message()
+                << "\n";
+      return kExitData;
+    }
+    if (!options.quiet) {
+      std::cerr << "dataset_to_bag: recording " << segmenter->name() << " detections on "
+                << options.detections_topic << " (replay with detector:=topic)\n";
+    }
+  }
+
+  const std::string ns = "/" + options.camera;
+  const std::string color_topic = ns + "/rgb/image_raw";
+  const std::string depth_topic = ns + "/depth_registered/image_raw";
+  const std::string color_info_topic = ns + "/rgb/camera_info";
+  const std::string depth_info_topic = ns + "/depth_registered/camera_info";
+  const std::string optical_frame = options.camera + "_rgb_optical_frame";
+
+  rosbag::Bag bag;
+  try {
+    bag.open(options.output_path, rosbag::bagmode::Write);
+    if (options.lz4) bag.setCompression(rosbag::compression::LZ4);
+  } catch (const std::exception& e) {
+    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot write the bag: " << e.what()
+              << "\n";
+    return kExitData;
+  }
+  auto fail = [&](const std::string& message) {
+    if (!options.quiet) std::cerr << "\n";
+    std::cerr << "dataset_to_bag: " << message << "\n";
+    try {
+      bag.close();
+    } catch (const std::exception&) {
+    }
+    std::error_code error;
+    fs::remove(options.output_path, error);  // no half-written bag that looks complete
+    return kExitData;
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  double previous_stamp_s = -1.0;
+  for (size_t i = 0; i < indices.size(); ++i) {
+    RgbdFrame frame;
+    status = source.load(indices[i], &frame);
+    if (!status) return fail(status.message());
+    const double dataset_stamp_s =
+        source.has_timestamps
+            ? frame.stamp_s
+            : (source.format == "scenenn" ? frame.index - 1 : frame.index) / options.rate_hz;
+    const double stamp_s = dataset_stamp_s + options.time_offset_s;
+    if (!(stamp_s > 0.0)) {
+      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
+                  " s is not > 0 (rosbag needs positive times): use --time-offset");
+    }
+    if (stamp_s < previous_stamp_s) {
+      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
+                  " s goes back in time (previous frame " + std::to_string(previous_stamp_s) +
+                  " s)");
+    }
+    previous_stamp_s = stamp_s;
+
+    // Depth in the colour camera, and the colour camera's pose.
+    cv::Mat depth_mm;
+    CameraIntrinsics K_color = frame.registered ? frame.K_depth : frame.K_color;
+    K_color.width = frame.color_bgr.cols;
+    K_color.height = frame.color_bgr.rows;
+    if (frame.registered) {
+      if (frame.depth.type() == CV_16UC1) {
+        depth_mm = frame.depth;
+      } else {
+        frame.depth.convertTo(depth_mm, CV_16UC1, 1e3);  // saturates; NaN -> 0
+      }
+    } else {
+      status = registerDepthToColor(frame.depth, frame.K_depth, K_color, frame.T_C_D, &depth_mm);
+      if (!status) return fail(frame.name + ": " + status.message());
+    }
+    const Eigen::Isometry3d T_W_C = frame.T_W_D * frame.T_C_D.inverse();
+
+    std_msgs::Header header;
+    header.seq = static_cast<uint32_t>(i);
+    header.stamp = ros::Time(stamp_s);
+    header.frame_id = optical_frame;
+
+    geometry_msgs::PoseStamped pose;
+    pose.header = header;
+    pose.header.frame_id = options.world_frame;
+    pose.pose = poseToMsg(T_W_C);
+
+    geometry_msgs::TransformStamped transform;
+    transform.header = pose.header;
+    transform.child_frame_id = optical_frame;
+    transform.transform = transformToMsg(T_W_C);
+    tf2_msgs::TFMessage tf;
+    tf.transforms.push_back(transform);
+
+    try {
+      // TF and pose first: a node that receives the images can already look the pose up.
+      bag.write("/tf", header.stamp, tf);
+      bag.write(options.pose_topic, header.stamp, pose);
+      bag.write(color_info_topic, header.stamp, cameraInfoMsg(K_color, header));
+      bag.write(depth_info_topic, header.stamp, cameraInfoMsg(K_color, header));
+      bag.write(color_topic, header.stamp, *colorImageToMsg(frame.color_bgr, header));
+      bag.write(depth_topic, header.stamp,
+                *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
+                     .toImageMsg());
+    } catch (const std::exception& e) {
+      return fail(options.output_path + ": cannot write: " + e.what());
+    }
+    if (segmenter) {
+      std::vector<Detection2D> detections;
+      std::vector<std::string> warnings;
+      status =
+          segmenter->detect(frame.color_bgr, source.frame_name(indices[i]), &detections, &warnings);
+      if (!status)
+        return fail(frame.name + ": detector " + segmenter->name() + ": " + status.message());
+      if (!options.quiet) {
+        for (const std::string& warning : warnings) {
+          std::cerr << "\ndataset_to_bag: " << frame.name << ": " << warning << "\n";
+        }
+      }
+      try {
+        bag.write(options.detections_topic, header.stamp, detectionsToMsg(detections, header));
+      } catch (const std::exception& e) {
+        return fail(options.output_path + ": cannot write: " + e.what());
+      }
+    }
+    if (!options.quiet) {
+      const double elapsed_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      printProgress(i + 1, indices.size(), elapsed_s);
+    }
+  }
+  try {
+    bag.close();
+  } catch (const std::exception& e) {
+    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot close: " << e.what()
+              << "\n";
+    return kExitData;
+  }
+  if (!options.quiet) {
+    std::cerr << "dataset_to_bag: wrote " << indices.size() << " frames to " << options.output_path
+              << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace mvod
+
+int main(int argc, char** argv) {
+  mvod::Options options;
+  const int parsed = mvod::parseOptions(argc, argv, &options);
+  if (parsed >= 0) return parsed;
+  return mvod::convert(options);
+}
