@@ -77,8 +77,17 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   if (result == nullptr) return Status::Error("result must not be null");
   *result = Result();
   // Table 3's "-LCCP" ablation: the whole cloud is the object.
+  auto wholeCloud = [&points, result]() {
+    std::vector<int> all;
+    all.reserve(points.size());
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (points[i].allFinite()) all.push_back(static_cast<int>(i));
+    }
+    result->segments.push_back(std::move(all));
+  };
   if (!config_.enable) {
     result->largest_segment = points;
+    wholeCloud();
     return Status::Ok();
   }
   const Status valid = config_.isValid();
@@ -104,6 +113,7 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   if (static_cast<int>(cloud->size()) < config_.min_points) {
     // Too small to split into supervoxels: keep it whole.
     for (const std::size_t i : source_index) result->largest_segment.push_back(points[i]);
+    wholeCloud();
     return Status::Ok();
   }
 
@@ -196,6 +206,18 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
     for (std::size_t i = 0; i < point_segment.size(); ++i) {
       if (point_segment[i] == largest) result->largest_segment.push_back(points[source_index[i]]);
     }
+    std::map<std::uint32_t, std::vector<int>> by_label;
+    for (std::size_t i = 0; i < point_segment.size(); ++i) {
+      if (point_segment[i] != 0) {
+        by_label[point_segment[i]].push_back(static_cast<int>(source_index[i]));
+      }
+    }
+    result->segments.push_back(std::move(by_label[largest]));
+    by_label.erase(largest);
+    for (auto& entry : by_label) result->segments.push_back(std::move(entry.second));
+    std::stable_sort(
+        result->segments.begin() + 1, result->segments.end(),
+        [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
   } catch (const std::exception& e) {
     *result = Result();
     return Status::Error(std::string("PCL supervoxel/LCCP failed: ") + e.what());

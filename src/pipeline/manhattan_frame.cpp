@@ -529,6 +529,10 @@ Status BoxEstimator::Config::isValid() const {
   if (min_points < 1) {
     return Status::Error("box min_points must be >= 1 (got " + std::to_string(min_points) + ")");
   }
+  if (!(extent_trim_fraction >= 0.0 && extent_trim_fraction < 0.2)) {
+    return Status::Error("box extent_trim_fraction must be in [0, 0.2) (got " +
+                         std::to_string(extent_trim_fraction) + ")");
+  }
   return Status::Ok();
 }
 
@@ -538,7 +542,8 @@ std::string BoxEstimator::Config::print() const {
   for (std::string line; std::getline(manhattan_lines, line);) {
     out << "manhattan." << line << "\n";
   }
-  out << "min_points: " << min_points << "\n";
+  out << "min_points: " << min_points << "\n"
+      << "extent_trim_fraction: " << extent_trim_fraction << "\n";
   return out.str();
 }
 
@@ -611,10 +616,26 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   const Eigen::Matrix3d R_MF_W = mf.R_W_MF.transpose();
   Eigen::Vector3d min_MF = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d max_MF = -min_MF;
-  for (const Eigen::Vector3f& p : points) {
-    const Eigen::Vector3d p_MF = R_MF_W * (p.cast<double>() - centroid);
-    min_MF = min_MF.cwiseMin(p_MF);
-    max_MF = max_MF.cwiseMax(p_MF);
+  const size_t trim = static_cast<size_t>(config_.extent_trim_fraction * points.size());
+  if (trim == 0) {
+    for (const Eigen::Vector3f& p : points) {
+      const Eigen::Vector3d p_MF = R_MF_W * (p.cast<double>() - centroid);
+      min_MF = min_MF.cwiseMin(p_MF);
+      max_MF = max_MF.cwiseMax(p_MF);
+    }
+  } else {
+    // Order statistics per axis: the trim-th smallest and largest coordinate.
+    std::vector<double> coordinate(points.size());
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3d direction = R_MF_W.row(axis).transpose();
+      for (size_t i = 0; i < points.size(); ++i) {
+        coordinate[i] = direction.dot(points[i].cast<double>() - centroid);
+      }
+      std::nth_element(coordinate.begin(), coordinate.begin() + trim, coordinate.end());
+      min_MF[axis] = coordinate[trim];
+      std::nth_element(coordinate.begin(), coordinate.end() - 1 - trim, coordinate.end());
+      max_MF[axis] = coordinate[coordinate.size() - 1 - trim];
+    }
   }
   box->rotation = mf.R_W_MF;
   box->size_m = max_MF - min_MF;

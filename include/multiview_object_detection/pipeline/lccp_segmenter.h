@@ -1,4 +1,5 @@
-// Sec. 3.2 / Eq. 2: supervoxels + LCCP (locally convex connected patches); the largest segment is the object.
+// Sec. 3.2 / Eq. 2: supervoxels + LCCP (locally convex connected patches); the largest segment is
+// the object.
 #pragma once
 
 #include "multiview_object_detection/pipeline/common.h"
@@ -8,16 +9,17 @@ namespace mvod {
 class LccpSegmenter {
  public:
   struct Config {
-    bool enable = true;                  // false = Table 3's "-LCCP" ablation (cloud passes through)
+    bool enable = true;  // false = Table 3's "-LCCP" ablation (cloud passes through)
     // Supervoxel octree leaf, coarser than the 0.01 m filter grid: Kinect rows on surfaces seen
     // at a grazing angle (box tops) lie ~2 cm apart at 2 m and must still be adjacent voxels.
     double voxel_resolution_m = 0.015;
-    double seed_resolution_m = 0.05;     // supervoxel seed spacing
+    double seed_resolution_m = 0.05;  // supervoxel seed spacing
     double spatial_importance = 1.0;
     double normal_importance = 4.0;
-    double color_importance = 0.0;       // clouds carry no colour
-    // Log-transform depth before supervoxel clustering (PCL's single-camera transform) for single-view
-    // clouds given in the camera frame: density falls with depth, the log keeps voxel sizes fair.
+    double color_importance = 0.0;  // clouds carry no colour
+    // Log-transform depth before supervoxel clustering (PCL's single-camera transform) for
+    // single-view clouds given in the camera frame: density falls with depth, the log keeps voxel
+    // sizes fair.
     bool log_depth_transform = true;
     double concavity_tolerance_deg = 10.0;
     double smoothness_threshold = 0.1;
@@ -26,13 +28,17 @@ class LccpSegmenter {
     int min_segment_size = 1;
     bool use_extended_convexity = false;
     bool use_sanity_criterion = true;
-    int min_points = 30;                 // fewer input points: no segmentation, cloud passes through
+    int min_points = 30;  // fewer input points: no segmentation, cloud passes through
     Status isValid() const;
     std::string print() const;
   };
 
   struct Result {
     PointCloud largest_segment;  // Eq. 2
+    // Every segment as indices into the input points, largest first (segments[0] is
+    // largest_segment). Points in no supervoxel are in none. With LCCP disabled or a cloud too
+    // small to split: one segment of all finite points.
+    std::vector<std::vector<int>> segments;
     int num_supervoxels = 0;
     int num_segments = 0;
   };
@@ -41,12 +47,12 @@ class LccpSegmenter {
   explicit LccpSegmenter(const Config& config) : config_(config) {}
   const Config& config() const { return config_; }
 
-  // points_in_camera_frame: true when `points` are a single view in its optical frame (z = depth > 0), which
-  // enables the log-depth transform; false for fused world-frame clouds (already voxelised to uniform density).
-  // Supervoxel normals are flipped towards the origin of the points' frame (PCL's convention)
-  // and convexity depends on that: give world-frame clouds relative to a camera centre
-  // (points_W - t_W_C, add it back to the segment) when the world origin may lie below or
-  // inside the object.
+  // points_in_camera_frame: true when `points` are a single view in its optical frame (z = depth >
+  // 0), which enables the log-depth transform; false for fused world-frame clouds (already
+  // voxelised to uniform density). Supervoxel normals are flipped towards the origin of the points'
+  // frame (PCL's convention) and convexity depends on that: give world-frame clouds relative to a
+  // camera centre (points_W - t_W_C, add it back to the segment) when the world origin may lie
+  // below or inside the object.
   Status segment(const PointCloud& points, bool points_in_camera_frame, Result* result) const;
 
  private:

@@ -5,19 +5,20 @@
 
 namespace mvod {
 
-// Surface normals by PCA over neighbours within radius_m (at most max_neighbours); unit length, oriented
-// arbitrarily. Points with fewer than 3 neighbours get a NaN normal.
+// Surface normals by PCA over neighbours within radius_m (at most max_neighbours); unit length,
+// oriented arbitrarily. Points with fewer than 3 neighbours get a NaN normal.
 std::vector<Eigen::Vector3f> estimateNormals(const PointCloud& points, double radius_m,
                                              int max_neighbours = 30);
 
 class ManhattanFrameEstimator {
  public:
   struct Config {
-    double inlier_angle_deg = 10.0;   // δ of Eq. 3
+    double inlier_angle_deg = 10.0;  // δ of Eq. 3
     double normal_radius_m = 0.03;
-    int max_normals = 5000;           // normals subsampled beyond this (deterministic stride)
-    // true (default): one axis is forced parallel to the floor normal and only yaw is searched, solved
-    // exactly. false: the unconstrained SO(3) estimate, then the axis closest to vertical is snapped to it.
+    int max_normals = 5000;  // normals subsampled beyond this (deterministic stride)
+    // true (default): one axis is forced parallel to the floor normal and only yaw is searched,
+    // solved exactly. false: the unconstrained SO(3) estimate, then the axis closest to vertical is
+    // snapped to it.
     bool gravity_constrained = true;
     Status isValid() const;
     std::string print() const;
@@ -25,8 +26,8 @@ class ManhattanFrameEstimator {
 
   struct Result {
     Eigen::Matrix3d R_W_MF = Eigen::Matrix3d::Identity();  // columns: frame axes in world
-    double yaw_rad = 0.0;   // yaw of column 0 about `up` (GravityFrame), in [-pi/4, pi/4)
-    int inliers = 0;        // Eq. 3 objective at the optimum
+    double yaw_rad = 0.0;  // yaw of column 0 about `up` (GravityFrame), in [-pi/4, pi/4)
+    int inliers = 0;       // Eq. 3 objective at the optimum
     int num_normals = 0;
   };
 
@@ -34,13 +35,15 @@ class ManhattanFrameEstimator {
   explicit ManhattanFrameEstimator(const Config& config) : config_(config) {}
   const Config& config() const { return config_; }
 
-  // Eq. 3 with R restricted to rotations about `gravity.up`: the inlier count is a piecewise-constant
-  // function of yaw in [0, pi/2) (the four horizontal axes fold onto one period); each normal contributes an
-  // arc, and a sweep over the sorted arc end points finds the global maximum exactly. Returns the middle of
-  // the best arc. Normals within δ of vertical count for every yaw.
-  Result estimateYaw(const std::vector<Eigen::Vector3f>& normals_W, const GravityFrame& gravity) const;
-  // Eq. 3 over SO(3): candidate first axes from the normals themselves, each completed by the exact yaw
-  // search about it; the best consensus wins.
+  // Eq. 3 with R restricted to rotations about `gravity.up`: the inlier count is a
+  // piecewise-constant function of yaw in [0, pi/2) (the four horizontal axes fold onto one
+  // period); each normal contributes an arc, and a sweep over the sorted arc end points finds the
+  // global maximum exactly. Returns the middle of the best arc. Normals within δ of vertical count
+  // for every yaw.
+  Result estimateYaw(const std::vector<Eigen::Vector3f>& normals_W,
+                     const GravityFrame& gravity) const;
+  // Eq. 3 over SO(3): candidate first axes from the normals themselves, each completed by the exact
+  // yaw search about it; the best consensus wins.
   Result estimateSO3(const std::vector<Eigen::Vector3f>& normals_W) const;
   // Eq. 3 objective: number of normals within δ of one of the six axes ±R e_j.
   int countInliers(const std::vector<Eigen::Vector3f>& normals, const Eigen::Matrix3d& R) const;
@@ -53,7 +56,10 @@ class BoxEstimator {
  public:
   struct Config {
     ManhattanFrameEstimator::Config manhattan;
-    int min_points = 10;   // fewer points: no box
+    int min_points = 10;  // fewer points: no box
+    // Robust extents: this fraction of the points is left out at each end of every axis (noisy
+    // Kinect points add 4-6 cm to min/max). 0 = Eq. 4's min/max.
+    double extent_trim_fraction = 0.005;
     Status isValid() const;
     std::string print() const;
   };
@@ -62,9 +68,9 @@ class BoxEstimator {
   explicit BoxEstimator(const Config& config) : config_(config), manhattan_(config.manhattan) {}
   const Config& config() const { return config_; }
 
-  // Eq. 4: Manhattan frame of the cloud (normals -> estimator), the frame put at the centroid, the points
-  // expressed in it, min/max per axis. The returned box's third column is gravity.up; its centre is the middle
-  // of the min/max extent (not the centroid).
+  // Eq. 4: Manhattan frame of the cloud (normals -> estimator), the frame put at the centroid, the
+  // points expressed in it, min/max per axis. The returned box's third column is gravity.up; its
+  // centre is the middle of the min/max extent (not the centroid).
   Status estimate(const PointCloud& points_W, const GravityFrame& gravity, OrientedBox* box,
                   ManhattanFrameEstimator::Result* frame = nullptr) const;
 
