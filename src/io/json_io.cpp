@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -182,6 +183,41 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
   if (segment != value.end()) {
     if (!(status = readCloud(*segment, prefix + "segment", &object.segment_W))) return status;
   }
+  // Evidence fusion's votes (optional; maps without them go on fusing from their segment).
+  const auto evidence = value.find("evidence");
+  if (evidence != value.end()) {
+    const std::string where = prefix + "evidence";
+    if (!evidence->is_object() || !evidence->contains("voxel_size_m") ||
+        !(*evidence)["voxel_size_m"].is_number() || !evidence->contains("voxels") ||
+        !(*evidence)["voxels"].is_array()) {
+      return fieldError(where,
+                        "expected {\"voxel_size_m\": s, \"voxels\": [[i, j, k, in, out], ...]}");
+    }
+    const double size_m = (*evidence)["voxel_size_m"].get<double>();
+    if (!(std::isfinite(size_m) && size_m > 0.0))
+      return fieldError(where, "voxel_size_m must be > 0");
+    object.evidence_voxel_size_m = size_m;
+    for (const json& voxel : (*evidence)["voxels"]) {
+      bool ok = voxel.is_array() && voxel.size() == 5;
+      for (size_t i = 0; ok && i < 5; ++i) ok = voxel[i].is_number_integer();
+      if (ok) {
+        for (int i = 0; i < 3; ++i) {
+          const std::int64_t v = voxel[i].get<std::int64_t>();
+          ok = ok && v >= -(1 << 20) && v < (1 << 20);
+        }
+        for (int i = 3; i < 5; ++i) {
+          const std::int64_t v = voxel[i].get<std::int64_t>();
+          ok = ok && v >= 0 && v <= UINT16_MAX;
+        }
+      }
+      if (!ok) return fieldError(where, "voxels must be [i, j, k, in, out] integers in range");
+      const std::int64_t key = ObjectDatabase::packVoxel(
+          Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
+      VoxelEvidence& e = object.evidence[key];
+      e.inside = static_cast<std::uint16_t>(voxel[3].get<int>());
+      e.outside = static_cast<std::uint16_t>(voxel[4].get<int>());
+    }
+  }
   *out = std::move(object);
   return Status::Ok();
 }
@@ -225,6 +261,24 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
     if (include_clouds) {
       entry["points"] = cloudToJson(object.points_W);
       entry["segment"] = cloudToJson(object.segment_W);
+      if (!object.evidence.empty()) {
+        // Sorted, so that one map always writes the same file.
+        std::vector<std::pair<Eigen::Vector3i, VoxelEvidence>> voxels;
+        for (const auto& e : object.evidence) {
+          voxels.emplace_back(ObjectDatabase::unpackVoxel(e.first), e.second);
+        }
+        std::sort(voxels.begin(), voxels.end(), [](const auto& a, const auto& b) {
+          return std::lexicographical_compare(a.first.data(), a.first.data() + 3, b.first.data(),
+                                              b.first.data() + 3);
+        });
+        json list_json = json::array();
+        for (const auto& v : voxels) {
+          list_json.push_back(
+              {v.first.x(), v.first.y(), v.first.z(), v.second.inside, v.second.outside});
+        }
+        entry["evidence"] = {{"voxel_size_m", object.evidence_voxel_size_m},
+                             {"voxels", std::move(list_json)}};
+      }
     }
     list.push_back(std::move(entry));
   }

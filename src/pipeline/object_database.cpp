@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_set>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
 
@@ -14,6 +15,9 @@ Status ObjectDatabase::Config::isValid() const {
     return Status::Error("fusion_voxel_size_m must be a finite value > 0 (got " +
                          std::to_string(fusion_voxel_size_m) + ")");
   }
+  if (fusion != "paper" && fusion != "evidence") {
+    return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
+  }
   return Status::Ok();
 }
 
@@ -21,8 +25,68 @@ std::string ObjectDatabase::Config::print() const {
   std::ostringstream out;
   out << "fusion_voxel_size_m: " << fusion_voxel_size_m << "\n"
       << "no_fusion_within_keyframe: " << (no_fusion_within_keyframe ? "true" : "false") << "\n"
-      << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n";
+      << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n"
+      << "fusion: " << fusion << "\n";
   return out.str();
+}
+
+namespace {
+
+constexpr std::int64_t kFieldMask = 0x1FFFFF;  // 21 bits per axis
+
+std::int64_t unpackField(std::int64_t key, int shift) {
+  std::int64_t v = (key >> shift) & kFieldMask;
+  if (v & (std::int64_t{1} << 20)) v -= std::int64_t{1} << 21;  // sign
+  return v;
+}
+
+void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* evidence) {
+  for (const std::int64_t key : inside) {
+    VoxelEvidence& e = (*evidence)[key];
+    if (e.inside < UINT16_MAX) ++e.inside;
+  }
+}
+
+}  // namespace
+
+std::int64_t ObjectDatabase::packVoxel(const Eigen::Vector3i& index) {
+  return ((static_cast<std::int64_t>(index.x()) & kFieldMask) << 42) |
+         ((static_cast<std::int64_t>(index.y()) & kFieldMask) << 21) |
+         (static_cast<std::int64_t>(index.z()) & kFieldMask);
+}
+
+Eigen::Vector3i ObjectDatabase::unpackVoxel(std::int64_t key) {
+  return Eigen::Vector3i(static_cast<int>(unpackField(key, 42)),
+                         static_cast<int>(unpackField(key, 21)),
+                         static_cast<int>(unpackField(key, 0)));
+}
+
+std::int64_t ObjectDatabase::voxelKey(const Eigen::Vector3f& p_W) const {
+  const double inv = 1.0 / config_.fusion_voxel_size_m;
+  const auto field = [inv](float v) {
+    return static_cast<std::int64_t>(std::floor(v * inv)) & kFieldMask;
+  };
+  return (field(p_W.x()) << 42) | (field(p_W.y()) << 21) | field(p_W.z());
+}
+
+Eigen::Vector3f ObjectDatabase::voxelCentre(std::int64_t key) const {
+  const double s = config_.fusion_voxel_size_m;
+  return Eigen::Vector3f(static_cast<float>((unpackField(key, 42) + 0.5) * s),
+                         static_cast<float>((unpackField(key, 21) + 0.5) * s),
+                         static_cast<float>((unpackField(key, 0) + 0.5) * s));
+}
+
+PointCloud ObjectDatabase::supportedVoxels(const MapObject& object) const {
+  PointCloud centres;
+  for (const auto& entry : object.evidence) {
+    const VoxelEvidence& e = entry.second;
+    if (e.inside >= 1 && e.inside >= e.outside) centres.push_back(voxelCentre(entry.first));
+  }
+  // Hash order is not stable across library versions: sort for reproducible boxes.
+  std::sort(centres.begin(), centres.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  });
+  return centres;
 }
 
 ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservation& observation,
@@ -54,17 +118,47 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   const double threshold_m = priors_.fusionDistance(observation.class_name);
   if (!config_.disable_fusion && nearest != nullptr && result.distance_m <= threshold_m) {
     MapObject& object = *nearest;
-    // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface bounded.
-    PointCloud merged;
-    merged.reserve(object.points_W.size() + observation.points_W.size());
-    merged.insert(merged.end(), object.points_W.begin(), object.points_W.end());
-    merged.insert(merged.end(), observation.points_W.begin(), observation.points_W.end());
-    object.points_W = PointCloudFilter::voxelize(merged, config_.fusion_voxel_size_m);
+    const PointCloud* to_process = &object.points_W;
+    PointCloud supported;
+    if (config_.fusion == "evidence") {
+      // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
+      if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
+      object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+      if (object.evidence.empty()) {
+        std::unordered_set<std::int64_t> inside;
+        for (const Eigen::Vector3f& p : object.segment_W) inside.insert(voxelKey(p));
+        countInside(inside, &object.evidence);
+      }
+      // This view's votes: inside for the voxels of its cut, outside for the voxels it saw surface
+      // in but left out of the cut. Cost: the view's points, not the object's size.
+      std::unordered_set<std::int64_t> inside;
+      for (const Eigen::Vector3f& p : observation.segment_W) inside.insert(voxelKey(p));
+      countInside(inside, &object.evidence);
+      std::unordered_set<std::int64_t> outside;
+      for (const Eigen::Vector3f& p : observation.seen_W) {
+        const std::int64_t key = voxelKey(p);
+        if (inside.count(key) != 0 || !outside.insert(key).second) continue;
+        const auto it = object.evidence.find(key);
+        if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
+      }
+      supported = supportedVoxels(object);
+      object.points_W.clear();
+      for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
+      to_process = &supported;
+    } else {
+      // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface
+      // bounded.
+      PointCloud merged;
+      merged.reserve(object.points_W.size() + observation.points_W.size());
+      merged.insert(merged.end(), object.points_W.begin(), object.points_W.end());
+      merged.insert(merged.end(), observation.points_W.begin(), observation.points_W.end());
+      object.points_W = PointCloudFilter::voxelize(merged, config_.fusion_voxel_size_m);
+    }
 
     PointCloud segment_W;
     OrientedBox box;
     double yaw_rad = object.yaw_rad;
-    if (process && process(object.points_W, &segment_W, &box, &yaw_rad)) {
+    if (process && process(*to_process, &segment_W, &box, &yaw_rad)) {
       object.segment_W = std::move(segment_W);
       object.box = box;
       object.yaw_rad = yaw_rad;
@@ -90,6 +184,12 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   object.observations = 1;
   object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);
   object.segment_W = observation.segment_W;
+  if (config_.fusion == "evidence") {
+    std::unordered_set<std::int64_t> inside;
+    for (const Eigen::Vector3f& p : observation.segment_W) inside.insert(voxelKey(p));
+    countInside(inside, &object.evidence);
+    object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+  }
   object.box = observation.box;
   object.yaw_rad = observation.yaw_rad;
   object.first_keyframe = observation.keyframe;

@@ -55,6 +55,8 @@ Status ObjectMapper::Config::isValid() const {
   if (!(status = checkSection("extractor", extractor.isValid()))) return status;
   if (!(status = checkSection("filter", filter.isValid()))) return status;
   if (!(status = checkSection("lccp", lccp.isValid()))) return status;
+  if (!(status = checkSection("selection", selection.isValid()))) return status;
+  if (!(status = checkSection("floor", floor.isValid()))) return status;
   if (!(status = checkSection("box", box.isValid()))) return status;
   if (!(status = checkSection("database", database.isValid()))) return status;
   if (!(status = checkSection("prior_filter", prior_filter.isValid()))) return status;
@@ -72,6 +74,8 @@ std::string ObjectMapper::Config::print() const {
   appendSection("extractor", extractor.print(), &out);
   appendSection("filter", filter.print(), &out);
   appendSection("lccp", lccp.print(), &out);
+  appendSection("selection", selection.print(), &out);
+  appendSection("floor", floor.print(), &out);
   appendSection("box", box.print(), &out);
   appendSection("database", database.print(), &out);
   appendSection("prior_filter", prior_filter.print(), &out);
@@ -80,11 +84,20 @@ std::string ObjectMapper::Config::print() const {
   return out.str();
 }
 
+void ObjectMapper::Config::usePaperMethod() {
+  selection.selection = "largest";
+  database.fusion = "paper";
+  floor.enable = false;
+  box.extent_trim_fraction = 0.0;
+}
+
 ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
     : config_(config),
       extractor_(config.extractor),
       filter_(config.filter),
       lccp_(config.lccp),
+      selector_(config.selection),
+      floor_(config.floor),
       box_estimator_(config.box),
       database_(config.database, priors),
       prior_filter_(config.prior_filter),
@@ -98,6 +111,10 @@ Status ObjectMapper::updateConfig(const Config& config) {
   extractor_ = ObjectCloudExtractor(config.extractor);
   filter_ = PointCloudFilter(config.filter);
   lccp_ = LccpSegmenter(config.lccp);
+  selector_ = SegmentSelector(config.selection);
+  const FloorEstimator previous_floor = floor_;
+  floor_ = FloorEstimator(config.floor);
+  if (previous_floor.hasFloor()) floor_.setFloor(previous_floor.floorHeight_m(), gravity().up);
   box_estimator_ = BoxEstimator(config.box);
   database_.setConfig(config.database);
   prior_filter_ = PriorSizeFilter(config.prior_filter);
@@ -127,6 +144,7 @@ bool ObjectMapper::updateGravity(const RgbdFrame& frame) {
 void ObjectMapper::reset() {
   database_.clear();
   gravity_estimator_ = GravityEstimator(config_.gravity);
+  floor_.reset();
   keyframes_ = 0;
 }
 
@@ -179,6 +197,23 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
 
   // Eq. 1: one cloud per detection, back-projected once for the whole frame.
   Clock::time_point t = Clock::now();
+  // The whole view, once: the floor's height, and the surfaces around each detection for the
+  // consistent selection and the evidence fusion.
+  const bool need_view = config_.floor.enable || config_.selection.consistent() ||
+                         config_.database.fusion == "evidence";
+  SegmentSelector::FrameView view;
+  if (need_view) {
+    view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
+                                          config_.extractor.max_valid_depth_m);
+  }
+  if (config_.floor.enable) {
+    PointCloud sample_W;
+    sample_W.reserve(view.points_D.size() / 2 + 1);
+    const Eigen::Isometry3f T_W_D = frame.T_W_D.cast<float>();
+    for (size_t i = 0; i < view.points_D.size(); i += 2)
+      sample_W.push_back(T_W_D * view.points_D[i]);
+    floor_.addFrame(sample_W, gravity());
+  }
   std::vector<PointCloud> clouds_D;
   const Status extracted = extractor_.extract(frame, kept, &clouds_D);
   if (!extracted || clouds_D.size() != kept.size()) {
@@ -205,7 +240,12 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
       continue;
     }
     ObjectObservation observation;
-    const Status single = runSingleView(clouds_D[k], frame.T_W_D, &observation, &out.times);
+    ViewContext context;
+    context.frame = &frame;
+    context.detection = &detection;
+    context.view = need_view ? &view : nullptr;
+    const Status single =
+        runSingleView(clouds_D[k], frame.T_W_D, context, &observation, &out.times);
     if (!single) {
       out.warnings.push_back(what + ": " + single.message());
       continue;
@@ -242,18 +282,66 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
 
 bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                                      ObjectObservation* observation, StageTimes* times) const {
-  return runSingleView(points_D, T_W_D, observation, times).ok();
+  return runSingleView(points_D, T_W_D, ViewContext(), observation, times).ok();
+}
+
+Status ObjectMapper::processSingleView(const RgbdFrame& frame, const Detection2D& detection,
+                                       const PointCloud& points_D, ObjectObservation* observation,
+                                       StageTimes* times) const {
+  const SegmentSelector::FrameView view = SegmentSelector::makeFrameView(
+      frame, 2, config_.extractor.min_valid_depth_m, config_.extractor.max_valid_depth_m);
+  ViewContext context;
+  context.frame = &frame;
+  context.detection = &detection;
+  context.view = &view;
+  return runSingleView(points_D, frame.T_W_D, context, observation, times);
+}
+
+void ObjectMapper::groundBox(OrientedBox* box) const {
+  if (!floorCutActive()) return;
+  const Eigen::Vector3d up = box->rotation.col(2);
+  if (up.dot(gravity().up) < 0.999) return;  // not gravity-aligned
+  const double centre = up.dot(box->center_m);
+  const double bottom = centre - 0.5 * box->size_m.z();
+  const double top = centre + 0.5 * box->size_m.z();
+  const double floor_m = floor_.floorHeight_m();
+  if (bottom - floor_m > config_.floor.grounding_distance_m || top <= floor_m + 0.05) return;
+  box->size_m.z() = top - floor_m;
+  box->center_m += up * (0.5 * (top + floor_m) - centre);
 }
 
 Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
-                                   ObjectObservation* observation, StageTimes* times) const {
+                                   const ViewContext& context, ObjectObservation* observation,
+                                   StageTimes* times) const {
   StageTimes local_times;
   StageTimes& stage = times != nullptr ? *times : local_times;
+  const GravityFrame gravity_frame = gravity();
 
-  // Sec. 3.2: pass-through, voxel grid and outlier removal in the camera frame.
+  // Sec. 3.2: pass-through, voxel grid and outlier removal in the camera frame; before them the
+  // floor cut: points just above the floor are floor, whatever the mask says.
   Clock::time_point t = Clock::now();
+  PointCloud above_floor_D;
+  const PointCloud* input_D = &points_D;
+  if (floorCutActive()) {
+    const Eigen::Vector3f up_D = (T_W_D.linear().transpose() * gravity_frame.up).cast<float>();
+    const float up_offset = static_cast<float>(gravity_frame.up.dot(T_W_D.translation()));
+    const float floor_m = static_cast<float>(floor_.floorHeight_m());
+    const float clearance_m = static_cast<float>(config_.floor.clearance_m);
+    const float per_m2 = static_cast<float>(config_.floor.clearance_per_m2);
+    above_floor_D.reserve(points_D.size());
+    for (const Eigen::Vector3f& p : points_D) {
+      const float height_m = up_D.dot(p) + up_offset - floor_m;
+      if (height_m >= clearance_m + per_m2 * p.z() * p.z()) above_floor_D.push_back(p);
+    }
+    if (above_floor_D.empty()) {
+      stage.filter_ms += msSince(t);
+      return Status::Error("every point lies on the floor (" + std::to_string(points_D.size()) +
+                           " points)");
+    }
+    input_D = &above_floor_D;
+  }
   const PointCloud filtered_D =
-      config_.filter.enable ? filter_.filterCameraFrame(points_D) : points_D;
+      config_.filter.enable ? filter_.filterCameraFrame(*input_D) : *input_D;
   stage.filter_ms += msSince(t);
   if (static_cast<int>(filtered_D.size()) < config_.min_object_points) {
     return Status::Error("only " + std::to_string(filtered_D.size()) + " of " +
@@ -270,15 +358,52 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   if (!segmented) return Status::Error("LCCP failed: " + segmented.message());
   if (segmentation.largest_segment.empty()) return Status::Error("LCCP left no segment");
 
+  // Eq. 2, or the segments consistent with the detection.
+  t = Clock::now();
+  SegmentSelector::Input selection_input;
+  selection_input.points_D = &filtered_D;
+  selection_input.segments = &segmentation.segments;
+  selection_input.detection = context.detection;
+  selection_input.frame = context.frame;
+  selection_input.view = context.view;
+  selection_input.prior = context.detection != nullptr
+                              ? database_.priors().find(context.detection->class_name)
+                              : nullptr;
+  selection_input.gravity = gravity_frame;
+  SegmentSelector::Result selection;
+  const Status selected = selector_.select(selection_input, &selection);
+  stage.lccp_ms += msSince(t);
+  if (!selected) return Status::Error("no object in the cut: " + selected.message());
+  PointCloud cut_D;
+  cut_D.reserve(selection.indices.size());
+  for (const int i : selection.indices) cut_D.push_back(filtered_D[i]);
+  if (static_cast<int>(cut_D.size()) < config_.box.min_points) {
+    return Status::Error("the cut holds only " + std::to_string(cut_D.size()) + " points");
+  }
+
   // Eq. 1: into the world frame, then Eq. 3/4 on the segment.
   PointCloud points_W = transformCloud(filtered_D, T_W_D);
-  PointCloud segment_W = transformCloud(segmentation.largest_segment, T_W_D);
+  PointCloud segment_W = transformCloud(cut_D, T_W_D);
   t = Clock::now();
-  const GravityFrame gravity_frame = gravity();
   OrientedBox box;
   const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box);
+  if (boxed) groundBox(&box);
   stage.manhattan_ms += msSince(t);
   if (!boxed) return Status::Error("no box: " + boxed.message());
+
+  // Evidence fusion: the view's surface around the box votes on the voxels it sees.
+  if (config_.database.fusion == "evidence" && context.view != nullptr) {
+    const Eigen::Isometry3f T_W_D_f = T_W_D.cast<float>();
+    const Eigen::Matrix3f R_B_W = box.rotation.transpose().cast<float>();
+    const Eigen::Vector3f centre = box.center_m.cast<float>();
+    const Eigen::Vector3f half = (0.5 * box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
+    for (const Eigen::Vector3f& p_D : context.view->points_D) {
+      const Eigen::Vector3f p_W = T_W_D_f * p_D;
+      if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) {
+        observation->seen_W.push_back(p_W);
+      }
+    }
+  }
 
   observation->points_W = std::move(points_W);
   observation->segment_W = std::move(segment_W);
@@ -289,8 +414,22 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
 
 bool ObjectMapper::processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
                                 double* yaw_rad, StageTimes* times) const {
+  Clock::time_point t;
+  if (config_.database.fusion == "evidence") {
+    // The supported voxels are the object: box them (robust extents, grounded), nothing else.
+    t = Clock::now();
+    const GravityFrame gravity_frame = gravity();
+    OrientedBox fused_box;
+    if (!box_estimator_.estimate(points_W, gravity_frame, &fused_box)) return false;
+    groundBox(&fused_box);
+    times->manhattan_ms += msSince(t);
+    *segment_W = points_W;
+    *box = fused_box;
+    *yaw_rad = gravity_frame.yawOf(fused_box.rotation.col(0));
+    return true;
+  }
   // Eq. 7's fused cloud goes through the same filter, LCCP and box stages, in the world frame.
-  Clock::time_point t = Clock::now();
+  t = Clock::now();
   // points_W comes from the database, already on its fusion grid: no second voxel pass.
   const PointCloud filtered_W =
       config_.filter.enable ? filter_.filterFused(points_W, config_.database.fusion_voxel_size_m)

@@ -6,7 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
+
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/rgbd_frame.h"
 
 namespace mvod {
 namespace test {
@@ -83,6 +90,50 @@ inline Eigen::Isometry3d cameraLookingAlongY(const Eigen::Vector3d& position, do
   T_W_C.linear() = R;
   T_W_C.translation() = position;
   return T_W_C;
+}
+
+// Renders a 640x480 frame (16-bit mm depth, Kinect-like intrinsics) and the perfect mask of the
+// box. (At 320x240 the grazing-angle box top is sampled too sparsely for 1-2 cm supervoxels.)
+inline RgbdFrame renderFrame(const BoxScene& scene, const Eigen::Isometry3d& T_W_D, int index,
+                             cv::Mat* mask) {
+  RgbdFrame frame;
+  frame.index = index;
+  frame.name = "frame-" + std::to_string(index);
+  frame.stamp_s = 0.1 * index;
+  frame.K_depth = CameraIntrinsics{520.0, 520.0, 319.5, 239.5, 640, 480};
+  frame.K_color = frame.K_depth;
+  frame.registered = true;
+  frame.T_W_D = T_W_D;
+  frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(0));
+  frame.color_bgr = cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 120, 150));
+  *mask = cv::Mat(480, 640, CV_8UC1, cv::Scalar(0));
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      const Eigen::Vector3d ray_D((u - frame.K_depth.cx) / frame.K_depth.fx,
+                                  (v - frame.K_depth.cy) / frame.K_depth.fy, 1.0);
+      Surface surface = Surface::kNone;
+      const double t = scene.cast(T_W_D.translation(), T_W_D.linear() * ray_D, &surface);
+      const bool on_box = surface == Surface::kBox;
+      if (!std::isfinite(t) || t > 10.0) continue;
+      frame.depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(t * 1000.0));
+      if (on_box) {
+        mask->at<uint8_t>(v, u) = 255;
+        frame.color_bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(20, 40, 200);
+      }
+    }
+  }
+  return frame;
+}
+
+inline Detection2D detectionFromMask(const cv::Mat& mask, const std::string& class_name,
+                                     float score) {
+  Detection2D detection;
+  detection.class_name = class_name;
+  detection.class_id = cocoClassId(class_name);
+  detection.score = score;
+  detection.mask = mask.clone();
+  detection.box_px = cv::boundingRect(mask);
+  return detection;
 }
 
 }  // namespace test

@@ -216,6 +216,7 @@ TEST_F(ObjectDatabaseTest, ProbabilityIsTheMeanOfNewAndStored) {
 TEST_F(ObjectDatabaseTest, FusedCloudStaysBoundedWhenTheSameSurfaceIsSeenAgain) {
   ObjectDatabase::Config config;
   config.fusion_voxel_size_m = 0.01;
+  config.fusion = "paper";  // Eq. 7's union of the views' clouds
   ObjectDatabase database(config, priors_);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> coordinate(0.0f, 0.5f);
@@ -317,6 +318,55 @@ TEST_F(ObjectDatabaseTest, ConfigValidation) {
   config.fusion_voxel_size_m = std::nan("");
   EXPECT_FALSE(config.isValid().ok());
   EXPECT_NE(ObjectDatabase::Config().print().find("fusion_voxel_size_m: 0.01"), std::string::npos);
+}
+
+TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideTheirCut) {
+  ObjectDatabase::Config config;  // fusion: evidence (the default)
+  ASSERT_EQ(config.fusion, "evidence");
+  ObjectDatabase database(config, priors_);
+  // The object: a 0.2 m square at z = 0.7. The first view's cut also holds a strip of floor it
+  // bled into; the next two views see that floor (seen_W) but leave it out of their cut.
+  PointCloud floor_strip;
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 5; ++j)
+      floor_strip.emplace_back(0.005f + 0.01f * i, 0.305f + 0.01f * j, 0.005f);
+  }
+  int calls = 0;
+  PointCloud last_supported;
+  for (int k = 0; k < 3; ++k) {
+    ObjectObservation obs = observation("chair", {0.1, 0.1, 0.7}, 0.8, k);
+    obs.segment_W = obs.points_W;
+    obs.seen_W = obs.points_W;
+    obs.seen_W.insert(obs.seen_W.end(), floor_strip.begin(), floor_strip.end());
+    if (k == 0) obs.segment_W.insert(obs.segment_W.end(), floor_strip.begin(), floor_strip.end());
+    const auto processor = [&](const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
+                               double* yaw_rad) {
+      last_supported = points_W;
+      return centroidProcessor(&calls)(points_W, segment_W, box, yaw_rad);
+    };
+    database.fuseOrInsert(obs, processor);
+  }
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject& object = database.objects().begin()->second;
+  EXPECT_EQ(object.observations, 3);
+  EXPECT_EQ(calls, 2);
+  // 400 object voxels inside 3 times; 100 floor voxels inside once, outside twice.
+  EXPECT_EQ(object.evidence.size(), 500u);
+  const PointCloud supported = database.supportedVoxels(object);
+  EXPECT_EQ(supported.size(), 400u);
+  EXPECT_EQ(last_supported.size(), 400u);
+  for (const auto& p : supported) EXPECT_GT(p.z(), 0.6f);
+  // The box was made from the supported voxels only: its centre is the object's.
+  EXPECT_NEAR(object.box.center_m.z(), 0.7, 0.01);
+  // A map saved before evidence fusion (no evidence) goes on fusing from its segment.
+  MapObject legacy = object;
+  legacy.evidence.clear();
+  legacy.evidence_voxel_size_m = 0.0;
+  database.setObjects({legacy});
+  ObjectObservation obs = observation("chair", {0.1, 0.1, 0.7}, 0.8, 10);
+  obs.segment_W = obs.points_W;
+  database.fuseOrInsert(obs, centroidProcessor(&calls));
+  EXPECT_EQ(database.objects().begin()->second.evidence.size(), 400u);
 }
 
 }  // namespace

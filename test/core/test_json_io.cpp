@@ -126,6 +126,39 @@ TEST(JsonIoTest, RoundTripWithClouds) {
   EXPECT_EQ(objectsToJson(loaded, loaded_summary, true), text);
 }
 
+TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
+  MapObject object = makeObject(4, "chair", 0.1, 10);
+  object.evidence_voxel_size_m = 0.01;
+  object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(-3, 5, 70))] = VoxelEvidence{4, 1};
+  object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(1048575, -1048576, 0))] =
+      VoxelEvidence{1, 65535};
+  const std::string text = objectsToJson({object}, makeSummary(), true);
+  std::vector<MapObject> loaded;
+  MapSummary summary;
+  ASSERT_TRUE(objectsFromJson(text, &loaded, &summary).ok());
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_DOUBLE_EQ(loaded[0].evidence_voxel_size_m, 0.01);
+  ASSERT_EQ(loaded[0].evidence.size(), 2u);
+  for (const auto& entry : object.evidence) {
+    const auto it = loaded[0].evidence.find(entry.first);
+    ASSERT_NE(it, loaded[0].evidence.end());
+    EXPECT_EQ(it->second.inside, entry.second.inside);
+    EXPECT_EQ(it->second.outside, entry.second.outside);
+  }
+  EXPECT_EQ(objectsToJson(loaded, summary, true), text);
+  // Out-of-range votes or coordinates are refused with the field named.
+  for (const std::string& bad :
+       {"[0, 0, 0, 70000, 0]", "[0, 0, 2000000, 1, 0]", "[0, 0, 1]", "[0, 0, 0, -1, 0]"}) {
+    std::string broken = text;
+    const size_t at = broken.find("\"voxels\":[");
+    ASSERT_NE(at, std::string::npos);
+    broken.insert(at + 10, bad + ",");
+    const Status status = objectsFromJson(broken, &loaded, &summary);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("evidence"), std::string::npos) << status.message();
+  }
+}
+
 TEST(JsonIoTest, RoundTripWithoutClouds) {
   const std::vector<MapObject> objects = {makeObject(3, "tv", 1.2, 20)};
   const MapSummary summary = makeSummary();

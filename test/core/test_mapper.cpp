@@ -24,48 +24,8 @@ test::BoxScene mapperScene() {
   return scene;
 }
 
-// Renders a 640x480 frame (16-bit mm depth, Kinect-like intrinsics) and the perfect mask of the
-// box. (At 320x240 the grazing-angle box top is sampled too sparsely for 1-2 cm supervoxels.)
-RgbdFrame renderFrame(const test::BoxScene& scene, const Eigen::Isometry3d& T_W_D, int index,
-                      cv::Mat* mask) {
-  RgbdFrame frame;
-  frame.index = index;
-  frame.name = "frame-" + std::to_string(index);
-  frame.stamp_s = 0.1 * index;
-  frame.K_depth = CameraIntrinsics{520.0, 520.0, 319.5, 239.5, 640, 480};
-  frame.K_color = frame.K_depth;
-  frame.registered = true;
-  frame.T_W_D = T_W_D;
-  frame.depth = cv::Mat(kRows, kCols, CV_16UC1, cv::Scalar(0));
-  frame.color_bgr = cv::Mat(kRows, kCols, CV_8UC3, cv::Scalar(90, 120, 150));
-  *mask = cv::Mat(kRows, kCols, CV_8UC1, cv::Scalar(0));
-  for (int v = 0; v < kRows; ++v) {
-    for (int u = 0; u < kCols; ++u) {
-      const Eigen::Vector3d ray_D((u - frame.K_depth.cx) / frame.K_depth.fx,
-                                  (v - frame.K_depth.cy) / frame.K_depth.fy, 1.0);
-      test::Surface surface = test::Surface::kNone;
-      const double t = scene.cast(T_W_D.translation(), T_W_D.linear() * ray_D, &surface);
-      const bool on_box = surface == test::Surface::kBox;
-      if (!std::isfinite(t) || t > 10.0) continue;
-      frame.depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(t * 1000.0));
-      if (on_box) {
-        mask->at<uint8_t>(v, u) = 255;
-        frame.color_bgr.at<cv::Vec3b>(v, u) = cv::Vec3b(20, 40, 200);
-      }
-    }
-  }
-  return frame;
-}
-
-Detection2D detectionFromMask(const cv::Mat& mask, const std::string& class_name, float score) {
-  Detection2D detection;
-  detection.class_name = class_name;
-  detection.class_id = cocoClassId(class_name);
-  detection.score = score;
-  detection.mask = mask.clone();
-  detection.box_px = cv::boundingRect(mask);
-  return detection;
-}
+using test::detectionFromMask;
+using test::renderFrame;
 
 bool anyWarningContains(const KeyframeReport& report, const std::string& text) {
   return std::any_of(report.warnings.begin(), report.warnings.end(),

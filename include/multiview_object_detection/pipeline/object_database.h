@@ -2,9 +2,11 @@
 // clouds re-processed (Eq. 7) and probabilities averaged (Eq. 8).
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/class_priors.h"
@@ -18,12 +20,23 @@ struct ObjectObservation {
   std::string class_name;
   double probability = 0.0;  // ψ
   PointCloud points_W;       // filtered object cloud before LCCP (Eq. 7 fuses these)
-  PointCloud segment_W;      // LCCP's largest segment (Eq. 2)
-  OrientedBox box;           // from segment_W (Eq. 4)
-  double yaw_rad = 0.0;      // yaw of box column 0 about gravity (GravityFrame::yawOf)
+  PointCloud segment_W;      // the cut: LCCP's largest segment (Eq. 2) or the selected segments
+  // Evidence fusion: the view's surface points around the cut (in it or not). Voxels of these that
+  // are not in the cut are votes against the object there.
+  PointCloud seen_W;
+  OrientedBox box;       // from segment_W (Eq. 4)
+  double yaw_rad = 0.0;  // yaw of box column 0 about gravity (GravityFrame::yawOf)
   int keyframe = 0;
   double stamp_s = 0.0;
 };
+
+// Evidence fusion: how often a voxel of the object's grid was inside a view's cut, and how often a
+// view saw surface there but left it out of its cut.
+struct VoxelEvidence {
+  std::uint16_t inside = 0;
+  std::uint16_t outside = 0;
+};
+using EvidenceMap = std::unordered_map<std::int64_t, VoxelEvidence>;
 
 struct MapObject {
   int id = 0;  // α, never reused
@@ -31,8 +44,11 @@ struct MapObject {
   std::string class_name;
   double probability = 0.0;  // Eq. 8 running value
   int observations = 0;
-  PointCloud points_W;   // fused cloud, voxelised (bounded memory)
-  PointCloud segment_W;  // largest LCCP segment of the fused cloud
+  PointCloud points_W;  // fused cloud, voxelised (bounded memory)
+  PointCloud
+      segment_W;  // paper: largest LCCP segment of the fused cloud; evidence: supported voxels
+  EvidenceMap evidence;                // evidence fusion only (key: voxelKey on the fusion grid)
+  double evidence_voxel_size_m = 0.0;  // the grid of `evidence` (0: none yet)
   OrientedBox box;
   double yaw_rad = 0.0;
   int first_keyframe = 0;
@@ -57,6 +73,10 @@ class ObjectDatabase {
     // Table 2's single-frame baseline: every observation is inserted as a new object, nothing is
     // fused.
     bool disable_fusion = false;
+    // paper: Eq. 7 as written, the union of the views' clouds re-filtered, re-segmented and
+    // re-boxed. evidence: each voxel counts the views that put it inside their cut and those that
+    // saw it but left it out; the box comes from the voxels that are inside at least as often.
+    std::string fusion = "evidence";
     Status isValid() const;
     std::string print() const;
   };
@@ -81,6 +101,15 @@ class ObjectDatabase {
   // `process`, and the probability becomes mean(ψ_new, ψ_j) (Eq. 8).
   FusionResult fuseOrInsert(const ObjectObservation& observation,
                             const FusedCloudProcessor& process);
+
+  // Evidence fusion's supported voxels (centres): inside >= outside and inside >= 1.
+  PointCloud supportedVoxels(const MapObject& object) const;
+  // A key from and to integer voxel coordinates (each in [-2^20, 2^20)).
+  static std::int64_t packVoxel(const Eigen::Vector3i& index);
+  static Eigen::Vector3i unpackVoxel(std::int64_t key);
+  // The fusion grid's key of a point, and a key's voxel centre.
+  std::int64_t voxelKey(const Eigen::Vector3f& p_W) const;
+  Eigen::Vector3f voxelCentre(std::int64_t key) const;
 
   const std::map<int, MapObject>& objects() const { return objects_; }
   const MapObject* find(int id) const;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/floor_estimator.h"
 #include "multiview_object_detection/pipeline/gravity_estimator.h"
 #include "multiview_object_detection/pipeline/lccp_segmenter.h"
 #include "multiview_object_detection/pipeline/manhattan_frame.h"
@@ -14,6 +15,7 @@
 #include "multiview_object_detection/pipeline/object_database.h"
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
 #include "multiview_object_detection/pipeline/refinement.h"
+#include "multiview_object_detection/pipeline/segment_selector.h"
 
 namespace mvod {
 
@@ -51,6 +53,8 @@ class ObjectMapper {
     ObjectCloudExtractor::Config extractor;
     PointCloudFilter::Config filter;
     LccpSegmenter::Config lccp;
+    SegmentSelector::Config selection;  // which LCCP segments are the object
+    FloorEstimator::Config floor;       // floor cut before LCCP, boxes grounded on the floor
     BoxEstimator::Config box;
     ObjectDatabase::Config database;
     PriorSizeFilter::Config prior_filter;
@@ -58,6 +62,9 @@ class ObjectMapper {
     GravityEstimator::Config gravity;
     Status isValid() const;  // checks every sub-config
     std::string print() const;
+    // The paper's method as published: Eq. 2's largest segment, Eq. 7's literal fusion, min/max
+    // extents, no floor cut. The defaults are what measured best (README, Evaluation).
+    void usePaperMethod();
   };
 
   struct RefinementReport {
@@ -83,10 +90,15 @@ class ObjectMapper {
   // Sec. 3.5: removes atypical and intersecting objects from the database.
   RefinementReport refine();
 
-  // Single-view processing of one object cloud in the depth camera frame: filter, LCCP, box. Used
-  // by processKeyframe; public for tests and the single-frame baseline.
+  // Single-view processing of one object cloud in the depth camera frame: floor cut, filter, LCCP,
+  // segment selection, box. Without a frame and detection the largest segment is kept. Used by
+  // processKeyframe; public for tests and the single-frame baseline.
   bool processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                          ObjectObservation* observation, StageTimes* times) const;
+  Status processSingleView(const RgbdFrame& frame, const Detection2D& detection,
+                           const PointCloud& points_D, ObjectObservation* observation,
+                           StageTimes* times) const;
+  const FloorEstimator& floor() const { return floor_; }
 
   const ObjectDatabase& database() const { return database_; }
   ObjectDatabase& mutableDatabase() { return database_; }
@@ -100,9 +112,19 @@ class ObjectMapper {
  private:
   bool processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
                     double* yaw_rad, StageTimes* times) const;
+  // What the consistent segment selection needs to know about the view (all may be null).
+  struct ViewContext {
+    const RgbdFrame* frame = nullptr;
+    const Detection2D* detection = nullptr;
+    const SegmentSelector::FrameView* view = nullptr;
+  };
   // processSingleView with the reason a detection was dropped.
   Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
-                       ObjectObservation* observation, StageTimes* times) const;
+                       const ViewContext& context, ObjectObservation* observation,
+                       StageTimes* times) const;
+  // Extends a box whose bottom is near the floor down to it.
+  void groundBox(OrientedBox* box) const;
+  bool floorCutActive() const { return config_.floor.enable && floor_.hasFloor(); }
   // Updates the gravity estimate from the frame's depth when none is configured; false while
   // unknown.
   bool updateGravity(const RgbdFrame& frame);
@@ -111,6 +133,8 @@ class ObjectMapper {
   ObjectCloudExtractor extractor_;
   PointCloudFilter filter_;
   LccpSegmenter lccp_;
+  SegmentSelector selector_;
+  FloorEstimator floor_;
   BoxEstimator box_estimator_;
   ObjectDatabase database_;
   PriorSizeFilter prior_filter_;
