@@ -129,16 +129,33 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "lccp/use_extended_convexity", &m.lccp.use_extended_convexity, e);
   readParam(nh, "lccp/use_sanity_criterion", &m.lccp.use_sanity_criterion, e);
   readParam(nh, "lccp/min_points", &m.lccp.min_points, e);
+  // paper_method: Eq. 2 largest segment, Eq. 7 literal fusion, min/max extents, no floor cut;
+  // the single settings below still override it.
+  bool paper_method = false;
+  readParam(nh, "paper_method", &paper_method, e);
+  if (paper_method) m.usePaperMethod();
+  readParam(nh, "lccp/selection", &m.selection.selection, e);
+  readNumber(nh, "selection/core_box_fraction", &m.selection.core_box_fraction, e);
+  readNumber(nh, "selection/core_mask_erosion", &m.selection.core_mask_erosion, e);
+  readNumber(nh, "selection/adjacency_distance_m", &m.selection.adjacency_distance_m, e);
+  readParam(nh, "selection/ring_px", &m.selection.ring_px, e);
+  readNumber(nh, "selection/prior_size_slack", &m.selection.prior_size_slack, e);
+  readParam(nh, "floor/enable", &m.floor.enable, e);
+  readNumber(nh, "floor/clearance_m", &m.floor.clearance_m, e);
+  readNumber(nh, "floor/clearance_per_m2", &m.floor.clearance_per_m2, e);
+  readNumber(nh, "floor/grounding_distance_m", &m.floor.grounding_distance_m, e);
 
   readParam(nh, "box/inlier_angle_deg", &m.box.manhattan.inlier_angle_deg, e);
   readParam(nh, "box/normal_radius_m", &m.box.manhattan.normal_radius_m, e);
   readParam(nh, "box/max_normals", &m.box.manhattan.max_normals, e);
   readParam(nh, "box/gravity_constrained", &m.box.manhattan.gravity_constrained, e);
   readParam(nh, "box/min_points", &m.box.min_points, e);
+  readNumber(nh, "box/extent_trim_fraction", &m.box.extent_trim_fraction, e);
 
   readParam(nh, "database/fusion_voxel_size_m", &m.database.fusion_voxel_size_m, e);
   readParam(nh, "database/no_fusion_within_keyframe", &m.database.no_fusion_within_keyframe, e);
   readParam(nh, "database/disable_fusion", &m.database.disable_fusion, e);
+  readParam(nh, "database/fusion", &m.database.fusion, e);
 
   readParam(nh, "prior_filter/enable", &m.prior_filter.enable, e);
   readParam(nh, "prior_filter/volume_min_ratio", &m.prior_filter.volume_min_ratio, e);

@@ -22,11 +22,11 @@
 #include <vector>
 
 #include "cli_args.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
-#include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
 
 namespace fs = std::filesystem;
 
@@ -68,6 +68,11 @@ const char* const kUsage =
     "  --no-filter            ablation: no voxel/pass-through/outlier filters\n"
     "  --no-lccp              ablation: no LCCP segmentation\n"
     "  --single-frame         baseline: no fusion across keyframes (each detection a new object)\n"
+    "  --paper                the paper's method as published: largest LCCP segment (Eq. 2),\n"
+    "                         literal fusion (Eq. 7), min/max box extents, no floor cut\n"
+    "  --selection S          largest (Eq. 2) | consistent (default)\n"
+    "  --fusion F             paper (Eq. 7) | evidence (default)\n"
+    "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
@@ -94,6 +99,10 @@ struct Options {
   bool no_filter = false;
   bool no_lccp = false;
   bool single_frame = false;
+  bool paper = false;
+  bool no_floor = false;
+  std::string selection;
+  std::string fusion;
   bool estimate_gravity = false;
   bool simulated_perfect = false;
   long simulated_seed = 1;
@@ -119,6 +128,20 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       options->no_lccp = true;
     } else if (arg == "--single-frame") {
       options->single_frame = true;
+    } else if (arg == "--paper") {
+      options->paper = true;
+    } else if (arg == "--no-floor") {
+      options->no_floor = true;
+    } else if (arg == "--selection") {
+      if (!value(&options->selection) ||
+          (options->selection != "largest" && options->selection != "consistent")) {
+        return "--selection needs largest or consistent";
+      }
+    } else if (arg == "--fusion") {
+      if (!value(&options->fusion) ||
+          (options->fusion != "paper" && options->fusion != "evidence")) {
+        return "--fusion needs paper or evidence";
+      }
     } else if (arg == "--simulated-perfect") {
       options->simulated_perfect = true;
     } else if (arg == "--simulated-seed") {
@@ -375,6 +398,10 @@ int main(int argc, char** argv) {
   }
 
   mvod::ObjectMapper::Config config;
+  if (options.paper) config.usePaperMethod();
+  if (!options.selection.empty()) config.selection.selection = options.selection;
+  if (!options.fusion.empty()) config.database.fusion = options.fusion;
+  if (options.no_floor) config.floor.enable = false;
   config.min_probability = options.min_probability;
   config.filter.enable = !options.no_filter;
   config.lccp.enable = !options.no_lccp;
