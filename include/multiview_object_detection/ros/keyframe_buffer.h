@@ -1,0 +1,84 @@
+// Between the RGB-D input and the worker: frames wait here for their camera pose (TF, or the pose
+// topic buffered here) and, in keyframe_mode topic, for the keyframe stream; then the
+// KeyframeSelector decides. The one place that knows about stamps and their order: out-of-order
+// inputs are refused here, eviction of old frames and poses happens here, and ~reset clears it all
+// here. Waiting never blocks a callback: frames are retried when a pose arrives and on a timer.
+#pragma once
+
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <tf2_ros/buffer.h>
+
+#include <atomic>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <string>
+
+#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/object_detection_publishers.h"
+#include "multiview_object_detection/ros/object_detection_ros_config.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+#include "multiview_object_detection/ros/pending_frames.h"
+
+namespace mvod {
+
+class KeyframeBuffer {
+ public:
+  // Gets each selected keyframe, with input order kept (called with the buffer's lock held).
+  using KeyframeCallback = std::function<void(KeyframeJob job)>;
+
+  KeyframeBuffer(const ObjectDetectionRosConfig& config, const RgbdTopics& topics,
+                 const tf2_ros::Buffer& tf_buffer, ObjectDetectionPublishers* publishers,
+                 SharedStatistics* stats, const std::atomic<bool>& shut_down,
+                 KeyframeCallback on_keyframe);
+
+  KeyframeBuffer(const KeyframeBuffer&) = delete;
+  KeyframeBuffer& operator=(const KeyframeBuffer&) = delete;
+
+  // Subscribes the pose topic (pose_source topic) and the keyframe topic (keyframe_mode topic) and
+  // starts the retry timer.
+  void start(ros::NodeHandle nh);
+  void stop();
+
+  // A checked input from RgbdInput (ROS callback thread). Refused unless newer than the last one.
+  void addFrame(PendingFrame frame);
+  // Forgets the waiting frames, the selector's state, the last stamp (a restarted bag may begin
+  // again) and the keyframe path, and publishes the empty path.
+  void reset();
+  // Keyframe thresholds changed by dynamic reconfigure.
+  void setKeyframeConfig(const KeyframeSelector::Config& keyframes);
+
+ private:
+  enum class Lookup { kReady, kWait, kFailed };
+
+  void poseCallback(const geometry_msgs::PoseStampedConstPtr& msg);
+  void keyframeCallback(const geometry_msgs::PoseStampedConstPtr& msg);
+  void resolvePendingFrames();  // needs mutex_
+  Lookup lookupCameraPose(const PendingFrame& frame, bool timed_out, Eigen::Isometry3d* T_W_C,
+                          Eigen::Isometry3d* T_C_D, std::string* error);  // needs mutex_
+
+  const ObjectDetectionRosConfig config_;  // fixed fields only (frames, pose source, timeouts)
+  const RgbdTopics topics_;
+  const tf2_ros::Buffer& tf_buffer_;
+  ObjectDetectionPublishers* publishers_;
+  SharedStatistics* stats_;
+  const std::atomic<bool>& shut_down_;
+  KeyframeCallback on_keyframe_;
+
+  ros::Subscriber pose_sub_;
+  ros::Subscriber keyframe_sub_;
+  ros::WallTimer pending_timer_;
+
+  std::mutex mutex_;
+  std::deque<PendingFrame> pending_;              // input order = stamp order
+  std::deque<geometry_msgs::PoseStamped> poses_;  // pose_source topic, sorted by stamp
+  ros::Time last_input_stamp_;
+  KeyframeSelector selector_;
+  int next_keyframe_index_ = 0;
+  nav_msgs::Path keyframe_path_;
+};
+
+}  // namespace mvod

@@ -1,0 +1,103 @@
+// The node's heavy work, off the callback threads: keyframes wait in a bounded queue (the oldest is
+// dropped when it is full, voxblox-style) and ONE worker thread runs the detector and
+// ObjectMapper::processKeyframe on each, applying reconfigured settings between keyframes. The map
+// lives here; the services reach it through the map functions below, under the same lock.
+#pragma once
+
+#include <tf2_ros/buffer.h>
+
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/detections_buffer.h"
+#include "multiview_object_detection/ros/object_detection_publishers.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+#include "multiview_object_detection/ros/pending_frames.h"
+#include "multiview_object_detection/ros/runtime_config.h"
+
+namespace mvod {
+
+class KeyframeWorker {
+ public:
+  // What one refinement removed, and what is left.
+  struct Refinement {
+    int removed_atypical = 0;
+    int removed_intersecting = 0;
+    size_t objects_left = 0;
+  };
+
+  // `segmenter`: the detector (null for detector "topic", then `detections` is used);
+  // `segmenter_injected`: given by the caller, never reloaded on reconfigure.
+  KeyframeWorker(const ClassPriors& priors, std::unique_ptr<InstanceSegmenter> segmenter,
+                 bool segmenter_injected, const RgbdTopics& topics, RuntimeConfig* config,
+                 const tf2_ros::Buffer& tf_buffer, DetectionsBuffer* detections,
+                 ObjectDetectionPublishers* publishers, SharedStatistics* stats);
+  ~KeyframeWorker();
+
+  KeyframeWorker(const KeyframeWorker&) = delete;
+  KeyframeWorker& operator=(const KeyframeWorker&) = delete;
+
+  void start();
+  // Finishes the queued keyframes and joins the thread. Idempotent.
+  void stop();
+
+  // Queues a keyframe (any thread, never blocks); the oldest is dropped when the queue is full.
+  void enqueue(KeyframeJob job);
+  void clearQueue();
+
+  // The map, under the lock the worker holds while it processes a keyframe.
+  std::vector<MapObject> objects() const;
+  // The objects and the summary for objects.json (all but `frames`).
+  void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const;
+  // Replaces the objects (~load_map); the keyframe count and gravity are kept.
+  void replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary);
+  // Empties the map; ids keep counting. Returns the number of objects removed.
+  size_t resetMap();
+  // Sec. 3.5 on the current map.
+  Refinement refine(const std::string& why);
+
+ private:
+  void workerLoop();
+  void processKeyframe(const KeyframeJob& job);
+  void applyPendingReconfigure();
+  bool updateGravityFromTf(const std::string& what);
+  void refineLocked(const std::string& why);  // needs mapper_mutex_
+
+  const RgbdTopics topics_;
+  RuntimeConfig* config_;
+  const tf2_ros::Buffer& tf_buffer_;
+  DetectionsBuffer* detections_;  // detector "topic" only
+  ObjectDetectionPublishers* publishers_;
+  SharedStatistics* stats_;
+  const int max_queue_size_;  // processing_queue_size (fixed)
+
+  // Queue (queue_mutex_).
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<KeyframeJob> queue_;
+  bool stop_ = false;
+  std::thread thread_;
+
+  // The map (mapper_mutex_): the worker and the services.
+  mutable std::mutex mapper_mutex_;
+  std::unique_ptr<ObjectMapper> mapper_;
+  int removed_atypical_ = 0;
+  int removed_intersecting_ = 0;
+
+  // The worker thread's own.
+  std::unique_ptr<InstanceSegmenter> segmenter_;
+  const bool segmenter_injected_;
+  bool gravity_from_tf_known_ = false;
+};
+
+}  // namespace mvod

@@ -1,0 +1,64 @@
+// Everything the node publishes: the map (objects, markers, object cloud), the keyframe path, the
+// detection image and /diagnostics. Topics are private (~objects, ...), latched where a late rviz
+// should still see the map.
+#pragma once
+
+#include <image_transport/image_transport.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+
+#include <memory>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/ros/object_detection_ros_config.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+
+namespace mvod {
+
+class ObjectDetectionPublishers {
+ public:
+  // Advertises every output; /diagnostics starts with startDiagnostics().
+  ObjectDetectionPublishers(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
+                            const ObjectDetectionRosConfig& config, SharedStatistics* stats);
+
+  ObjectDetectionPublishers(const ObjectDetectionPublishers&) = delete;
+  ObjectDetectionPublishers& operator=(const ObjectDetectionPublishers&) = delete;
+
+  // Objects, markers (DELETEs for the objects gone since the last call) and, if enabled, the
+  // object cloud, all in world_frame. Safe from any thread.
+  void publishMap(const std::vector<MapObject>& objects, const ros::Time& stamp);
+  void publishKeyframePath(const nav_msgs::Path& path);
+  // Drawn only while someone subscribes.
+  void publishDetectionImage(const cv::Mat& color_bgr, const std::vector<Detection2D>& detections,
+                             const std_msgs::Header& header);
+
+  // /diagnostics every second from the statistics.
+  void startDiagnostics();
+  void stopDiagnostics();
+
+ private:
+  void publishDiagnostics(const ros::WallTimerEvent& event);
+
+  ros::NodeHandle nh_;
+  const ObjectDetectionRosConfig config_;  // fixed fields only (world_frame, publish_object_cloud)
+  SharedStatistics* stats_;
+
+  ros::Publisher objects_pub_;
+  ros::Publisher markers_pub_;
+  ros::Publisher object_cloud_pub_;
+  ros::Publisher keyframes_pub_;
+  ros::Publisher diagnostics_pub_;
+  std::unique_ptr<image_transport::ImageTransport> private_it_;
+  image_transport::Publisher detections_image_pub_;
+  std::mutex publish_mutex_;
+  std::set<int> published_marker_ids_;  // publish_mutex_
+
+  ros::WallTimer diagnostics_timer_;
+  int dropped_at_last_diagnostics_ = 0;  // the timer's thread only
+};
+
+}  // namespace mvod

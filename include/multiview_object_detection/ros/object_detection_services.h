@@ -1,0 +1,58 @@
+// The node's services: ~get_objects, ~save_map, ~load_map, ~reset and ~refine. They run on their
+// own callback queue and thread, so a slow keyframe does not stall the input callbacks.
+#pragma once
+
+#include <multiview_object_detection/GetObjects.h>
+#include <multiview_object_detection/MapFile.h>
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+
+#include <memory>
+#include <string>
+
+#include "multiview_object_detection/ros/keyframe_buffer.h"
+#include "multiview_object_detection/ros/keyframe_worker.h"
+#include "multiview_object_detection/ros/object_detection_publishers.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+
+namespace mvod {
+
+class ObjectDetectionServices {
+ public:
+  // Advertises the services in nh_private's namespace and starts their thread.
+  ObjectDetectionServices(const ros::NodeHandle& nh_private, const std::string& world_frame,
+                          KeyframeWorker* worker, KeyframeBuffer* buffer,
+                          ObjectDetectionPublishers* publishers, SharedStatistics* stats);
+
+  ObjectDetectionServices(const ObjectDetectionServices&) = delete;
+  ObjectDetectionServices& operator=(const ObjectDetectionServices&) = delete;
+
+  void stop();
+
+ private:
+  bool getObjects(multiview_object_detection::GetObjects::Request& request,
+                  multiview_object_detection::GetObjects::Response& response);
+  bool saveMap(multiview_object_detection::MapFile::Request& request,
+               multiview_object_detection::MapFile::Response& response);
+  bool loadMap(multiview_object_detection::MapFile::Request& request,
+               multiview_object_detection::MapFile::Response& response);
+  bool reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
+  bool refine(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
+
+  const std::string world_frame_;
+  KeyframeWorker* worker_;
+  KeyframeBuffer* buffer_;
+  ObjectDetectionPublishers* publishers_;
+  SharedStatistics* stats_;
+
+  ros::CallbackQueue queue_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+  ros::ServiceServer get_objects_srv_;
+  ros::ServiceServer save_map_srv_;
+  ros::ServiceServer load_map_srv_;
+  ros::ServiceServer reset_srv_;
+  ros::ServiceServer refine_srv_;
+};
+
+}  // namespace mvod

@@ -1,0 +1,50 @@
+// The node's counters: each stage counts its own, /diagnostics and the tests read them.
+#pragma once
+
+#include <mutex>
+
+#include "multiview_object_detection/pipeline/object_mapper.h"
+
+namespace mvod {
+
+// Counters reported on /diagnostics (and read by tests).
+struct ObjectDetectionStatistics {
+  int frames_received = 0;
+  int frames_rejected = 0;  // bad encoding, size, camera_info, out-of-order stamp
+  int pose_failures = 0;    // no TF / pose in time, or an invalid pose
+  int keyframes_selected = 0;
+  int keyframes_dropped = 0;    // the processing queue was full
+  int keyframes_processed = 0;  // went through ObjectMapper::processKeyframe
+  int keyframes_failed = 0;     // conversion, detector or mapper error; no detections in time
+  int queue_length = 0;
+  int objects = 0;
+  int removed_atypical = 0;
+  int removed_intersecting = 0;
+  bool waiting_for_gravity = false;
+  double detection_ms = 0.0;  // last keyframe
+  StageTimes stage_times;     // last keyframe
+};
+
+// The counters behind one mutex, written from the callback, worker and service threads. The mutex
+// is the innermost lock of the node: update() may be called with any other lock held, and the
+// function given to it takes none.
+class SharedStatistics {
+ public:
+  ObjectDetectionStatistics get() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stats_;
+  }
+
+  // Returns what `change` returns (e.g. the new value of a counter).
+  template <typename Change>
+  auto update(Change&& change) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return change(stats_);
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  ObjectDetectionStatistics stats_;
+};
+
+}  // namespace mvod

@@ -1,0 +1,84 @@
+#include "multiview_object_detection/ros/detections_buffer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/throttled_log.h"
+
+namespace mvod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr size_t kMaxBufferedDetections = 300;
+// Detections are matched to a keyframe by the colour image's stamp, which a detector copies.
+constexpr double kDetectionStampToleranceS = 1e-3;
+
+}  // namespace
+
+void DetectionsBuffer::subscribe(ros::NodeHandle nh) {
+  sub_ = nh.subscribe("detections", 30, &DetectionsBuffer::detectionsCallback, this);
+}
+
+void DetectionsBuffer::unsubscribe() { sub_.shutdown(); }
+
+void DetectionsBuffer::wakeWaiting() { cv_.notify_all(); }
+
+void DetectionsBuffer::detectionsCallback(
+    const multiview_object_detection::InstanceDetectionsConstPtr& msg) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = std::upper_bound(
+        detections_.begin(), detections_.end(), msg->header.stamp,
+        [](const ros::Time& stamp,
+           const multiview_object_detection::InstanceDetectionsConstPtr& detections) {
+          return stamp < detections->header.stamp;
+        });
+    detections_.insert(it, msg);
+    while (detections_.size() > kMaxBufferedDetections) detections_.pop_front();
+  }
+  cv_.notify_all();
+}
+
+bool DetectionsBuffer::waitFor(const KeyframeJob& job, double max_age_s, const cv::Size& image_size,
+                               const std::string& what, std::vector<Detection2D>* detections) {
+  const std_msgs::Header& header = job.msgs.color->header;
+  const ros::Time stamp = header.stamp;
+  const Clock::time_point deadline = job.received + std::chrono::duration_cast<Clock::duration>(
+                                                        std::chrono::duration<double>(max_age_s));
+  multiview_object_detection::InstanceDetectionsConstPtr match;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      // Keyframes come in stamp order: detections older than this one are not needed any more.
+      while (!detections_.empty() &&
+             (detections_.front()->header.stamp - stamp).toSec() < -kDetectionStampToleranceS) {
+        detections_.pop_front();
+      }
+      if (!detections_.empty() && std::abs((detections_.front()->header.stamp - stamp).toSec()) <=
+                                      kDetectionStampToleranceS) {
+        match = detections_.front();
+        detections_.pop_front();
+        break;
+      }
+      if (Clock::now() >= deadline || shut_down_) break;
+      cv_.wait_until(lock, deadline);
+    }
+  }
+  if (!match) {
+    errorThrottled(what + " skipped: no detections with its stamp on '" + topic() +
+                   "' within detections_max_age_s (" + std::to_string(max_age_s) + " s)");
+    return false;
+  }
+  std::vector<std::string> warnings;
+  const Status converted = detectionsFromMsg(*match, image_size, topic(), detections, &warnings);
+  for (const std::string& warning : warnings) warnThrottled(warning);
+  if (!converted) {
+    errorThrottled(what + " skipped: " + converted.message());
+    return false;
+  }
+  return true;
+}
+
+}  // namespace mvod

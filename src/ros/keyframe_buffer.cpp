@@ -1,0 +1,283 @@
+#include "multiview_object_detection/ros/keyframe_buffer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include "multiview_object_detection/ros/throttled_log.h"
+
+namespace mvod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr size_t kMaxPendingFrames = 100;
+constexpr size_t kMaxBufferedPoses = 2000;
+constexpr size_t kMaxPathPoses = 100000;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string stampText(const ros::Time& stamp) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%u.%09u", stamp.sec, stamp.nsec);
+  return text;
+}
+
+}  // namespace
+
+KeyframeBuffer::KeyframeBuffer(const ObjectDetectionRosConfig& config, const RgbdTopics& topics,
+                               const tf2_ros::Buffer& tf_buffer,
+                               ObjectDetectionPublishers* publishers, SharedStatistics* stats,
+                               const std::atomic<bool>& shut_down, KeyframeCallback on_keyframe)
+    : config_(config),
+      topics_(topics),
+      tf_buffer_(tf_buffer),
+      publishers_(publishers),
+      stats_(stats),
+      shut_down_(shut_down),
+      on_keyframe_(std::move(on_keyframe)),
+      selector_(config.keyframes) {
+  keyframe_path_.header.frame_id = config_.world_frame;
+}
+
+void KeyframeBuffer::start(ros::NodeHandle nh) {
+  if (config_.pose_source == "topic") {
+    pose_sub_ = nh.subscribe("pose", 100, &KeyframeBuffer::poseCallback, this);
+  }
+  if (config_.keyframes.mode == KeyframeSelector::Mode::kExternal) {
+    keyframe_sub_ = nh.subscribe("keyframe", 100, &KeyframeBuffer::keyframeCallback, this);
+  }
+  // Frames waiting for a pose are retried when a pose arrives and on this timer (TF, timeouts).
+  pending_timer_ = nh.createWallTimer(ros::WallDuration(0.02), [this](const ros::WallTimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    resolvePendingFrames();
+  });
+}
+
+void KeyframeBuffer::stop() {
+  pending_timer_.stop();
+  pose_sub_.shutdown();
+  keyframe_sub_.shutdown();
+}
+
+void KeyframeBuffer::addFrame(PendingFrame frame) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std_msgs::Header& header = frame.msgs.color->header;
+  if (!last_input_stamp_.isZero() && header.stamp <= last_input_stamp_) {
+    errorThrottled("RGB-D input dropped: " + describeInput(topics_.color, header) +
+                   " is older than or as old as the last frame (stamp " +
+                   stampText(last_input_stamp_) +
+                   "): out-of-order or repeated stamp (call ~reset after restarting a bag)");
+    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
+    return;
+  }
+  last_input_stamp_ = header.stamp;
+  pending_.push_back(std::move(frame));
+  while (pending_.size() > kMaxPendingFrames) {
+    const PendingFrame& oldest = pending_.front();
+    errorThrottled("frame " + describeInput(topics_.color, oldest.msgs.color->header) +
+                   " dropped: too many frames waiting for their camera pose");
+    pending_.pop_front();
+    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.pose_failures; });
+  }
+  resolvePendingFrames();
+}
+
+void KeyframeBuffer::reset() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_.clear();
+  selector_.reset();
+  last_input_stamp_ = ros::Time();  // a restarted bag may begin again
+  keyframe_path_.poses.clear();
+  keyframe_path_.header.stamp = ros::Time::now();
+  publishers_->publishKeyframePath(keyframe_path_);
+}
+
+void KeyframeBuffer::setKeyframeConfig(const KeyframeSelector::Config& keyframes) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  selector_.setConfig(keyframes);
+}
+
+void KeyframeBuffer::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
+  Eigen::Isometry3d T_W_C;
+  const Status valid = poseFromMsg(msg->pose, &T_W_C);
+  if (!valid) {
+    errorThrottled("camera pose " + describeInput(pose_sub_.getTopic(), msg->header) +
+                   " ignored: " + valid.message());
+    return;
+  }
+  if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.world_frame) {
+    warnThrottled("camera pose " + describeInput(pose_sub_.getTopic(), msg->header) +
+                  " is in frame '" + msg->header.frame_id + "', not world_frame '" +
+                  config_.world_frame + "': used as if it were world_frame");
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it =
+      std::upper_bound(poses_.begin(), poses_.end(), msg->header.stamp,
+                       [](const ros::Time& stamp, const geometry_msgs::PoseStamped& pose) {
+                         return stamp < pose.header.stamp;
+                       });
+  poses_.insert(it, *msg);
+  while (poses_.size() > kMaxBufferedPoses) poses_.pop_front();
+  resolvePendingFrames();
+}
+
+void KeyframeBuffer::keyframeCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  selector_.addExternalKeyframe(msg->header.stamp.toSec());
+  resolvePendingFrames();
+}
+
+KeyframeBuffer::Lookup KeyframeBuffer::lookupCameraPose(const PendingFrame& frame, bool timed_out,
+                                                        Eigen::Isometry3d* T_W_C,
+                                                        Eigen::Isometry3d* T_C_D,
+                                                        std::string* error) {
+  const std_msgs::Header& header = frame.msgs.color->header;
+  const ros::Time stamp = header.stamp;
+  const std::string& world_frame = config_.world_frame;
+  const double tf_timeout_s = config_.tf_timeout_s;
+  const double max_diff_s = config_.pose_max_time_diff_s;
+  const std::string what = describeInput(topics_.color, header);
+
+  // Unregistered depth: depth camera -> colour camera, a static transform.
+  *T_C_D = Eigen::Isometry3d::Identity();
+  if (frame.msgs.depth_info) {
+    const std::string& depth_frame = frame.msgs.depth_info->header.frame_id.empty()
+                                         ? frame.msgs.depth->header.frame_id
+                                         : frame.msgs.depth_info->header.frame_id;
+    if (depth_frame.empty() || depth_frame == frame.camera_frame) {
+      *T_C_D = Eigen::Isometry3d::Identity();
+    } else {
+      std::string tf_error;
+      if (!tf_buffer_.canTransform(frame.camera_frame, depth_frame, ros::Time(0), &tf_error)) {
+        if (!timed_out) return Lookup::kWait;
+        *error = "frame " + what + ": no TF '" + frame.camera_frame + "' <- '" + depth_frame +
+                 "' (depth to colour camera) after " + std::to_string(tf_timeout_s) +
+                 " s: " + tf_error;
+        return Lookup::kFailed;
+      }
+      try {
+        const geometry_msgs::TransformStamped tf =
+            tf_buffer_.lookupTransform(frame.camera_frame, depth_frame, ros::Time(0));
+        const Status valid = transformFromMsg(tf.transform, T_C_D);
+        if (!valid) {
+          *error = "frame " + what + ": TF '" + frame.camera_frame + "' <- '" + depth_frame +
+                   "' is invalid: " + valid.message();
+          return Lookup::kFailed;
+        }
+      } catch (const tf2::TransformException& e) {
+        *error = "frame " + what + ": TF lookup failed: " + e.what();
+        return Lookup::kFailed;
+      }
+    }
+  }
+
+  if (config_.pose_source == "tf") {
+    std::string tf_error;
+    if (!tf_buffer_.canTransform(world_frame, frame.camera_frame, stamp, &tf_error)) {
+      if (!timed_out) return Lookup::kWait;
+      *error = "frame " + what + ": no TF '" + world_frame + "' <- '" + frame.camera_frame +
+               "' at the image stamp within tf_timeout_s (" + std::to_string(tf_timeout_s) +
+               " s): " + tf_error;
+      return Lookup::kFailed;
+    }
+    try {
+      const geometry_msgs::TransformStamped tf =
+          tf_buffer_.lookupTransform(world_frame, frame.camera_frame, stamp);
+      const Status valid = transformFromMsg(tf.transform, T_W_C);
+      if (!valid) {
+        *error = "frame " + what + ": TF '" + world_frame + "' <- '" + frame.camera_frame +
+                 "' is invalid: " + valid.message();
+        return Lookup::kFailed;
+      }
+    } catch (const tf2::TransformException& e) {
+      *error = "frame " + what + ": TF lookup failed: " + e.what();
+      return Lookup::kFailed;
+    }
+    return Lookup::kReady;
+  }
+
+  // pose_source topic: the nearest pose in time. Once a pose at or after the image stamp has
+  // arrived, later poses can only be further away.
+  const geometry_msgs::PoseStamped* best = nullptr;
+  double best_dt = std::numeric_limits<double>::infinity();
+  for (const geometry_msgs::PoseStamped& pose : poses_) {
+    const double dt = std::abs((pose.header.stamp - stamp).toSec());
+    if (dt < best_dt) {
+      best_dt = dt;
+      best = &pose;
+    }
+  }
+  const bool final_answer = timed_out || (!poses_.empty() && poses_.back().header.stamp >= stamp);
+  if (!final_answer) return Lookup::kWait;
+  if (best == nullptr || best_dt > max_diff_s) {
+    std::ostringstream text;
+    text << "frame " << what << ": no camera pose on '" << pose_sub_.getTopic()
+         << "' within pose_max_time_diff_s (" << max_diff_s << " s) of the image stamp";
+    if (best != nullptr) {
+      text << " (nearest " << best_dt << " s away)";
+    } else {
+      text << " (none received yet)";
+    }
+    *error = text.str();
+    return Lookup::kFailed;
+  }
+  const Status valid = poseFromMsg(best->pose, T_W_C);
+  if (!valid) {
+    *error = "frame " + what + ": camera pose is invalid: " + valid.message();
+    return Lookup::kFailed;
+  }
+  return Lookup::kReady;
+}
+
+void KeyframeBuffer::resolvePendingFrames() {
+  if (shut_down_) return;
+  while (!pending_.empty()) {
+    const PendingFrame& frame = pending_.front();
+    const bool timed_out = secondsSince(frame.received) >= config_.tf_timeout_s;
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+    Eigen::Isometry3d T_C_D = Eigen::Isometry3d::Identity();
+    std::string error;
+    const Lookup lookup = lookupCameraPose(frame, timed_out, &T_W_C, &T_C_D, &error);
+    if (lookup == Lookup::kWait) break;
+    if (lookup == Lookup::kFailed) {
+      errorThrottled(error);
+      pending_.pop_front();
+      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.pose_failures; });
+      continue;
+    }
+    const ros::Time stamp = frame.msgs.color->header.stamp;
+    // keyframe_mode topic: wait (up to tf_timeout_s) until the keyframe stream has passed this
+    // stamp.
+    if (!selector_.canDecide(stamp.toSec()) && !timed_out) break;
+    if (selector_.isKeyframe(T_W_C, stamp.toSec())) {
+      KeyframeJob job;
+      job.msgs = frame.msgs;
+      job.camera_frame = frame.camera_frame;
+      job.T_W_C = T_W_C;
+      job.T_C_D = T_C_D;
+      job.received = frame.received;
+      job.index = next_keyframe_index_++;
+
+      geometry_msgs::PoseStamped pose;
+      pose.header.frame_id = keyframe_path_.header.frame_id;
+      pose.header.stamp = stamp;
+      pose.pose = poseToMsg(T_W_C);
+      keyframe_path_.header.stamp = stamp;
+      keyframe_path_.poses.push_back(pose);
+      if (keyframe_path_.poses.size() > kMaxPathPoses) {
+        keyframe_path_.poses.erase(keyframe_path_.poses.begin());
+      }
+      publishers_->publishKeyframePath(keyframe_path_);
+      on_keyframe_(std::move(job));
+    }
+    pending_.pop_front();
+  }
+}
+
+}  // namespace mvod

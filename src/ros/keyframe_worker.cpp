@@ -1,0 +1,326 @@
+#include "multiview_object_detection/ros/keyframe_worker.h"
+
+#include <ros/console.h>
+
+#include <algorithm>
+#include <sstream>
+#include <utility>
+
+#include "multiview_object_detection/ros/throttled_log.h"
+
+namespace mvod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string idList(const std::vector<int>& ids) {
+  std::ostringstream out;
+  out << "[";
+  for (size_t i = 0; i < ids.size(); ++i) out << (i > 0 ? ", " : "") << ids[i];
+  out << "]";
+  return out.str();
+}
+
+}  // namespace
+
+KeyframeWorker::KeyframeWorker(const ClassPriors& priors,
+                               std::unique_ptr<InstanceSegmenter> segmenter,
+                               bool segmenter_injected, const RgbdTopics& topics,
+                               RuntimeConfig* config, const tf2_ros::Buffer& tf_buffer,
+                               DetectionsBuffer* detections, ObjectDetectionPublishers* publishers,
+                               SharedStatistics* stats)
+    : topics_(topics),
+      config_(config),
+      tf_buffer_(tf_buffer),
+      detections_(detections),
+      publishers_(publishers),
+      stats_(stats),
+      max_queue_size_(config->get().processing_queue_size),
+      mapper_(std::make_unique<ObjectMapper>(config->get().mapperConfig(), priors)),
+      segmenter_(std::move(segmenter)),
+      segmenter_injected_(segmenter_injected) {}
+
+KeyframeWorker::~KeyframeWorker() { stop(); }
+
+void KeyframeWorker::start() { thread_ = std::thread(&KeyframeWorker::workerLoop, this); }
+
+void KeyframeWorker::stop() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+  if (detections_) detections_->wakeWaiting();
+  if (thread_.joinable()) thread_.join();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Queue
+
+void KeyframeWorker::enqueue(KeyframeJob job) {
+  int dropped_total = 0;
+  std::string dropped_what;
+  int queue_length = 0;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(std::move(job));
+    while (static_cast<int>(queue_.size()) > max_queue_size_) {
+      dropped_what = describeInput(topics_.color, queue_.front().msgs.color->header);
+      queue_.pop_front();
+      dropped_total = stats_->update(
+          [](ObjectDetectionStatistics& stats) { return ++stats.keyframes_dropped; });
+    }
+    queue_length = static_cast<int>(queue_.size());
+  }
+  queue_cv_.notify_one();
+  stats_->update([queue_length](ObjectDetectionStatistics& stats) {
+    ++stats.keyframes_selected;
+    stats.queue_length = queue_length;
+  });
+  if (!dropped_what.empty()) {
+    ROS_WARN_THROTTLE(kLogThrottlePeriodS,
+                      "processing queue full (processing_queue_size %d): dropped the oldest "
+                      "keyframe %s; %d keyframes dropped so far (processing is slower than the "
+                      "keyframe rate)",
+                      queue_length, dropped_what.c_str(), dropped_total);
+  }
+}
+
+void KeyframeWorker::clearQueue() {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  queue_.clear();
+}
+
+void KeyframeWorker::workerLoop() {
+  while (true) {
+    KeyframeJob job;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // stopping and nothing left
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      const int queue_length = static_cast<int>(queue_.size());
+      stats_->update(
+          [queue_length](ObjectDetectionStatistics& stats) { stats.queue_length = queue_length; });
+    }
+    try {
+      processKeyframe(job);
+    } catch (const std::exception& e) {
+      // Nothing may take the node down; a bug in a stage costs one keyframe.
+      errorThrottled("keyframe " + describeInput(topics_.color, job.msgs.color->header) +
+                     ": processing failed with an exception: " + e.what());
+      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// One keyframe
+
+void KeyframeWorker::applyPendingReconfigure() {
+  bool mapper_changed = false;
+  bool segmenter_changed = false;
+  const RuntimeConfig::Config config = config_->takeChanges(&mapper_changed, &segmenter_changed);
+  if (mapper_changed) {
+    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    ObjectMapper::Config mapper_config = config.mapperConfig();
+    mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
+    const Status updated = mapper_->updateConfig(mapper_config);
+    if (!updated) ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
+  }
+  if (segmenter_changed && config.detector != "topic" && !segmenter_injected_) {
+    std::unique_ptr<InstanceSegmenter> segmenter;
+    const Status created = createInstanceSegmenter(config.segmenterOptions(), &segmenter);
+    if (created) {
+      segmenter_ = std::move(segmenter);
+      ROS_INFO("detector reloaded with score_threshold %.3f", config.segmenter.score_threshold);
+    } else {
+      ROS_ERROR("detector reload failed, the previous one is kept: %s", created.message().c_str());
+    }
+  }
+}
+
+bool KeyframeWorker::updateGravityFromTf(const std::string& what) {
+  const RuntimeConfig::Config config = config_->get();
+  const std::string& world_frame = config.world_frame;
+  const std::string& gravity_frame = config.gravity_frame;
+  std::string tf_error;
+  Eigen::Isometry3d T_W_G;
+  Status valid = Status::Error("no transform");
+  if (tf_buffer_.canTransform(world_frame, gravity_frame, ros::Time(0), &tf_error)) {
+    try {
+      valid = transformFromMsg(
+          tf_buffer_.lookupTransform(world_frame, gravity_frame, ros::Time(0)).transform, &T_W_G);
+      if (!valid) tf_error = valid.message();
+    } catch (const tf2::TransformException& e) {
+      tf_error = e.what();
+    }
+  }
+  if (!valid) {
+    warnThrottled(what + " skipped: waiting for gravity (gravity_source tf): no TF '" +
+                  world_frame + "' <- '" + gravity_frame + "': " + tf_error);
+    return false;
+  }
+  // Gravity points along -z of gravity_frame (REP 103: z up).
+  const Eigen::Vector3d gravity_down_W = -T_W_G.linear().col(2);
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  ObjectMapper::Config mapper_config = mapper_->config();
+  mapper_config.gravity_down_W = gravity_down_W;
+  const Status updated = mapper_->updateConfig(mapper_config);
+  if (!updated) {
+    errorThrottled("gravity from TF refused: " + updated.message());
+    return false;
+  }
+  gravity_from_tf_known_ = true;
+  ROS_INFO("gravity from TF '%s' <- '%s': down = [%.3f, %.3f, %.3f] in %s", world_frame.c_str(),
+           gravity_frame.c_str(), gravity_down_W.x(), gravity_down_W.y(), gravity_down_W.z(),
+           world_frame.c_str());
+  return true;
+}
+
+void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
+  const std_msgs::Header& header = job.msgs.color->header;
+  const std::string what = "keyframe " + describeInput(topics_.color, header);
+  auto failed = [this](const std::string& text) {
+    errorThrottled(text);
+    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
+  };
+  applyPendingReconfigure();
+  const RuntimeConfig::Config config = config_->get();
+
+  if (config.gravity_source == "tf" && !gravity_from_tf_known_ && !updateGravityFromTf(what)) {
+    stats_->update([](ObjectDetectionStatistics& stats) { stats.waiting_for_gravity = true; });
+    return;
+  }
+
+  RgbdFrame frame;
+  const Status converted = rgbdFrameFromMsgs(job.msgs, topics_, job.T_W_C, job.T_C_D, &frame);
+  if (!converted) {
+    failed(what + " skipped: " + converted.message());
+    return;
+  }
+  frame.index = job.index;
+
+  // Sec. 3.1: instances in the colour image.
+  std::vector<Detection2D> detections;
+  double detection_ms = 0.0;
+  if (config.detector == "topic") {
+    if (!detections_->waitFor(job, config.detections_max_age_s, frame.color_bgr.size(), what,
+                              &detections)) {
+      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
+      return;
+    }
+  } else {
+    const Clock::time_point start = Clock::now();
+    std::vector<std::string> warnings;
+    const Status detected = segmenter_->detect(frame.color_bgr, frame.name, &detections, &warnings);
+    detection_ms = msSince(start);
+    for (const std::string& warning : warnings) warnThrottled(what + ": " + warning);
+    if (!detected) {
+      failed(what + " skipped: detector " + segmenter_->name() + ": " + detected.message());
+      return;
+    }
+  }
+  // score_threshold may have been raised at run time; external detectors are held to it too.
+  detections.erase(std::remove_if(detections.begin(), detections.end(),
+                                  [&config](const Detection2D& d) {
+                                    return !(d.score >= config.segmenter.score_threshold);
+                                  }),
+                   detections.end());
+
+  publishers_->publishDetectionImage(frame.color_bgr, detections, header);
+
+  KeyframeReport report;
+  Status processed;
+  {
+    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    processed = mapper_->processKeyframe(frame, detections, &report);
+    if (processed && config.refine_every_n_keyframes > 0 &&
+        mapper_->keyframesProcessed() % config.refine_every_n_keyframes == 0) {
+      refineLocked("every " + std::to_string(config.refine_every_n_keyframes) + " keyframes");
+    }
+  }
+  if (!processed) {
+    failed(what + " skipped: " + processed.message());
+    return;
+  }
+  for (const std::string& warning : report.warnings) warnThrottled(warning);
+  ROS_DEBUG("%s: %d detections, %d above lambda, %d boxes, %d inserted, %d fused, %.1f ms",
+            what.c_str(), report.detections, report.above_threshold, report.with_box,
+            report.inserted, report.fused, report.times.total_ms);
+  stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
+    ++stats.keyframes_processed;
+    stats.waiting_for_gravity = report.waiting_for_gravity;
+    stats.detection_ms = detection_ms;
+    stats.stage_times = report.times;
+  });
+  publishers_->publishMap(objects(), header.stamp);
+}
+
+void KeyframeWorker::refineLocked(const std::string& why) {
+  const ObjectMapper::RefinementReport report = mapper_->refine();
+  removed_atypical_ += static_cast<int>(report.atypical_ids.size());
+  removed_intersecting_ += static_cast<int>(report.intersecting_ids.size());
+  stats_->update([this, &report](ObjectDetectionStatistics& stats) {
+    stats.removed_atypical = removed_atypical_;
+    stats.removed_intersecting = removed_intersecting_;
+    stats.stage_times.refinement_ms = report.time_ms;
+  });
+  if (!report.atypical_ids.empty() || !report.intersecting_ids.empty()) {
+    ROS_INFO("refinement (%s): removed atypical %s, intersecting %s (%.1f ms)", why.c_str(),
+             idList(report.atypical_ids).c_str(), idList(report.intersecting_ids).c_str(),
+             report.time_ms);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The map, for the services
+
+std::vector<MapObject> KeyframeWorker::objects() const {
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  return databaseObjects(mapper_->database());
+}
+
+void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const {
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  *objects = databaseObjects(mapper_->database());
+  summary->keyframes = mapper_->keyframesProcessed();
+  summary->gravity_down_W = -mapper_->gravity().up;
+  summary->removed_atypical = removed_atypical_;
+  summary->removed_intersecting = removed_intersecting_;
+}
+
+void KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary) {
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  mapper_->mutableDatabase().setObjects(objects);
+  removed_atypical_ = summary.removed_atypical;
+  removed_intersecting_ = summary.removed_intersecting;
+}
+
+size_t KeyframeWorker::resetMap() {
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  const size_t removed = mapper_->database().size();
+  mapper_->reset();
+  removed_atypical_ = 0;
+  removed_intersecting_ = 0;
+  return removed;
+}
+
+KeyframeWorker::Refinement KeyframeWorker::refine(const std::string& why) {
+  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  const int atypical_before = removed_atypical_;
+  const int intersecting_before = removed_intersecting_;
+  refineLocked(why);
+  Refinement refinement;
+  refinement.removed_atypical = removed_atypical_ - atypical_before;
+  refinement.removed_intersecting = removed_intersecting_ - intersecting_before;
+  refinement.objects_left = mapper_->database().size();
+  return refinement;
+}
+
+}  // namespace mvod

@@ -1,0 +1,99 @@
+#include "multiview_object_detection/ros/rgbd_input.h"
+
+#include <boost/bind/bind.hpp>
+#include <utility>
+
+#include "multiview_object_detection/ros/throttled_log.h"
+
+namespace mvod {
+
+RgbdInput::RgbdInput(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
+                     const ObjectDetectionRosConfig& config, SharedStatistics* stats,
+                     const std::atomic<bool>& shut_down)
+    : nh_(nh), nh_private_(nh_private), config_(config), stats_(stats), shut_down_(shut_down) {
+  topics_.depth = config_.depth_registered ? "depth_registered/image_raw" : "depth/image_raw";
+  // Messages name the inputs as remapped.
+  topics_.color = nh_.resolveName(topics_.color);
+  topics_.depth = nh_.resolveName(topics_.depth);
+  topics_.color_info = nh_.resolveName(topics_.color_info);
+  topics_.depth_info = nh_.resolveName(topics_.depth_info);
+  it_ = std::make_unique<image_transport::ImageTransport>(nh_);
+}
+
+void RgbdInput::subscribe(FrameCallback callback) {
+  callback_ = std::move(callback);
+  const int queue_size = config_.queue_size;
+  const image_transport::TransportHints hints("raw", ros::TransportHints(), nh_private_);
+  color_sub_.subscribe(*it_, topics_.color, queue_size, hints);
+  depth_sub_.subscribe(*it_, topics_.depth, queue_size, hints);
+  color_info_sub_.subscribe(nh_, topics_.color_info, queue_size);
+  using boost::placeholders::_1;
+  using boost::placeholders::_2;
+  using boost::placeholders::_3;
+  using boost::placeholders::_4;
+  if (config_.depth_registered) {
+    const auto callback =
+        boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, sensor_msgs::CameraInfoConstPtr());
+    if (config_.exact_sync) {
+      exact_sync3_ = std::make_unique<message_filters::Synchronizer<ExactPolicy3>>(
+          ExactPolicy3(queue_size), color_sub_, depth_sub_, color_info_sub_);
+      exact_sync3_->registerCallback(callback);
+    } else {
+      approx_sync3_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy3>>(
+          ApproxPolicy3(queue_size), color_sub_, depth_sub_, color_info_sub_);
+      approx_sync3_->registerCallback(callback);
+    }
+  } else {
+    depth_info_sub_.subscribe(nh_, topics_.depth_info, queue_size);
+    const auto callback = boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, _4);
+    if (config_.exact_sync) {
+      exact_sync4_ = std::make_unique<message_filters::Synchronizer<ExactPolicy4>>(
+          ExactPolicy4(queue_size), color_sub_, depth_sub_, color_info_sub_, depth_info_sub_);
+      exact_sync4_->registerCallback(callback);
+    } else {
+      approx_sync4_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy4>>(
+          ApproxPolicy4(queue_size), color_sub_, depth_sub_, color_info_sub_, depth_info_sub_);
+      approx_sync4_->registerCallback(callback);
+    }
+  }
+}
+
+void RgbdInput::unsubscribe() {
+  color_sub_.unsubscribe();
+  depth_sub_.unsubscribe();
+  color_info_sub_.unsubscribe();
+  depth_info_sub_.unsubscribe();
+}
+
+void RgbdInput::rgbdCallback(const sensor_msgs::ImageConstPtr& color,
+                             const sensor_msgs::ImageConstPtr& depth,
+                             const sensor_msgs::CameraInfoConstPtr& color_info,
+                             const sensor_msgs::CameraInfoConstPtr& depth_info) {
+  if (shut_down_) return;
+  stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_received; });
+  auto reject = [this](const std::string& text) {
+    errorThrottled(text);
+    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
+  };
+  PendingFrame frame;
+  frame.msgs.color = color;
+  frame.msgs.depth = depth;
+  frame.msgs.color_info = color_info;
+  frame.msgs.depth_info = depth_info;
+  frame.received = std::chrono::steady_clock::now();
+  const Status checked = checkRgbdMessages(frame.msgs, topics_);
+  if (!checked) {
+    reject("RGB-D input rejected: " + checked.message());
+    return;
+  }
+  frame.camera_frame = config_.camera_frame.empty() ? color->header.frame_id : config_.camera_frame;
+  if (config_.pose_source == "tf" && frame.camera_frame.empty()) {
+    reject("RGB-D input rejected: " + describeInput(topics_.color, color->header) +
+           " has no frame_id and camera_frame is not set: the camera pose cannot be looked up");
+    return;
+  }
+  // Stamp order and the pose are the keyframe buffer's business.
+  callback_(std::move(frame));
+}
+
+}  // namespace mvod
