@@ -60,6 +60,13 @@ Status openDatasetSource(const std::string& directory, const std::string& format
       opened.notes.push_back(
           "colour and depth are two cameras (color-intrinsics.txt): depth is registered to the "
           "colour camera");
+    } else {
+      opened.warnings.push_back(
+          directory +
+          " has no color-intrinsics.txt: colour and depth are taken as registered (one camera, "
+          "camera-intrinsics.txt for both). Real 7-Scenes (Kinect v1) colour is a second camera: "
+          "add its K as color-intrinsics.txt (the Kinect v1 default is 525 0 320 / 0 525 240 / "
+          "0 0 1), or masks land on the wrong depth pixels");
     }
   } else {
     auto dataset = std::make_shared<SceneNNDataset>();

@@ -368,6 +368,9 @@ int main(int argc, char** argv) {
               << opened.message() << "\n";
     return kExitFailure;
   }
+  for (const std::string& warning : dataset.warnings) {
+    std::cerr << "offline_detection: warning: " << warning << "\n";
+  }
   if (!options.quiet) {
     std::cerr << "offline_detection: " << options.dataset << " (" << dataset.format << ", "
               << dataset.indices.size() << " frames)\n";

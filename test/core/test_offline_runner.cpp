@@ -15,9 +15,9 @@
 #include <sstream>
 
 #include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "shared_data.h"
 #include "test_files.h"
 
@@ -149,6 +149,10 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
                (work_ / "clouds").string(), "--overlays", (work_ / "overlays").string()},
               work_);
   ASSERT_EQ(result.exit_code, 0) << result.err;
+  // A 7-Scenes-layout folder without color-intrinsics.txt is taken as registered, and says so.
+  EXPECT_NE(result.err.find("warning: " + dataset.string() + " has no color-intrinsics.txt"),
+            std::string::npos)
+      << result.err;
   std::vector<MapObject> objects;
   MapSummary summary;
   const Status loaded = loadObjects(output, &objects, &summary);
@@ -269,6 +273,7 @@ TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
                (work_ / "clouds").string()},
               work_);
   ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.err.find("no color-intrinsics.txt"), std::string::npos) << result.err;
   std::vector<MapObject> objects;
   MapSummary summary;
   const Status loaded = loadObjects(output, &objects, &summary);

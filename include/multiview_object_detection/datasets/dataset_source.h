@@ -23,6 +23,8 @@ struct DatasetSource {
   bool has_gravity = false;
   Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
   std::vector<std::string> notes;  // what a user should know (intrinsics source, registration ...)
+  // What may make the results wrong (printed even by quiet tools).
+  std::vector<std::string> warnings;
 };
 
 // format: "auto" (trajectory.log or depth/ -> SceneNN, camera-intrinsics.txt -> 7-Scenes),
