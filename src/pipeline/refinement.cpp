@@ -112,13 +112,18 @@ Status IntersectionFilter::Config::isValid() const {
     return Status::Error("volume_ratio_threshold must be in [0, 1] (got " +
                          number(volume_ratio_threshold) + ")");
   }
+  if (!(duplicate_ratio >= 0.0 && duplicate_ratio <= 1.0)) {
+    return Status::Error("duplicate_ratio must be in [0, 1] (got " +
+                         std::to_string(duplicate_ratio) + ")");
+  }
   return Status::Ok();
 }
 
 std::string IntersectionFilter::Config::print() const {
   std::ostringstream out;
   out << "enable: " << (enable ? "true" : "false") << "\n"
-      << "volume_ratio_threshold: " << volume_ratio_threshold << "\n";
+      << "volume_ratio_threshold: " << volume_ratio_threshold << "\n"
+      << "duplicate_ratio: " << duplicate_ratio << "\n";
   return out.str();
 }
 
@@ -197,6 +202,17 @@ std::vector<int> IntersectionFilter::intersectingObjects(const ObjectDatabase& d
         }
       }
       if (xi == nullptr) break;
+      if (config_.duplicate_ratio > 0.0 &&
+          std::min(xi->eta_sigma, xi->eta_tau) > config_.duplicate_ratio) {
+        const MapObject& a = *objects[sigma];
+        const MapObject& b = *objects[xi->tau];
+        if (a.observations * a.probability < b.observations * b.probability) {
+          deleted[sigma] = true;
+          break;
+        }
+        deleted[xi->tau] = true;
+        continue;
+      }
       if (xi->eta_sigma > xi->eta_tau && xi->eta_sigma > threshold) {  // line 9
         deleted[sigma] = true;
         break;

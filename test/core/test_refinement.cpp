@@ -217,6 +217,21 @@ TEST_F(IntersectionFilterTest, OfTwoIdenticalBoxesTheLaterIsDeleted) {
   EXPECT_EQ(filter_.intersectingObjects(database, kUp), std::vector<int>{7});
 }
 
+TEST_F(IntersectionFilterTest, OfTwoDuplicatesUnderTwoLabelsTheLessSupportedIsDeleted) {
+  // One chair seen 7 times as a chair and twice as a couch: nearly the same box.
+  MapObject couch = makeObject(3, "couch", a_);
+  couch.observations = 2;
+  MapObject chair =
+      makeObject(5, "chair", makeBox(Eigen::Vector3d(0.05, 0.0, 0.0), Eigen::Vector3d(1, 1, 1)));
+  chair.observations = 7;
+  const ObjectDatabase database = makeDatabase({couch, chair});
+  EXPECT_EQ(filter_.intersectingObjects(database, kUp), std::vector<int>{3});
+  // Algorithm 1 as published: ids and containment decide, not support.
+  IntersectionFilter::Config paper;
+  paper.duplicate_ratio = 0.0;
+  EXPECT_EQ(IntersectionFilter(paper).intersectingObjects(database, kUp), std::vector<int>{5});
+}
+
 TEST_F(IntersectionFilterTest, DeletedObjectCausesNoFurtherDeletion) {
   // X (id 1) = A. Y (id 2) pokes out of X: η_Y = 0.6 > η_X = 0.3, so X's step deletes Y. Z (id 3)
   // lies entirely inside the part of Y outside X: it only intersects the deleted Y and stays.

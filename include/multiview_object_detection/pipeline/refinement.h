@@ -1,5 +1,5 @@
-// Sec. 3.5: database refinement - atypical sizes (Eq. 9) and objects mostly inside others (Eq. 10, 11,
-// Algorithm 1).
+// Sec. 3.5: database refinement - atypical sizes (Eq. 9) and objects mostly inside others (Eq. 10,
+// 11, Algorithm 1).
 #pragma once
 
 #include <vector>
@@ -13,9 +13,9 @@ class PriorSizeFilter {
  public:
   struct Config {
     bool enable = true;
-    double volume_min_ratio = 0.05;   // Γ_Vmin
-    double volume_max_ratio = 8.0;    // Γ_Vmax
-    double edge_min_ratio = 0.2;      // Γ_E
+    double volume_min_ratio = 0.05;  // Γ_Vmin
+    double volume_max_ratio = 8.0;   // Γ_Vmax
+    double edge_min_ratio = 0.2;     // Γ_E
     bool keep_classes_without_prior = true;
     Status isValid() const;
     std::string print() const;
@@ -37,7 +37,12 @@ class IntersectionFilter {
  public:
   struct Config {
     bool enable = true;
-    double volume_ratio_threshold = 0.5;   // Γ_V∩ of Eq. 11
+    double volume_ratio_threshold = 0.5;  // Γ_V∩ of Eq. 11
+    // Duplicates: when each of two objects lies mostly inside the other (both ratios above this),
+    // they are one object detected under two labels (a chair sometimes called a couch); the one
+    // with less support (observations x probability) goes, whatever their sizes and ids.
+    // 0 = Algorithm 1 as published (the more contained one goes, the later one on ties).
+    double duplicate_ratio = 0.5;
     Status isValid() const;
     std::string print() const;
   };
@@ -48,11 +53,13 @@ class IntersectionFilter {
   explicit IntersectionFilter(const Config& config) : config_(config) {}
   const Config& config() const { return config_; }
 
-  // Eq. 10, 11 for one ordered pair (η_A = V∩/V_A, η_B = V∩/V_B); Full when B lies entirely inside A.
+  // Eq. 10, 11 for one ordered pair (η_A = V∩/V_A, η_B = V∩/V_B); Full when B lies entirely inside
+  // A.
   Case classify(const OrientedBox& a, const OrientedBox& b, const Eigen::Vector3d& up,
                 double* eta_a = nullptr, double* eta_b = nullptr) const;
-  // Algorithm 1 over the objects in id order: for each σ, ξ is the later object whose containment ratio
-  // with σ is largest; whichever of the two is more contained (ratio above the threshold) is deleted.
+  // Algorithm 1 over the objects in id order: for each σ, ξ is the later object whose containment
+  // ratio with σ is largest; whichever of the two is more contained (ratio above the threshold) is
+  // deleted.
   std::vector<int> intersectingObjects(const ObjectDatabase& database,
                                        const Eigen::Vector3d& up) const;
 
