@@ -183,6 +183,20 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
   if (segment != value.end()) {
     if (!(status = readCloud(*segment, prefix + "segment", &object.segment_W))) return status;
   }
+  // Evidence fusion's class votes (optional).
+  const auto scores = value.find("class_scores");
+  if (scores != value.end()) {
+    if (!scores->is_object()) {
+      return fieldError(prefix + "class_scores", "expected {\"class\": summed probability, ...}");
+    }
+    for (auto it = scores->begin(); it != scores->end(); ++it) {
+      if (!it.value().is_number() || !std::isfinite(it.value().get<double>()) ||
+          it.value().get<double>() < 0.0) {
+        return fieldError(prefix + "class_scores", "values must be finite numbers >= 0");
+      }
+      object.class_scores[it.key()] = it.value().get<double>();
+    }
+  }
   // Evidence fusion's votes (optional; maps without them go on fusing from their segment).
   const auto evidence = value.find("evidence");
   if (evidence != value.end()) {
@@ -258,6 +272,11 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
                   {"last_keyframe", object.last_keyframe},
                   {"first_seen", object.first_seen_s},
                   {"last_seen", object.last_seen_s}};
+    if (!object.class_scores.empty()) {
+      json scores = json::object();
+      for (const auto& score : object.class_scores) scores[score.first] = score.second;
+      entry["class_scores"] = std::move(scores);
+    }
     if (include_clouds) {
       entry["points"] = cloudToJson(object.points_W);
       entry["segment"] = cloudToJson(object.segment_W);

@@ -15,6 +15,9 @@ Status ObjectDatabase::Config::isValid() const {
     return Status::Error("fusion_voxel_size_m must be a finite value > 0 (got " +
                          std::to_string(fusion_voxel_size_m) + ")");
   }
+  if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
+    return Status::Error("min_overlap_to_fuse must be in [0, 1]");
+  }
   if (fusion != "paper" && fusion != "evidence") {
     return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
   }
@@ -26,7 +29,8 @@ std::string ObjectDatabase::Config::print() const {
   out << "fusion_voxel_size_m: " << fusion_voxel_size_m << "\n"
       << "no_fusion_within_keyframe: " << (no_fusion_within_keyframe ? "true" : "false") << "\n"
       << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n"
-      << "fusion: " << fusion << "\n";
+      << "fusion: " << fusion << "\n"
+      << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n";
   return out.str();
 }
 
@@ -116,8 +120,65 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   }
 
   const double threshold_m = priors_.fusionDistance(observation.class_name);
-  if (!config_.disable_fusion && nearest != nullptr && result.distance_m <= threshold_m) {
+  const bool evidence = config_.fusion == "evidence";
+  bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
+  if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
+    // Not near a same-class object: the object (any class) whose supported voxels hold most of
+    // this cut, if enough of it.
+    std::unordered_set<std::int64_t> cut;
+    for (const Eigen::Vector3f& p : observation.segment_W) cut.insert(voxelKey(p));
+    double best_overlap = 0.0;
+    MapObject* best_object = nullptr;
+    for (auto& entry : objects_) {
+      MapObject& object = entry.second;
+      if (object.evidence.empty() || object.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
+        continue;
+      }
+      if (config_.no_fusion_within_keyframe &&
+          std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
+              inserted_this_keyframe_.end()) {
+        continue;
+      }
+      if ((object.box.center_m - observation.box.center_m).norm() >
+          0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
+        continue;  // the boxes cannot overlap
+      }
+      int shared = 0;
+      for (const std::int64_t key : cut) {
+        const auto it = object.evidence.find(key);
+        if (it != object.evidence.end() && it->second.inside >= 1 &&
+            it->second.inside >= it->second.outside) {
+          ++shared;
+        }
+      }
+      const double overlap = cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
+      if (overlap > best_overlap) {
+        best_overlap = overlap;
+        best_object = &object;
+      }
+    }
+    if (best_object != nullptr && best_overlap >= config_.min_overlap_to_fuse) {
+      fuse = true;
+      nearest = best_object;
+      result.distance_m = (nearest->box.center_m - observation.box.center_m).norm();
+    }
+  }
+  if (!config_.disable_fusion && fuse) {
     MapObject& object = *nearest;
+    if (evidence) {
+      // The class: the largest summed probability of the detections fused here.
+      if (object.class_scores.empty()) {
+        object.class_scores[object.class_name] = object.probability * object.observations;
+      }
+      object.class_scores[observation.class_name] += observation.probability;
+      const auto best =
+          std::max_element(object.class_scores.begin(), object.class_scores.end(),
+                           [](const auto& a, const auto& b) { return a.second < b.second; });
+      if (best->first != object.class_name) {
+        object.class_name = best->first;
+        object.class_id = cocoClassId(best->first);
+      }
+    }
     const PointCloud* to_process = &object.points_W;
     PointCloud supported;
     if (config_.fusion == "evidence") {
@@ -185,6 +246,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);
   object.segment_W = observation.segment_W;
   if (config_.fusion == "evidence") {
+    object.class_scores[observation.class_name] = observation.probability;
     std::unordered_set<std::int64_t> inside;
     for (const Eigen::Vector3f& p : observation.segment_W) inside.insert(voxelKey(p));
     countInside(inside, &object.evidence);

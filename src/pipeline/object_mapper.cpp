@@ -89,6 +89,7 @@ void ObjectMapper::Config::usePaperMethod() {
   database.fusion = "paper";
   floor.enable = false;
   box.extent_trim_fraction = 0.0;
+  intersection_filter.duplicate_ratio = 0.0;
 }
 
 ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)

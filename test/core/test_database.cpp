@@ -148,8 +148,10 @@ TEST_F(ObjectDatabaseTest, FusesWithTheNearestOfSeveralCandidates) {
   EXPECT_NEAR(result.distance_m, 0.2, 1e-9);
 }
 
-TEST_F(ObjectDatabaseTest, DifferentClassesNeverFuse) {
-  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+TEST_F(ObjectDatabaseTest, DifferentClassesNeverFuseByCentreDistance) {
+  ObjectDatabase::Config config;
+  config.min_overlap_to_fuse = 0.0;  // Eq. 6 alone (the paper's fusion never fuses classes either)
+  ObjectDatabase database(config, priors_);
   int calls = 0;
   database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(&calls));
   const auto result =
@@ -158,6 +160,35 @@ TEST_F(ObjectDatabaseTest, DifferentClassesNeverFuse) {
   EXPECT_TRUE(std::isinf(result.distance_m));
   EXPECT_EQ(database.size(), 2u);
   EXPECT_EQ(calls, 0);
+}
+
+TEST_F(ObjectDatabaseTest, OverlappingCutsFuseAcrossClassesAndTheClassIsVoted) {
+  // Evidence fusion: one chair, detected twice as a chair and once, in between, as a couch.
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  auto seen = [](ObjectObservation obs) {
+    obs.segment_W = obs.points_W;
+    return obs;
+  };
+  const auto first = database.fuseOrInsert(seen(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0)),
+                                           centroidProcessor(&calls));
+  const auto second = database.fuseOrInsert(seen(observation("couch", {1.0, 2.0, 0.5}, 0.9, 1)),
+                                            centroidProcessor(&calls));
+  EXPECT_EQ(second.decision, ObjectDatabase::Decision::kFused);
+  EXPECT_EQ(second.object_id, first.object_id);
+  ASSERT_EQ(database.size(), 1u);
+  EXPECT_EQ(database.objects().begin()->second.class_name, "couch");  // 0.9 > 0.8 so far
+  database.fuseOrInsert(seen(observation("chair", {1.0, 2.0, 0.5}, 0.7, 2)),
+                        centroidProcessor(&calls));
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject& object = database.objects().begin()->second;
+  EXPECT_EQ(object.class_name, "chair");  // 1.5 against 0.9
+  EXPECT_EQ(object.class_id, cocoClassId("chair"));
+  EXPECT_EQ(object.observations, 3);
+  // A cut beside it (no shared voxels) stays its own object, whatever its class.
+  database.fuseOrInsert(seen(observation("couch", {1.5, 2.0, 0.5}, 0.9, 3)),
+                        centroidProcessor(&calls));
+  EXPECT_EQ(database.size(), 2u);
 }
 
 TEST_F(ObjectDatabaseTest, DetectionsOfOneKeyframeDoNotFuseWithEachOther) {

@@ -129,6 +129,7 @@ TEST(JsonIoTest, RoundTripWithClouds) {
 TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   MapObject object = makeObject(4, "chair", 0.1, 10);
   object.evidence_voxel_size_m = 0.01;
+  object.class_scores = {{"chair", 2.5}, {"couch", 0.75}};
   object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(-3, 5, 70))] = VoxelEvidence{4, 1};
   object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(1048575, -1048576, 0))] =
       VoxelEvidence{1, 65535};
@@ -138,6 +139,7 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   ASSERT_TRUE(objectsFromJson(text, &loaded, &summary).ok());
   ASSERT_EQ(loaded.size(), 1u);
   EXPECT_DOUBLE_EQ(loaded[0].evidence_voxel_size_m, 0.01);
+  EXPECT_EQ(loaded[0].class_scores, object.class_scores);
   ASSERT_EQ(loaded[0].evidence.size(), 2u);
   for (const auto& entry : object.evidence) {
     const auto it = loaded[0].evidence.find(entry.first);

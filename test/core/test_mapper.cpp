@@ -228,6 +228,8 @@ TEST_F(ObjectMapperTest, EmptyAndBrokenMasksAreWarningsNotErrors) {
 }
 
 TEST_F(ObjectMapperTest, RefineRemovesAnAtypicalObject) {
+  // Two objects in one place: fusion by overlap (evidence fusion's default) would make them one.
+  config_.database.min_overlap_to_fuse = 0.0;
   ObjectMapper mapper(config_, priors_);
   KeyframeReport report;
   // The same 0.5 m box once as a chair (plausible) and, from another keyframe, as a cup (far too

@@ -49,6 +49,9 @@ struct MapObject {
       segment_W;  // paper: largest LCCP segment of the fused cloud; evidence: supported voxels
   EvidenceMap evidence;                // evidence fusion only (key: voxelKey on the fusion grid)
   double evidence_voxel_size_m = 0.0;  // the grid of `evidence` (0: none yet)
+  // Evidence fusion: summed probability per class of the detections fused here; class_name is the
+  // class with the largest sum (a chair that the detector sometimes calls a couch stays a chair).
+  std::map<std::string, double> class_scores;
   OrientedBox box;
   double yaw_rad = 0.0;
   int first_keyframe = 0;
@@ -77,6 +80,10 @@ class ObjectDatabase {
     // re-boxed. evidence: each voxel counts the views that put it inside their cut and those that
     // saw it but left it out; the box comes from the voxels that are inside at least as often.
     std::string fusion = "evidence";
+    // Evidence fusion: a detection whose cut lies at least this much (share of its voxels) on an
+    // object's supported voxels is fused into it whatever the classes and centres (0 = centres
+    // and classes only, Eq. 6).
+    double min_overlap_to_fuse = 0.5;
     Status isValid() const;
     std::string print() const;
   };
