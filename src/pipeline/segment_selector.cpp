@@ -13,6 +13,8 @@
 namespace mvod {
 namespace {
 
+constexpr double kPiOver18 = 3.14159265358979323846 / 18.0;
+
 // 21 bits per axis: +-1M cells, far beyond any room at centimetre cells.
 std::int64_t cellKey(const Eigen::Vector3f& p, float inv_cell) {
   const auto c = [inv_cell](float v) {
@@ -322,33 +324,54 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   const Eigen::Vector3f up = input.gravity.up.cast<float>();
   const Eigen::Vector3f x_h = input.gravity.x_h.cast<float>();
   const Eigen::Vector3f y_h = input.gravity.y_h.cast<float>();
+  // Extents along 18 horizontal directions (every 10 degrees) and up: unions are min/max per
+  // direction, and the narrowest direction with its perpendicular approximates the footprint
+  // rectangle whatever the object's yaw.
+  constexpr int kDirections = 18;
   struct Extent {
-    Eigen::Array3f lower = Eigen::Array3f::Constant(std::numeric_limits<float>::infinity());
-    Eigen::Array3f upper = -Eigen::Array3f::Constant(std::numeric_limits<float>::infinity());
+    Eigen::Array<float, kDirections + 1, 1> lower =
+        Eigen::Array<float, kDirections + 1, 1>::Constant(std::numeric_limits<float>::infinity());
+    Eigen::Array<float, kDirections + 1, 1> upper = -lower;
     void add(const Extent& other) {
       lower = lower.min(other.lower);
       upper = upper.max(other.upper);
     }
   };
+  std::vector<Eigen::Vector3f> directions;
+  for (int k = 0; k < kDirections; ++k) {
+    const float a = static_cast<float>(k * kPiOver18);
+    directions.push_back(std::cos(a) * x_h + std::sin(a) * y_h);
+  }
+  directions.push_back(up);
   std::vector<Extent> extents(num_segments);
   for (int s = 0; s < num_segments; ++s) {
     for (const int i : segments[s]) {
       const Eigen::Vector3f p_W = T_W_D * points[i];
-      const Eigen::Array3f q(x_h.dot(p_W), y_h.dot(p_W), up.dot(p_W));
-      extents[s].lower = extents[s].lower.min(q);
-      extents[s].upper = extents[s].upper.max(q);
+      for (int k = 0; k <= kDirections; ++k) {
+        const float q = directions[k].dot(p_W);
+        extents[s].lower[k] = std::min(extents[s].lower[k], q);
+        extents[s].upper[k] = std::max(extents[s].upper[k], q);
+      }
     }
   }
   double max_height_m = std::numeric_limits<double>::infinity();
-  double max_diagonal_m = std::numeric_limits<double>::infinity();
+  double max_short_m = std::numeric_limits<double>::infinity();
+  double max_long_m = std::numeric_limits<double>::infinity();
   if (input.prior != nullptr && input.prior->has_size) {
     const Eigen::Vector3d& size = input.prior->size_m;
     max_height_m = config_.prior_size_slack * size.z() + 0.1;
-    max_diagonal_m = config_.prior_size_slack * size.head<2>().norm() + 0.1;
+    max_short_m = config_.prior_size_slack * std::min(size.x(), size.y()) + 0.1;
+    max_long_m = config_.prior_size_slack * std::max(size.x(), size.y()) + 0.1;
   }
   auto plausible = [&](const Extent& e) {
-    const Eigen::Array3f span = e.upper - e.lower;
-    return span.z() <= max_height_m && std::hypot(span.x(), span.y()) <= max_diagonal_m;
+    const Eigen::Array<float, kDirections + 1, 1> span = e.upper - e.lower;
+    if (span[kDirections] > max_height_m) return false;
+    int narrow = 0;
+    for (int k = 1; k < kDirections; ++k) {
+      if (span[k] < span[narrow]) narrow = k;
+    }
+    return span[narrow] <= max_short_m &&
+           span[(narrow + kDirections / 2) % kDirections] <= max_long_m;
   };
 
   std::vector<char> kept(num_segments, 0);
