@@ -1,0 +1,181 @@
+// Real depth and poses: the 7-Scenes redkitchen frames with box-only detections projected from the
+// hand-annotated table and chairs (test/data/7scenes_redkitchen_annotation). The default cut and
+// fusion against the annotation; the paper's method on the same input, reported beside it.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/evaluation/box_detections.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
+#include "shared_data.h"
+
+namespace mvod {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct BoxComparison {
+  double centre_m = 0.0;  // horizontal centre distance
+  double edge_m = 0.0;    // worst footprint edge offset (along the truth's axes)
+  double top_m = 0.0;     // top height difference
+};
+
+BoxComparison compare(const OrientedBox& predicted, const OrientedBox& truth,
+                      const Eigen::Vector3d& up) {
+  BoxComparison c;
+  Eigen::Vector3d d = predicted.center_m - truth.center_m;
+  c.centre_m = (d - up * up.dot(d)).norm();
+  // The predicted footprint corners in the truth's horizontal axes.
+  const Eigen::Vector3d ax = truth.rotation.col(0);
+  const Eigen::Vector3d ay = truth.rotation.col(1);
+  double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d corner =
+        predicted.center_m +
+        predicted.rotation.col(0) * ((i & 1) ? 0.5 : -0.5) * predicted.size_m.x() +
+        predicted.rotation.col(1) * ((i & 2) ? 0.5 : -0.5) * predicted.size_m.y() - truth.center_m;
+    lo_x = std::min(lo_x, ax.dot(corner));
+    hi_x = std::max(hi_x, ax.dot(corner));
+    lo_y = std::min(lo_y, ay.dot(corner));
+    hi_y = std::max(hi_y, ay.dot(corner));
+  }
+  const Eigen::Vector3d half = 0.5 * truth.size_m;
+  c.edge_m = std::max({std::abs(lo_x + half.x()), std::abs(hi_x - half.x()),
+                       std::abs(lo_y + half.y()), std::abs(hi_y - half.y())});
+  const double top_p = up.dot(predicted.center_m) + 0.5 * predicted.size_m.z();
+  const double top_t = up.dot(truth.center_m) + 0.5 * truth.size_m.z();
+  c.top_m = std::abs(top_p - top_t);
+  return c;
+}
+
+class RedkitchenAnnotationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const std::string source = test::sharedPath("data/7scenes_redkitchen/data");
+    if (source.empty()) {
+      GTEST_SKIP() << "7-Scenes data not found (set MVOD_SHARED_DIR or put shared/ next to the "
+                      "repository): ../shared/data/7scenes_redkitchen/data";
+    }
+    // The frames (links into the read-only shared folder) plus the colour intrinsics 7-Scenes
+    // does not ship (Kinect v1 colour default; colour and depth are two cameras).
+    dir_ = fs::temp_directory_path() / ("mvod_redkitchen_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    for (const auto& entry : fs::directory_iterator(source)) {
+      fs::create_symlink(entry.path(), dir_ / entry.path().filename());
+    }
+    std::ofstream(dir_ / "color-intrinsics.txt") << "525 0 320\n0 525 240\n0 0 1\n";
+    ASSERT_TRUE(SevenScenesDataset::open(dir_.string(), &dataset_).ok());
+    ASSERT_TRUE(dataset_.hasGravity());
+    up_ = -dataset_.gravityDown_W().normalized();
+    const std::string annotation =
+        std::string(MVOD_SOURCE_DIR) + "/test/data/7scenes_redkitchen_annotation/ground_truth.json";
+    ASSERT_TRUE(loadSyntheticGroundTruth(annotation, 0.05, up_, &truth_).ok());
+    ASSERT_EQ(truth_.size(), 6u);
+    ASSERT_TRUE(
+        ClassPriors::loadYaml(std::string(MVOD_SOURCE_DIR) + "/config/class_priors.yaml", &priors_)
+            .ok());
+  }
+  void TearDown() override {
+    std::error_code error;
+    if (!dir_.empty()) fs::remove_all(dir_, error);
+  }
+
+  // Every 10th frame a keyframe, the annotated boxes as box-only detections; no refinement.
+  std::vector<MapObject> run(const ObjectMapper::Config& base) {
+    ObjectMapper::Config config = base;
+    config.gravity_down_W = dataset_.gravityDown_W();
+    ObjectMapper mapper(config, priors_);
+    for (const int index : dataset_.frameIndices()) {
+      if (index % 10 != 0) continue;
+      RgbdFrame frame;
+      EXPECT_TRUE(dataset_.load(index, &frame).ok());
+      const std::vector<Detection2D> detections =
+          boxDetectionsFromGroundTruth(truth_, frame, box_options_);
+      KeyframeReport report;
+      EXPECT_TRUE(mapper.processKeyframe(frame, detections, &report).ok());
+      if (std::getenv("MVOD_DEBUG_REDKITCHEN") != nullptr) {
+        for (const std::string& w : report.warnings) std::printf("%s\n", w.c_str());
+        for (const Detection2D& d : detections) {
+          std::printf("  %s [%d %d %d %d]\n", d.class_name.c_str(), d.box_px.x, d.box_px.y,
+                      d.box_px.width, d.box_px.height);
+        }
+        std::printf("frame %d: %zu detections, %d with box\n", index, detections.size(),
+                    report.with_box);
+      }
+    }
+    std::vector<MapObject> objects;
+    for (const auto& entry : mapper.database().objects()) objects.push_back(entry.second);
+    if (std::getenv("MVOD_DEBUG_REDKITCHEN") != nullptr) {
+      for (const MapObject& o : objects) {
+        std::printf("object %d %s obs %d centre %.2f %.2f %.2f size %.2f %.2f %.2f\n", o.id,
+                    o.class_name.c_str(), o.observations, o.box.center_m.x(), o.box.center_m.y(),
+                    o.box.center_m.z(), o.box.size_m.x(), o.box.size_m.y(), o.box.size_m.z());
+      }
+    }
+    return objects;
+  }
+
+  // The same-class object nearest to the truth (horizontally); null when there is none.
+  const MapObject* match(const std::vector<MapObject>& objects, const GroundTruthObject& truth) {
+    const MapObject* best = nullptr;
+    double best_d = 1e9;
+    for (const MapObject& object : objects) {
+      if (object.class_name != truth.class_name) continue;
+      const double d = compare(object.box, truth.box, up_).centre_m;
+      if (d < best_d) {
+        best_d = d;
+        best = &object;
+      }
+    }
+    return best;
+  }
+
+  fs::path dir_;
+  SevenScenesDataset dataset_;
+  Eigen::Vector3d up_;
+  std::vector<GroundTruthObject> truth_;
+  ClassPriors priors_;
+  BoxDetectionOptions box_options_;
+};
+
+TEST_F(RedkitchenAnnotationTest, BoxOnlyDetectionsGiveTheTableAndChairs) {
+  const std::vector<MapObject> ours = run(ObjectMapper::Config());
+  ObjectMapper::Config paper_config;
+  paper_config.usePaperMethod();
+  const std::vector<MapObject> paper = run(paper_config);
+
+  for (size_t i = 0; i < truth_.size(); ++i) {
+    const GroundTruthObject& truth = truth_[i];
+    const MapObject* a = match(ours, truth);
+    const MapObject* b = match(paper, truth);
+    const BoxComparison ca = a ? compare(a->box, truth.box, up_) : BoxComparison{9, 9, 9};
+    const BoxComparison cb = b ? compare(b->box, truth.box, up_) : BoxComparison{9, 9, 9};
+    std::printf(
+        "[ redkitchen ] %-12s %zu: default centre %.2f edge %.2f top %.2f (obs %d) | paper centre "
+        "%.2f edge %.2f top %.2f\n",
+        truth.class_name.c_str(), i, ca.centre_m, ca.edge_m, ca.top_m, a ? a->observations : 0,
+        cb.centre_m, cb.edge_m, cb.top_m);
+    ASSERT_NE(a, nullptr) << truth.class_name << " " << i << " not in the map";
+    // Issue 10's goals are: table within 10 cm in centre, 15 cm on each footprint edge, 5 cm in
+    // top height; each chair within 15 cm in centre. Met today: chairs A, B and E (1, 2, 5);
+    // the table within 15 cm in centre and 30 cm on its edges (README, Real data). Chairs C and D
+    // (3, 4), pushed under the table with only their backrests in view, are not met yet.
+    if (truth.class_name == "dining table") {
+      EXPECT_LT(ca.centre_m, 0.15);
+      EXPECT_LT(ca.edge_m, 0.30);
+    } else if (i == 1 || i == 2 || i == 5) {
+      EXPECT_LT(ca.centre_m, 0.15) << "chair " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mvod
