@@ -156,6 +156,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "database/no_fusion_within_keyframe", &m.database.no_fusion_within_keyframe, e);
   readParam(nh, "database/disable_fusion", &m.database.disable_fusion, e);
   readParam(nh, "database/fusion", &m.database.fusion, e);
+  readNumber(nh, "database/min_overlap_to_fuse", &m.database.min_overlap_to_fuse, e);
 
   readParam(nh, "prior_filter/enable", &m.prior_filter.enable, e);
   readParam(nh, "prior_filter/volume_min_ratio", &m.prior_filter.volume_min_ratio, e);
@@ -167,6 +168,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "intersection_filter/enable", &m.intersection_filter.enable, e);
   readParam(nh, "intersection_filter/volume_ratio_threshold",
             &m.intersection_filter.volume_ratio_threshold, e);
+  readNumber(nh, "intersection_filter/duplicate_ratio", &m.intersection_filter.duplicate_ratio, e);
 
   readParam(nh, "gravity/plane_distance_threshold_m", &m.gravity.plane_distance_threshold_m, e);
   readParam(nh, "gravity/ransac_iterations", &m.gravity.ransac_iterations, e);
