@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -62,6 +63,7 @@ const char* const kUsage =
     "  --output FILE          objects.json to write (default: objects.json)\n"
     "  --save-clouds DIR      one ASCII PLY per object: fused cloud and LCCP segment\n"
     "  --overlays DIR         detections drawn on each keyframe's colour image (PNG)\n"
+    "  --timings FILE         per-keyframe stage times as CSV (keyframes with detections)\n"
     "  --min-probability P    lambda of Eq. 5 (default: 0.5)\n"
     "  --priors FILE          class priors YAML (default: config/class_priors.yaml of the "
     "package)\n"
@@ -94,6 +96,7 @@ struct Options {
   std::string output = "objects.json";
   std::string save_clouds;
   std::string overlays;
+  std::string timings;
   double min_probability = 0.5;
   std::string priors;
   bool no_filter = false;
@@ -156,7 +159,7 @@ std::string parseArguments(int argc, char** argv, Options* options) {
     } else if (arg == "--dataset" || arg == "--detections" || arg == "--detector" ||
                arg == "--model-dir" || arg == "--output" || arg == "--save-clouds" ||
                arg == "--overlays" || arg == "--priors" || arg == "--backend" ||
-               arg == "--format") {
+               arg == "--timings" || arg == "--format") {
       if (!value(&text) || text.empty()) return arg + " needs a value";
       if (arg == "--dataset") options->dataset = text;
       if (arg == "--detections") options->detections = text;
@@ -165,6 +168,7 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (arg == "--output") options->output = text;
       if (arg == "--save-clouds") options->save_clouds = text;
       if (arg == "--overlays") options->overlays = text;
+      if (arg == "--timings") options->timings = text;
       if (arg == "--priors") options->priors = text;
       if (arg == "--backend") options->backend = text;
       if (arg == "--format") {
@@ -438,6 +442,7 @@ int main(int argc, char** argv) {
 
   Progress progress(frames.size(), !options.quiet);
   std::vector<mvod::StageTimes> stage_times;  // keyframes that had detections to process
+  std::vector<std::string> stage_frames;      // their names
   std::vector<double> detection_ms;
   int keyframes = 0;
   int errors = 0;
@@ -506,6 +511,7 @@ int main(int argc, char** argv) {
       counts.fused += report.fused;
       if (report.above_threshold > 0 && !report.waiting_for_gravity) {
         stage_times.push_back(report.times);
+        stage_frames.push_back(name);
       }
     }
     for (const std::string& warning : report.warnings) report_line("warning: " + warning, false);
@@ -537,6 +543,32 @@ int main(int argc, char** argv) {
   med.fusion_ms = stage_median(&mvod::StageTimes::fusion_ms);
   med.total_ms = stage_median(&mvod::StageTimes::total_ms);
   med.refinement_ms = refinement.time_ms;
+
+  // Does the cost per keyframe grow with the map? The first and the last 20 keyframes.
+  if (stage_times.size() >= 40 && !options.quiet) {
+    std::vector<double> first, last;
+    for (size_t k = 0; k < 20; ++k) {
+      first.push_back(stage_times[k].total_ms);
+      last.push_back(stage_times[stage_times.size() - 20 + k].total_ms);
+    }
+    std::fprintf(stderr,
+                 "offline_detection: time per keyframe, median of the first 20: %.1f ms, of the "
+                 "last 20: %.1f ms\n",
+                 median(first), median(last));
+  }
+  if (!options.timings.empty()) {
+    std::ofstream csv(options.timings);
+    csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms\n";
+    for (size_t k = 0; k < stage_times.size(); ++k) {
+      const mvod::StageTimes& t = stage_times[k];
+      csv << stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
+          << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "\n";
+    }
+    if (!csv) {
+      std::cerr << "offline_detection: cannot write " << options.timings << "\n";
+      return kExitFailure;
+    }
+  }
 
   const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper.database());
   printTable(objects);
