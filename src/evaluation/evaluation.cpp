@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/manhattan_frame.h"
 
 namespace mvod {
 namespace {
@@ -424,6 +425,12 @@ OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector
   OrientedBox box;
   const GravityFrame frame(up_W.allFinite() && up_W.norm() > 1e-9 ? Eigen::Vector3d(-up_W)
                                                                   : Eigen::Vector3d(0, 0, -1));
+  BoxEstimator::Config manhattan;
+  manhattan.extent_trim_fraction = 0.0;  // ground truth: the whole surface
+  if (points_W.size() >= 200 && BoxEstimator(manhattan).estimate(points_W, frame, &box).ok()) {
+    return box;
+  }
+  box = OrientedBox();
   std::vector<Eigen::Vector2d> footprint;
   double low = std::numeric_limits<double>::infinity();
   double high = -std::numeric_limits<double>::infinity();

@@ -215,6 +215,25 @@ TEST(EvaluationGeometry, BoxSurfaceSamplesAndFittedBox) {
   EXPECT_DOUBLE_EQ(fitGravityAlignedBox({}, up).volume(), 0.0);
 }
 
+TEST(EvaluationGeometry, PartlySeenBoxKeepsItsAxes) {
+  // A fridge in a corner: only its front and one side face were seen. The minimum-area rectangle
+  // of that L-shaped footprint is diagonal (0.92 x 0.46 at 45 degrees for a 0.62 x 0.70 box); the
+  // faces' normals give the box's own axes.
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const OrientedBox box = makeBox({1.0, -1.0, 0.95}, {0.62, 0.70, 1.9}, 0.3);
+  PointCloud seen;
+  for (const Eigen::Vector3f& p : sampleBoxSurface(box, 0.02, up)) {
+    const Eigen::Vector3d local = box.rotation.transpose() * (p.cast<double>() - box.center_m);
+    if (local.x() < -0.31 + 1e-5 || local.y() < -0.35 + 1e-5) seen.push_back(p);  // two faces
+  }
+  ASSERT_GT(seen.size(), 1000u);
+  const OrientedBox fitted = fitGravityAlignedBox(seen, up);
+  EXPECT_GT(orientedBoxIoU(fitted, box, up), 0.9);
+  const double yaw = std::atan2(fitted.rotation(1, 0), fitted.rotation(0, 0));
+  const double off = std::remainder(yaw - 0.3, 3.14159265358979323846 / 2.0);
+  EXPECT_LT(std::abs(off), 0.02) << "yaw " << yaw;
+}
+
 // ---- End to end ----
 
 TEST(EvaluationEndToEnd, PerfectPredictionsScoreOneAndShiftedOnesLower) {

@@ -90,8 +90,11 @@ std::vector<bool> matchRankedPredictions(const std::vector<std::vector<double>>&
 // out (it rests on the floor or is seen by no camera above it, and the ground-truth mesh has none).
 PointCloud sampleBoxSurface(const OrientedBox& box, double spacing_m, const Eigen::Vector3d& up_W);
 
-// Gravity-aligned box of a cloud: the minimum-area rectangle of the footprint in the floor plane of
-// up_W (rotating calipers over the hull edges) times the vertical extent. Third column = up_W.
+// Gravity-aligned box of a cloud (an object's observed surface): the yaw of the surfaces' Manhattan
+// frame (Eq. 3, as the predictions' boxes), the extents min/max, third column = up_W. A partly seen
+// object shows two perpendicular faces: their minimum-area rectangle would be diagonal and wrong,
+// their normals give the object's axes. Where the normals show no box structure (cylinders, too few
+// points), the minimum-area rectangle of the footprint (rotating calipers).
 OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector3d& up_W);
 
 EvaluationResult evaluate(const std::vector<GroundTruthObject>& ground_truth,
