@@ -15,6 +15,8 @@
 #include <set>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/voxel_key.h"
+
 namespace mvod {
 namespace {
 
@@ -225,8 +227,8 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
         }
       }
       if (!ok) return fieldError(where, "voxels must be [i, j, k, in, out] integers in range");
-      const std::int64_t key = ObjectDatabase::packVoxel(
-          Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
+      const std::int64_t key =
+          packVoxel(Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
       VoxelEvidence& e = object.evidence[key];
       e.inside = static_cast<std::uint16_t>(voxel[3].get<int>());
       e.outside = static_cast<std::uint16_t>(voxel[4].get<int>());
@@ -284,7 +286,7 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
         // Sorted, so that one map always writes the same file.
         std::vector<std::pair<Eigen::Vector3i, VoxelEvidence>> voxels;
         for (const auto& e : object.evidence) {
-          voxels.emplace_back(ObjectDatabase::unpackVoxel(e.first), e.second);
+          voxels.emplace_back(unpackVoxel(e.first), e.second);
         }
         std::sort(voxels.begin(), voxels.end(), [](const auto& a, const auto& b) {
           return std::lexicographical_compare(a.first.data(), a.first.data() + 3, b.first.data(),

@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
 
 namespace mvod {
 
@@ -36,14 +37,6 @@ std::string ObjectDatabase::Config::print() const {
 
 namespace {
 
-constexpr std::int64_t kFieldMask = 0x1FFFFF;  // 21 bits per axis
-
-std::int64_t unpackField(std::int64_t key, int shift) {
-  std::int64_t v = (key >> shift) & kFieldMask;
-  if (v & (std::int64_t{1} << 20)) v -= std::int64_t{1} << 21;  // sign
-  return v;
-}
-
 void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* evidence) {
   for (const std::int64_t key : inside) {
     VoxelEvidence& e = (*evidence)[key];
@@ -53,31 +46,14 @@ void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* ev
 
 }  // namespace
 
-std::int64_t ObjectDatabase::packVoxel(const Eigen::Vector3i& index) {
-  return ((static_cast<std::int64_t>(index.x()) & kFieldMask) << 42) |
-         ((static_cast<std::int64_t>(index.y()) & kFieldMask) << 21) |
-         (static_cast<std::int64_t>(index.z()) & kFieldMask);
-}
-
-Eigen::Vector3i ObjectDatabase::unpackVoxel(std::int64_t key) {
-  return Eigen::Vector3i(static_cast<int>(unpackField(key, 42)),
-                         static_cast<int>(unpackField(key, 21)),
-                         static_cast<int>(unpackField(key, 0)));
-}
-
 std::int64_t ObjectDatabase::voxelKey(const Eigen::Vector3f& p_W) const {
-  const double inv = 1.0 / config_.fusion_voxel_size_m;
-  const auto field = [inv](float v) {
-    return static_cast<std::int64_t>(std::floor(v * inv)) & kFieldMask;
-  };
-  return (field(p_W.x()) << 42) | (field(p_W.y()) << 21) | field(p_W.z());
+  return voxelKeyOf(p_W, config_.fusion_voxel_size_m);
 }
 
 Eigen::Vector3f ObjectDatabase::voxelCentre(std::int64_t key) const {
-  const double s = config_.fusion_voxel_size_m;
-  return Eigen::Vector3f(static_cast<float>((unpackField(key, 42) + 0.5) * s),
-                         static_cast<float>((unpackField(key, 21) + 0.5) * s),
-                         static_cast<float>((unpackField(key, 0) + 0.5) * s));
+  return ((unpackVoxel(key).cast<double>().array() + 0.5) * config_.fusion_voxel_size_m)
+      .matrix()
+      .cast<float>();
 }
 
 PointCloud ObjectDatabase::supportedVoxels(const MapObject& object) const {

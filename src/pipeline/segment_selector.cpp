@@ -9,25 +9,12 @@
 #include <unordered_map>
 
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
 
 namespace mvod {
 namespace {
 
 constexpr double kPiOver18 = 3.14159265358979323846 / 18.0;
-
-// 21 bits per axis: +-1M cells, far beyond any room at centimetre cells.
-std::int64_t cellKey(const Eigen::Vector3f& p, float inv_cell) {
-  const auto c = [inv_cell](float v) {
-    return static_cast<std::int64_t>(std::floor(v * inv_cell)) & 0x1FFFFF;
-  };
-  return (c(p.x()) << 42) | (c(p.y()) << 21) | c(p.z());
-}
-
-std::int64_t offsetKey(std::int64_t key, int dx, int dy, int dz) {
-  const auto add = [](std::int64_t field, int d) { return (field + d) & 0x1FFFFF; };
-  return (add((key >> 42) & 0x1FFFFF, dx) << 42) | (add((key >> 21) & 0x1FFFFF, dy) << 21) |
-         add(key & 0x1FFFFF, dz);
-}
 
 // The cells of one cloud: cell -> the segments with points in it (few per cell).
 using CellSegments = std::unordered_map<std::int64_t, std::vector<int>>;
@@ -241,8 +228,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       if (segments[s].size() < 20) continue;
       planes[s] = fitPlane(points, segments[s]);
       if (planes[s].rms_m > config_.plane_max_thickness_m) continue;
-      for (const int i : segments[s])
-        addToCell(&near_cells, cellKey(points[i], 1.f / near_cell_m), s);
+      for (const int i : segments[s]) addToCell(&near_cells, voxelKeyOf(points[i], near_cell_m), s);
     }
     if (!near_cells.empty()) {
       std::vector<int> near(num_segments, 0);
@@ -254,12 +240,12 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
         if (!crop.contains(pixel)) continue;
         if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
         const Eigen::Vector3f& p = view.points_D[k];
-        const std::int64_t key = cellKey(p, 1.f / near_cell_m);
+        const std::int64_t key = voxelKeyOf(p, near_cell_m);
         touched.clear();
         for (int dx = -1; dx <= 1; ++dx) {
           for (int dy = -1; dy <= 1; ++dy) {
             for (int dz = -1; dz <= 1; ++dz) {
-              const auto it = near_cells.find(offsetKey(key, dx, dy, dz));
+              const auto it = near_cells.find(offsetVoxelKey(key, dx, dy, dz));
               if (it == near_cells.end()) continue;
               for (const int s : it->second) {
                 if (std::find(touched.begin(), touched.end(), s) == touched.end()) {
@@ -299,17 +285,17 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
 
   // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
-  const float inv_adjacency = static_cast<float>(1.0 / config_.adjacency_distance_m);
   CellSegments cells;
   for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s]) addToCell(&cells, cellKey(points[i], inv_adjacency), s);
+    for (const int i : segments[s])
+      addToCell(&cells, voxelKeyOf(points[i], config_.adjacency_distance_m), s);
   }
   std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
   for (const auto& cell : cells) {
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells.find(offsetKey(cell.first, dx, dy, dz));
+          const auto it = cells.find(offsetVoxelKey(cell.first, dx, dy, dz));
           if (it == cells.end()) continue;
           for (const int a : cell.second) {
             for (const int b : it->second) adjacent[a][b] = 1;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
 #include "test_files.h"
 
 namespace mvod {
@@ -130,9 +131,8 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   MapObject object = makeObject(4, "chair", 0.1, 10);
   object.evidence_voxel_size_m = 0.01;
   object.class_scores = {{"chair", 2.5}, {"couch", 0.75}};
-  object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(-3, 5, 70))] = VoxelEvidence{4, 1};
-  object.evidence[ObjectDatabase::packVoxel(Eigen::Vector3i(1048575, -1048576, 0))] =
-      VoxelEvidence{1, 65535};
+  object.evidence[packVoxel(Eigen::Vector3i(-3, 5, 70))] = VoxelEvidence{4, 1};
+  object.evidence[packVoxel(Eigen::Vector3i(1048575, -1048576, 0))] = VoxelEvidence{1, 65535};
   const std::string text = objectsToJson({object}, makeSummary(), true);
   std::vector<MapObject> loaded;
   MapSummary summary;

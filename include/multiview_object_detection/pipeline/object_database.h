@@ -111,10 +111,7 @@ class ObjectDatabase {
 
   // Evidence fusion's supported voxels (centres): inside >= outside and inside >= 1.
   PointCloud supportedVoxels(const MapObject& object) const;
-  // A key from and to integer voxel coordinates (each in [-2^20, 2^20)).
-  static std::int64_t packVoxel(const Eigen::Vector3i& index);
-  static Eigen::Vector3i unpackVoxel(std::int64_t key);
-  // The fusion grid's key of a point, and a key's voxel centre.
+  // The fusion grid's key of a point (voxel_key.h), and a key's voxel centre.
   std::int64_t voxelKey(const Eigen::Vector3f& p_W) const;
   Eigen::Vector3f voxelCentre(std::int64_t key) const;
 
