@@ -149,7 +149,6 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
 
   const cv::Mat& depth = frame.depth;
   const CameraIntrinsics& K_d = frame.K_depth;
-  const CameraIntrinsics& K_c = frame.K_color;
   const int stride = config_.pixel_stride;
   const double min_m = config_.min_valid_depth_m;
   const double max_m = config_.max_valid_depth_m;
@@ -184,25 +183,14 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
   // Not registered (two cameras): each depth point is moved into the colour camera (T_C_D) and
   // projected with K_color; the mask is read at the nearest colour pixel. Every depth pixel may
   // land in a mask.
-  const Eigen::Matrix3d R_C_D = frame.T_C_D.linear();
-  const Eigen::Vector3d t_C_D = frame.T_C_D.translation();
   for (int v = 0; v < depth.rows; v += stride) {
     for (int u = 0; u < depth.cols; u += stride) {
       const double z = depthMetres(depth, u, v, min_m, max_m);
       if (!std::isfinite(z)) continue;
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
-      const Eigen::Vector3d p_C = R_C_D * p_D + t_C_D;
-      if (!(p_C.z() > 0.0)) continue;  // behind the colour camera
-      const double uc = K_c.fx * p_C.x() / p_C.z() + K_c.cx;
-      const double vc = K_c.fy * p_C.y() / p_C.z() + K_c.cy;
-      // Pixel centres at integer coordinates: round to the nearest pixel.
-      const double uc_round = std::floor(uc + 0.5);
-      const double vc_round = std::floor(vc + 0.5);
-      if (!(uc_round >= 0.0 && vc_round >= 0.0 && uc_round < color_size.width &&
-            vc_round < color_size.height)) {
-        continue;  // outside the colour image: in no mask
-      }
-      assign(static_cast<int>(uc_round), static_cast<int>(vc_round), p_D.cast<float>());
+      cv::Point pixel;
+      // Behind the colour camera or outside its image: in no mask.
+      if (colorPixelOf(frame, p_D, &pixel)) assign(pixel.x, pixel.y, p_D.cast<float>());
     }
   }
   return Status::Ok();

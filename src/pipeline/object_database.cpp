@@ -37,6 +37,12 @@ std::string ObjectDatabase::Config::print() const {
 
 namespace {
 
+std::unordered_set<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
+  std::unordered_set<std::int64_t> keys;
+  for (const Eigen::Vector3f& p : points_W) keys.insert(voxelKeyOf(p, voxel_size_m));
+  return keys;
+}
+
 void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* evidence) {
   for (const std::int64_t key : inside) {
     VoxelEvidence& e = (*evidence)[key];
@@ -97,12 +103,14 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
 
   const double threshold_m = priors_.fusionDistance(observation.class_name);
   const bool evidence = config_.fusion == "evidence";
+  // Evidence fusion: the voxels of this view's cut, computed once.
+  const std::unordered_set<std::int64_t> cut =
+      evidence ? voxelKeys(observation.segment_W, config_.fusion_voxel_size_m)
+               : std::unordered_set<std::int64_t>();
   bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
   if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
     // Not near a same-class object: the object (any class) whose supported voxels hold most of
     // this cut, if enough of it.
-    std::unordered_set<std::int64_t> cut;
-    for (const Eigen::Vector3f& p : observation.segment_W) cut.insert(voxelKey(p));
     double best_overlap = 0.0;
     MapObject* best_object = nullptr;
     for (auto& entry : objects_) {
@@ -162,19 +170,15 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
       object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
       if (object.evidence.empty()) {
-        std::unordered_set<std::int64_t> inside;
-        for (const Eigen::Vector3f& p : object.segment_W) inside.insert(voxelKey(p));
-        countInside(inside, &object.evidence);
+        countInside(voxelKeys(object.segment_W, config_.fusion_voxel_size_m), &object.evidence);
       }
       // This view's votes: inside for the voxels of its cut, outside for the voxels it saw surface
       // in but left out of the cut. Cost: the view's points, not the object's size.
-      std::unordered_set<std::int64_t> inside;
-      for (const Eigen::Vector3f& p : observation.segment_W) inside.insert(voxelKey(p));
-      countInside(inside, &object.evidence);
+      countInside(cut, &object.evidence);
       std::unordered_set<std::int64_t> outside;
       for (const Eigen::Vector3f& p : observation.seen_W) {
         const std::int64_t key = voxelKey(p);
-        if (inside.count(key) != 0 || !outside.insert(key).second) continue;
+        if (cut.count(key) != 0 || !outside.insert(key).second) continue;
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
       }
@@ -219,14 +223,15 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   object.class_name = observation.class_name;
   object.probability = observation.probability;
   object.observations = 1;
-  object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);
   object.segment_W = observation.segment_W;
-  if (config_.fusion == "evidence") {
+  if (evidence) {
+    // The object is what the cut holds; its cloud is the voxels with evidence, as after fusions.
     object.class_scores[observation.class_name] = observation.probability;
-    std::unordered_set<std::int64_t> inside;
-    for (const Eigen::Vector3f& p : observation.segment_W) inside.insert(voxelKey(p));
-    countInside(inside, &object.evidence);
+    countInside(cut, &object.evidence);
     object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+    for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
+  } else {
+    object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);
   }
   object.box = observation.box;
   object.yaw_rad = observation.yaw_rad;

@@ -104,27 +104,14 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
   FrameView view;
   const cv::Mat& depth = frame.depth;
   const CameraIntrinsics& K_d = frame.K_depth;
-  const CameraIntrinsics& K_c = frame.K_color;
-  if (depth.empty() || !K_d.isValid() || !K_c.isValid() || stride < 1) return view;
-  const Eigen::Matrix3d R_C_D = frame.T_C_D.linear();
-  const Eigen::Vector3d t_C_D = frame.T_C_D.translation();
-  const int width = frame.color_bgr.cols;
-  const int height = frame.color_bgr.rows;
+  if (depth.empty() || !K_d.isValid() || !frame.K_color.isValid() || stride < 1) return view;
   for (int v = 0; v < depth.rows; v += stride) {
     for (int u = 0; u < depth.cols; u += stride) {
       const float z = ObjectCloudExtractor::depthAt(depth, u, v, min_depth_m, max_depth_m);
       if (!std::isfinite(z)) continue;
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel(u, v);
-      if (!frame.registered) {
-        const Eigen::Vector3d p_C = R_C_D * p_D + t_C_D;
-        pixel = cv::Point(-1, -1);
-        if (p_C.z() > 0.0) {
-          const int uc = static_cast<int>(std::floor(K_c.fx * p_C.x() / p_C.z() + K_c.cx + 0.5));
-          const int vc = static_cast<int>(std::floor(K_c.fy * p_C.y() / p_C.z() + K_c.cy + 0.5));
-          if (uc >= 0 && vc >= 0 && uc < width && vc < height) pixel = cv::Point(uc, vc);
-        }
-      }
+      if (!frame.registered && !colorPixelOf(frame, p_D, &pixel)) pixel = cv::Point(-1, -1);
       view.points_D.push_back(p_D.cast<float>());
       view.pixels_color.push_back(pixel);
     }
@@ -199,16 +186,11 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   ring_mask.setTo(0, mask);
 
   // ---- Per point: in the core? World coordinates for the size limit.
-  const Eigen::Isometry3f T_C_D = frame.T_C_D.cast<float>();
-  const CameraIntrinsics& K_c = frame.K_color;
   std::vector<char> in_core(points.size(), 0);
   for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f p_C = T_C_D * points[i];
-    if (!(p_C.z() > 0.f)) continue;
-    const int u = static_cast<int>(std::floor(K_c.fx * p_C.x() / p_C.z() + K_c.cx + 0.5)) - crop.x;
-    const int v = static_cast<int>(std::floor(K_c.fy * p_C.y() / p_C.z() + K_c.cy + 0.5)) - crop.y;
-    if (u >= 0 && v >= 0 && u < crop.width && v < crop.height) {
-      in_core[i] = core.ptr<uint8_t>(v)[u] != 0;
+    cv::Point pixel;
+    if (colorPixelOf(frame, points[i].cast<double>(), &pixel) && crop.contains(pixel)) {
+      in_core[i] = core.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] != 0;
     }
   }
 

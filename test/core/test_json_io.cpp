@@ -149,12 +149,12 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   }
   EXPECT_EQ(objectsToJson(loaded, summary, true), text);
   // Out-of-range votes or coordinates are refused with the field named.
-  for (const std::string& bad :
+  for (const char* bad :
        {"[0, 0, 0, 70000, 0]", "[0, 0, 2000000, 1, 0]", "[0, 0, 1]", "[0, 0, 0, -1, 0]"}) {
     std::string broken = text;
     const size_t at = broken.find("\"voxels\":[");
     ASSERT_NE(at, std::string::npos);
-    broken.insert(at + 10, bad + ",");
+    broken.insert(at + 10, std::string(bad) + ",");
     const Status status = objectsFromJson(broken, &loaded, &summary);
     EXPECT_FALSE(status.ok()) << bad;
     EXPECT_NE(status.message().find("evidence"), std::string::npos) << status.message();
