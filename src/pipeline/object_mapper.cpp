@@ -208,11 +208,10 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
                                           config_.extractor.max_valid_depth_m);
   }
   if (config_.floor.enable) {
+    // Every 2nd point of the view is plenty for the floor's layer.
     PointCloud sample_W;
-    sample_W.reserve(view.points_D.size() / 2 + 1);
-    const Eigen::Isometry3f T_W_D = frame.T_W_D.cast<float>();
-    for (size_t i = 0; i < view.points_D.size(); i += 2)
-      sample_W.push_back(T_W_D * view.points_D[i]);
+    sample_W.reserve(view.points_W.size() / 2 + 1);
+    for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
     floor_.addFrame(sample_W, gravity());
   }
   std::vector<PointCloud> clouds_D;
@@ -394,12 +393,10 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
 
   // Evidence fusion: the view's surface around the box votes on the voxels it sees.
   if (config_.database.fusion == "evidence" && context.view != nullptr) {
-    const Eigen::Isometry3f T_W_D_f = T_W_D.cast<float>();
     const Eigen::Matrix3f R_B_W = box.rotation.transpose().cast<float>();
     const Eigen::Vector3f centre = box.center_m.cast<float>();
     const Eigen::Vector3f half = (0.5 * box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
-    for (const Eigen::Vector3f& p_D : context.view->points_D) {
-      const Eigen::Vector3f p_W = T_W_D_f * p_D;
+    for (const Eigen::Vector3f& p_W : context.view->points_W) {
       if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) {
         observation->seen_W.push_back(p_W);
       }

@@ -113,6 +113,7 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
       cv::Point pixel(u, v);
       if (!frame.registered && !colorPixelOf(frame, p_D, &pixel)) pixel = cv::Point(-1, -1);
       view.points_D.push_back(p_D.cast<float>());
+      view.points_W.push_back((frame.T_W_D * p_D).cast<float>());
       view.pixels_color.push_back(pixel);
     }
   }

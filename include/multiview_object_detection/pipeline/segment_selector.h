@@ -59,6 +59,7 @@ class SegmentSelector {
   // keyframe for the bounding-surface test of every detection.
   struct FrameView {
     PointCloud points_D;
+    PointCloud points_W;  // the same points in the world frame (T_W_D), computed once
     std::vector<cv::Point> pixels_color;  // (-1, -1): outside the colour image
   };
   static FrameView makeFrameView(const RgbdFrame& frame, int stride, double min_depth_m,
