@@ -142,8 +142,7 @@ Status decodeFastestDet(const cv::Mat& output, const cv::Size& image_size,
   }
   *detections = suppressNonMaxima(std::move(candidates), config.nms_threshold);
   for (Detection2D& detection : *detections) {
-    detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
-    detection.mask(detection.box_px).setTo(255);
+    detection.mask = cv::Mat(detection.box_px.size(), CV_8UC1, cv::Scalar(255));  // box-sized
   }
   return Status::Ok();
 }
@@ -188,16 +187,15 @@ Status decodeMaskRcnn(const cv::Mat& detection_out, const cv::Mat& detection_mas
                                   r[5] * image_size.width, r[6] * image_size.height, image_size);
     if (detection.box_px.area() <= 0) continue;
     // The class's low-resolution mask, stretched over the box (OpenCV's mask_rcnn sample does the
-    // same), thresholded into the full-size binary mask.
+    // same), thresholded into the box-sized binary mask.
     const cv::Mat small(
         mask_h, mask_w, CV_32F,
         const_cast<float*>(masks.ptr<float>()) +
             (static_cast<size_t>(i) * mask_classes + class_index) * mask_h * mask_w);
     cv::Mat stretched;
     cv::resize(small, stretched, detection.box_px.size(), 0, 0, cv::INTER_LINEAR);
-    detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
-    cv::Mat roi = detection.mask(detection.box_px);
-    roi.setTo(255, stretched > config.mask_threshold);
+    detection.mask = cv::Mat::zeros(detection.box_px.size(), CV_8UC1);
+    detection.mask.setTo(255, stretched > config.mask_threshold);
     candidates.push_back(std::move(detection));
   }
   // The network already applies NMS; this only removes exact repeats the graph may emit.

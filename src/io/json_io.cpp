@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,8 @@ namespace mvod {
 namespace {
 
 using nlohmann::json;
+
+constexpr double kMaxMapCoordinateM = 1e5;
 
 // Clouds are stored at 1 mm: finer than any sensor here and it keeps map files small.
 double roundToMillimetre(float value) {
@@ -92,6 +95,13 @@ Status readVector3(const json& value, const std::string& path, Eigen::Vector3d* 
     if (!value[i].is_number()) return fieldError(path, "expected numbers");
     v[i] = value[i].get<double>();
     if (!std::isfinite(v[i])) return fieldError(path, "not finite");
+    // Every vector of a map is a position, size or direction in metres: beyond this it is not
+    // a room, and it would not survive float storage and the next save.
+    if (std::abs(v[i]) > kMaxMapCoordinateM) {
+      std::ostringstream text;
+      text << "beyond +-" << kMaxMapCoordinateM << " m (" << v[i] << ")";
+      return fieldError(path, text.str());
+    }
   }
   *out = v;
   return Status::Ok();
@@ -125,6 +135,9 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
   MapObject object;
   Status status;
   if (!(status = readInt(value, prefix, "id", 0, &object.id))) return status;
+  if (object.id > kMaxObjectId) {
+    return fieldError(prefix + "id", "beyond " + std::to_string(kMaxObjectId));
+  }
   const json* name = nullptr;
   if (!(status = member(value, prefix, "class_name", &name))) return status;
   if (!name->is_string()) return fieldError(prefix + "class_name", "expected a string");
@@ -312,7 +325,8 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
                    {"with_box", c.with_box},     {"inserted", c.inserted},
                    {"fused", c.fused},           {"before_refinement", c.before_refinement}};
   // With clouds the document is large: compact. Without, indented for people to read.
-  return doc.dump(include_clouds ? -1 : 2) + "\n";
+  // Names come from detectors: bytes that are not UTF-8 are replaced rather than failing the save.
+  return doc.dump(include_clouds ? -1 : 2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
@@ -320,8 +334,13 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   json doc;
   try {
     doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // The position only: the parser's message quotes the bytes it read, which may be anything
+    // (a file that is not a map at all).
+    return Status::Error("objects.json: not valid JSON (parse error at byte " +
+                         std::to_string(e.byte) + ")");
   } catch (const json::exception& e) {
-    return Status::Error(std::string("objects.json: not valid JSON: ") + e.what());
+    return Status::Error("objects.json: not valid JSON (error " + std::to_string(e.id) + ")");
   }
   if (!doc.is_object()) return fieldError("(document)", "expected a JSON object");
 
@@ -390,10 +409,36 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   return Status::Ok();
 }
 
+namespace {
+
+// Temporaries of `path` that a killed save left behind: "<name>.tmp.XXXXXX" beside it.
+void removeOrphanTemporaries(const std::string& dir, const std::string& name) {
+  const std::string prefix = name + ".tmp.";
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(dir, error), end; !error && it != end;
+       it.increment(error)) {
+    const std::string entry = it->path().filename().string();
+    if (entry.size() == prefix.size() + 6 && entry.compare(0, prefix.size(), prefix) == 0 &&
+        it->is_regular_file(error)) {
+      std::filesystem::remove(it->path(), error);
+    }
+  }
+}
+
+}  // namespace
+
 Status writeFileAtomic(const std::string& path, const std::string& content) {
   // The temporary lives in the target's folder so rename() stays on one filesystem (atomic).
   const size_t slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash);
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  if (name.empty()) return Status::Error("cannot write " + path + ": no file name");
+  struct stat existing {};
+  const bool replacing = ::stat(path.c_str(), &existing) == 0;
+  if (replacing && !S_ISREG(existing.st_mode)) {
+    return Status::Error("cannot write " + path + ": it exists and is not a regular file");
+  }
+  removeOrphanTemporaries(dir, name);
   std::string tmp_path = path + ".tmp.XXXXXX";
   std::vector<char> tmp_name(tmp_path.begin(), tmp_path.end());
   tmp_name.push_back('\0');
@@ -418,10 +463,14 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
     }
     written += static_cast<size_t>(n);
   }
-  // mkstemp creates 0600; give the file the usual permissions.
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  ::fchmod(fd, 0666 & ~mask);
+  // mkstemp creates 0600: a replaced file keeps its mode, a new one gets the usual permissions.
+  if (replacing) {
+    ::fchmod(fd, existing.st_mode & 07777);
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    ::fchmod(fd, 0666 & ~mask);
+  }
   if (::fsync(fd) != 0) return fail("cannot fsync");
   if (::close(fd) != 0) {
     const std::string message = "cannot close " + tmp_path + ": " + std::strerror(errno);
@@ -443,13 +492,63 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
   return Status::Ok();
 }
 
-Status readFile(const std::string& path, std::string* content) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error("cannot open " + path + ": " + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) return Status::Error("cannot read " + path);
-  *content = buffer.str();
+Status readFile(const std::string& path, std::string* content, size_t max_bytes) {
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; only regular files are read.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return Status::Error("cannot open " + path + ": " + std::strerror(errno));
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) {
+    const std::string message = "cannot stat " + path + ": " + std::strerror(errno);
+    ::close(fd);
+    return Status::Error(message);
+  }
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    const char* kind = S_ISDIR(info.st_mode)    ? "a directory"
+                       : S_ISFIFO(info.st_mode) ? "a FIFO"
+                       : S_ISCHR(info.st_mode)  ? "a character device"
+                       : S_ISBLK(info.st_mode)  ? "a block device"
+                       : S_ISSOCK(info.st_mode) ? "a socket"
+                                                : "not a regular file";
+    return Status::Error("cannot read " + path + ": it is " + std::string(kind) +
+                         ", not a regular file");
+  }
+  if (static_cast<unsigned long long>(info.st_size) > max_bytes) {
+    ::close(fd);
+    return Status::Error("cannot read " + path + ": " + std::to_string(info.st_size) +
+                         " bytes, more than the limit of " + std::to_string(max_bytes));
+  }
+  std::string data;
+  data.resize(static_cast<size_t>(info.st_size));
+  size_t done = 0;
+  while (true) {
+    if (done == data.size()) {
+      // The file may have grown since fstat; read on, within the limit.
+      if (data.size() >= max_bytes) {
+        char probe;
+        const ssize_t n = ::read(fd, &probe, 1);
+        if (n > 0) {
+          ::close(fd);
+          return Status::Error("cannot read " + path + ": more than the limit of " +
+                               std::to_string(max_bytes) + " bytes");
+        }
+        break;
+      }
+      data.resize(std::min(max_bytes, data.size() + 65536));
+    }
+    const ssize_t n = ::read(fd, &data[done], data.size() - done);
+    if (n < 0) {
+      if (errno == EINTR || errno == EAGAIN) continue;
+      const std::string message = "cannot read " + path + ": " + std::strerror(errno);
+      ::close(fd);
+      return Status::Error(message);
+    }
+    if (n == 0) break;
+    done += static_cast<size_t>(n);
+  }
+  ::close(fd);
+  data.resize(done);
+  *content = std::move(data);
   return Status::Ok();
 }
 

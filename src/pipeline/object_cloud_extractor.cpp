@@ -40,8 +40,9 @@ std::string matTypeName(const cv::Mat& m) {
 // One detection's mask, prepared for per-pixel lookups: its bounding box of non-zero pixels lets
 // most pixels skip the mask read.
 struct MaskLookup {
-  cv::Mat mask;  // CV_8UC1, colour image size
-  cv::Rect box;  // non-zero pixels; empty = nothing to select
+  cv::Mat mask;      // CV_8UC1
+  cv::Point origin;  // colour pixel of mask pixel (0, 0)
+  cv::Rect box;      // non-zero pixels, colour pixels; empty = nothing to select
 };
 
 }  // namespace
@@ -123,23 +124,34 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     const int k = 2 * config_.mask_erosion_px + 1;
     kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));
   }
+  const cv::Rect image_rect(cv::Point(0, 0), color_size);
   for (size_t i = 0; i < detections.size(); ++i) {
     const cv::Mat& mask = detections[i].mask;
     if (mask.empty()) continue;  // no pixels: an empty cloud
-    if (mask.type() != CV_8UC1 || mask.size() != color_size) {
-      return Status::Error(label + ": detection " + std::to_string(i) + " (" +
-                           detections[i].class_name + "): mask is " + std::to_string(mask.cols) +
-                           "x" + std::to_string(mask.rows) + " " + matTypeName(mask) +
-                           ", expected 8UC1 " + std::to_string(color_size.width) + "x" +
-                           std::to_string(color_size.height) + " (the colour image's size)");
+    cv::Point origin;
+    if (!maskOrigin(detections[i], color_size, &origin)) {
+      const cv::Rect& box = detections[i].box_px;
+      return Status::Error(
+          label + ": detection " + std::to_string(i) + " (" + detections[i].class_name +
+          "): mask is " + std::to_string(mask.cols) + "x" + std::to_string(mask.rows) + " " +
+          matTypeName(mask) + ", expected 8UC1 of its box's size " + std::to_string(box.width) +
+          "x" + std::to_string(box.height) + " or of the colour image's " +
+          std::to_string(color_size.width) + "x" + std::to_string(color_size.height));
     }
     if (config_.mask_erosion_px > 0) {
-      // Mask borders bleed into the background; the image border does not erode (OpenCV default).
-      cv::erode(mask, masks[i].mask, kernel);
+      // Mask borders bleed into the background; the image border does not erode (OpenCV
+      // default). The mask is eroded on its rectangle grown by the radius, so the pixels just
+      // outside it count as background, as they would on the whole image.
+      const int r = config_.mask_erosion_px;
+      const cv::Rect region =
+          cv::Rect(origin.x - r, origin.y - r, mask.cols + 2 * r, mask.rows + 2 * r) & image_rect;
+      cv::erode(maskInRegion(detections[i], color_size, region), masks[i].mask, kernel);
+      masks[i].origin = region.tl();
     } else {
       masks[i].mask = mask;
+      masks[i].origin = origin;
     }
-    masks[i].box = cv::boundingRect(masks[i].mask);
+    masks[i].box = cv::boundingRect(masks[i].mask) + masks[i].origin;
   }
   clouds_D->assign(detections.size(), PointCloud());
 
@@ -158,7 +170,10 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     if (!any_box.contains(cv::Point(uc, vc))) return;
     for (size_t i = 0; i < masks.size(); ++i) {
       if (!masks[i].box.contains(cv::Point(uc, vc))) continue;
-      if (masks[i].mask.ptr<uint8_t>(vc)[uc] != 0) (*clouds_D)[i].push_back(p_D);
+      const MaskLookup& m = masks[i];
+      if (m.mask.ptr<uint8_t>(vc - m.origin.y)[uc - m.origin.x] != 0) {
+        (*clouds_D)[i].push_back(p_D);
+      }
     }
   };
 

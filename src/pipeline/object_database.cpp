@@ -218,7 +218,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   }
 
   MapObject object;
-  object.id = next_id_++;
+  object.id = takeNextId();
   object.class_id = observation.class_id;
   object.class_name = observation.class_name;
   object.probability = observation.probability;
@@ -273,14 +273,31 @@ void ObjectDatabase::clear() {
   current_keyframe_ = -1;
 }
 
-void ObjectDatabase::setObjects(const std::vector<MapObject>& objects) {
-  clear();
+Status ObjectDatabase::setObjects(const std::vector<MapObject>& objects) {
+  std::map<int, MapObject> replaced;
   int largest_id = 0;
   for (const MapObject& object : objects) {
-    objects_[object.id] = object;
+    if (object.id < 0 || object.id > kMaxObjectId) {
+      return Status::Error("object id " + std::to_string(object.id) + " is outside [0, " +
+                           std::to_string(kMaxObjectId) + "]");
+    }
+    if (!replaced.emplace(object.id, object).second) {
+      return Status::Error("object id " + std::to_string(object.id) + " is repeated");
+    }
     largest_id = std::max(largest_id, object.id);
   }
+  clear();
+  objects_ = std::move(replaced);
   next_id_ = std::max(next_id_, largest_id + 1);
+  return Status::Ok();
+}
+
+int ObjectDatabase::takeNextId() {
+  if (next_id_ <= kMaxObjectId) return next_id_++;
+  // After a billion objects: the smallest id not in use (ids are reused only here).
+  int id = 0;
+  while (objects_.count(id) != 0) ++id;
+  return id;
 }
 
 }  // namespace mvod

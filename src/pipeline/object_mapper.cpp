@@ -180,6 +180,13 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   const std::vector<std::string>& coco = cocoClassNames();
   for (size_t i = 0; i < detections.size(); ++i) {
     const Detection2D& detection = detections[i];
+    if (!(detection.score >= 0.f && detection.score <= 1.f)) {
+      // A probability is what the map stores and averages (Eq. 8); a percentage would make a map
+      // that cannot be reloaded.
+      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
+                             ": score is not a probability in [0, 1], skipped");
+      continue;
+    }
     if (!(detection.score >= config_.min_probability)) continue;
     ++out.above_threshold;
     Detection2D named = detection;

@@ -156,9 +156,9 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   cv::Mat mask(crop.size(), CV_8UC1, cv::Scalar(0));
   const cv::Rect box_in_crop = box - crop.tl();
   bool box_only = true;
-  if (!detection.mask.empty() && detection.mask.size() == image_size &&
-      detection.mask.type() == CV_8UC1) {
-    detection.mask(crop).copyTo(mask);
+  cv::Point origin;
+  if (maskOrigin(detection, image_size, &origin)) {
+    mask = maskInRegion(detection, image_size, crop);
     const int filled = cv::countNonZero(mask(box_in_crop));
     box_only = filled >= 0.97 * box.area();
   } else {

@@ -136,7 +136,7 @@ std_msgs::ColorRGBA colorFromHue(double hue) {
 }
 
 // Golden-ratio hues: neighbouring ids and classes get clearly different colours.
-double goldenHue(int index) {
+double goldenHue(std::int64_t index) {
   constexpr double kGolden = 0.618033988749895;
   const double hue = 0.12 + kGolden * static_cast<double>(index);
   return hue - std::floor(hue);
@@ -358,7 +358,9 @@ geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T) {
 
 Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& msg,
                          const cv::Size& image_size, const std::string& topic,
-                         std::vector<Detection2D>* detections, std::vector<std::string>* warnings) {
+                         std::vector<Detection2D>* detections, std::vector<std::string>* warnings,
+                         size_t max_detections, size_t* capped) {
+  if (capped != nullptr) *capped = 0;
   const std::string what = describeInput(topic, msg.header);
   const size_t n = msg.boxes.size();
   if (msg.scores.size() != n) {
@@ -387,19 +389,44 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
 
   const std::vector<std::string>& coco = cocoClassNames();
   const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
-  std::vector<Detection2D> out;
-  out.reserve(n);
+  // Scores first: a probability outside [0, 1] (a detector publishing percentages) is refused, and
+  // only the max_detections highest-scoring detections are converted, so one huge message costs
+  // bounded memory and time.
+  std::vector<size_t> kept;
+  kept.reserve(std::min(n, max_detections + 1));
   for (size_t i = 0; i < n; ++i) {
+    const float score = msg.scores[i];
+    if (!(score >= 0.f && score <= 1.f)) {
+      if (warnings != nullptr) {
+        warnings->push_back(what + ": detection " + std::to_string(i) + ": score " +
+                            std::to_string(score) +
+                            " is not a probability in [0, 1] (percentages?), skipped");
+      }
+      continue;
+    }
+    kept.push_back(i);
+  }
+  if (kept.size() > max_detections) {
+    std::stable_sort(kept.begin(), kept.end(),
+                     [&msg](size_t a, size_t b) { return msg.scores[a] > msg.scores[b]; });
+    if (warnings != nullptr) {
+      warnings->push_back(what + ": " + std::to_string(kept.size()) + " detections; only the " +
+                          std::to_string(max_detections) +
+                          " highest-scoring are used (max_detections_per_frame)");
+    }
+    if (capped != nullptr) *capped = kept.size() - max_detections;
+    kept.resize(max_detections);
+    std::sort(kept.begin(), kept.end());  // message order
+  }
+  std::vector<Detection2D> out;
+  out.reserve(kept.size());
+  for (const size_t i : kept) {
     const std::string label = what + ": detection " + std::to_string(i);
     auto warn = [&](const std::string& text) {
       if (warnings != nullptr) warnings->push_back(label + ": " + text + ", skipped");
     };
     Detection2D detection;
     detection.score = msg.scores[i];
-    if (!std::isfinite(detection.score)) {
-      warn("score is not finite");
-      continue;
-    }
     const int id = msg.class_ids.empty() ? -1 : msg.class_ids[i];
     const std::string name = msg.class_names.empty() ? std::string() : msg.class_names[i];
     if (id >= 0 && id < static_cast<int>(coco.size())) {
@@ -422,8 +449,7 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
     }
     detection.box_px = box;
     if (msg.masks.empty()) {
-      detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
-      detection.mask(box).setTo(255);
+      detection.mask = cv::Mat(box.size(), CV_8UC1, cv::Scalar(255));
     } else {
       const sensor_msgs::Image& mask_msg = msg.masks[i];
       if (mask_msg.encoding != enc::MONO8 && mask_msg.encoding != enc::TYPE_8UC1) {
@@ -441,10 +467,12 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
         if (warnings != nullptr) warnings->push_back(layout.message() + ", skipped");
         continue;
       }
-      cv::Mat mask(image_size, CV_8UC1);
-      for (int r = 0; r < image_size.height; ++r) {
-        std::memcpy(mask.ptr<uint8_t>(r), &mask_msg.data[static_cast<size_t>(r) * mask_msg.step],
-                    static_cast<size_t>(image_size.width));
+      // Only the box's pixels are kept (Detection2D's box-sized mask).
+      cv::Mat mask(box.size(), CV_8UC1);
+      for (int r = 0; r < box.height; ++r) {
+        std::memcpy(mask.ptr<uint8_t>(r),
+                    &mask_msg.data[static_cast<size_t>(r + box.y) * mask_msg.step + box.x],
+                    static_cast<size_t>(box.width));
       }
       if (cv::countNonZero(mask) == 0) {
         warn("mask is empty");
@@ -459,13 +487,14 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
 }
 
 multiview_object_detection::InstanceDetections detectionsToMsg(
-    const std::vector<Detection2D>& detections, const std_msgs::Header& header,
-    bool include_masks) {
+    const std::vector<Detection2D>& detections, const cv::Size& image_size,
+    const std_msgs::Header& header, bool include_masks) {
   multiview_object_detection::InstanceDetections msg;
   msg.header = header;
   bool all_masks = include_masks;
   for (const Detection2D& d : detections) {
-    if (d.mask.empty() || d.mask.type() != CV_8UC1) all_masks = false;
+    cv::Point origin;
+    if (!maskOrigin(d, image_size, &origin)) all_masks = false;
   }
   for (const Detection2D& d : detections) {
     sensor_msgs::RegionOfInterest roi;
@@ -478,7 +507,8 @@ multiview_object_detection::InstanceDetections detectionsToMsg(
     msg.class_names.push_back(d.class_name);
     msg.scores.push_back(d.score);
     if (all_masks) {
-      msg.masks.push_back(*cv_bridge::CvImage(header, enc::MONO8, d.mask).toImageMsg());
+      const cv::Mat mask = maskInRegion(d, image_size, cv::Rect(cv::Point(0, 0), image_size));
+      msg.masks.push_back(*cv_bridge::CvImage(header, enc::MONO8, mask).toImageMsg());
     }
   }
   return msg;
@@ -539,11 +569,13 @@ multiview_object_detection::ObjectArray objectsToMsg(const std::vector<MapObject
   return msg;
 }
 
-std_msgs::ColorRGBA classColor(int class_id) { return colorFromHue(goldenHue(class_id + 1)); }
+std_msgs::ColorRGBA classColor(int class_id) {
+  return colorFromHue(goldenHue(static_cast<std::int64_t>(class_id) + 1));
+}
 
 std_msgs::ColorRGBA objectColor(int object_id) {
   // Offset from the class palette so an object's points differ from its box colour sequence.
-  return colorFromHue(goldenHue(3 * object_id + 7));
+  return colorFromHue(goldenHue(3 * static_cast<std::int64_t>(object_id) + 7));
 }
 
 visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& objects,
@@ -630,6 +662,8 @@ void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs:
       4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
       sensor_msgs::PointField::FLOAT32, "rgb", 1, sensor_msgs::PointField::FLOAT32);
   modifier.resize(total);
+  // An iterator over an empty cloud binds a reference to no data (undefined behaviour).
+  if (total == 0) return;
   sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x");
   sensor_msgs::PointCloud2Iterator<float> y(*cloud, "y");
   sensor_msgs::PointCloud2Iterator<float> z(*cloud, "z");

@@ -14,6 +14,9 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxBufferedDetections = 300;
 // Detections are matched to a keyframe by the colour image's stamp, which a detector copies.
 constexpr double kDetectionStampToleranceS = 1e-3;
+// As in the keyframe buffer: a stamp this much older than the newest buffered one means time
+// jumped back, and the newer ones belong to an abandoned timeline.
+constexpr double kTimeJumpBackS = 1.0;
 
 }  // namespace
 
@@ -25,10 +28,25 @@ void DetectionsBuffer::unsubscribe() { sub_.shutdown(); }
 
 void DetectionsBuffer::wakeWaiting() { cv_.notify_all(); }
 
+void DetectionsBuffer::dropAfter(const ros::Time& stamp) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  dropAfterLocked(stamp);
+}
+
+void DetectionsBuffer::dropAfterLocked(const ros::Time& stamp) {
+  while (!detections_.empty() && detections_.back()->header.stamp > stamp) detections_.pop_back();
+}
+
 void DetectionsBuffer::detectionsCallback(
     const multiview_object_detection::InstanceDetectionsConstPtr& msg) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    if (!detections_.empty() &&
+        (detections_.back()->header.stamp - msg->header.stamp).toSec() > kTimeJumpBackS) {
+      warnThrottled("detections " + describeInput(topic(), msg->header) +
+                    ": time jumped back; the buffered later detections are dropped");
+      dropAfterLocked(msg->header.stamp + ros::Duration(kTimeJumpBackS));
+    }
     const auto it = std::upper_bound(
         detections_.begin(), detections_.end(), msg->header.stamp,
         [](const ros::Time& stamp,
@@ -42,7 +60,8 @@ void DetectionsBuffer::detectionsCallback(
 }
 
 bool DetectionsBuffer::waitFor(const KeyframeJob& job, double max_age_s, const cv::Size& image_size,
-                               const std::string& what, std::vector<Detection2D>* detections) {
+                               const std::string& what, size_t max_detections,
+                               std::vector<Detection2D>* detections) {
   const std_msgs::Header& header = job.msgs.color->header;
   const ros::Time stamp = header.stamp;
   const Clock::time_point deadline = job.received + std::chrono::duration_cast<Clock::duration>(
@@ -72,7 +91,14 @@ bool DetectionsBuffer::waitFor(const KeyframeJob& job, double max_age_s, const c
     return false;
   }
   std::vector<std::string> warnings;
-  const Status converted = detectionsFromMsg(*match, image_size, topic(), detections, &warnings);
+  size_t capped = 0;
+  const Status converted = detectionsFromMsg(*match, image_size, topic(), detections, &warnings,
+                                             max_detections, &capped);
+  if (capped > 0 && stats_ != nullptr) {
+    stats_->update([capped](ObjectDetectionStatistics& stats) {
+      stats.detections_capped += static_cast<int>(capped);
+    });
+  }
   for (const std::string& warning : warnings) warnThrottled(warning);
   if (!converted) {
     errorThrottled(what + " skipped: " + converted.message());

@@ -17,6 +17,10 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxPendingFrames = 100;
 constexpr size_t kMaxBufferedPoses = 2000;
 constexpr size_t kMaxPathPoses = 100000;
+// A stamp this much older than the newest seen means time jumped back (a bag restarted, a clock
+// reset, or the newest was a bogus future stamp): what was buffered for the abandoned timeline is
+// dropped. Smaller steps back are out-of-order input and are refused.
+constexpr double kTimeJumpBackS = 1.0;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -69,12 +73,15 @@ void KeyframeBuffer::addFrame(PendingFrame frame) {
   std::lock_guard<std::mutex> lock(mutex_);
   const std_msgs::Header& header = frame.msgs.color->header;
   if (!last_input_stamp_.isZero() && header.stamp <= last_input_stamp_) {
-    errorThrottled("RGB-D input dropped: " + describeInput(topics_.color, header) +
-                   " is older than or as old as the last frame (stamp " +
-                   stampText(last_input_stamp_) +
-                   "): out-of-order or repeated stamp (call ~reset after restarting a bag)");
-    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
-    return;
+    const double back_s = (last_input_stamp_ - header.stamp).toSec();
+    if (back_s <= kTimeJumpBackS) {
+      errorThrottled("RGB-D input dropped: " + describeInput(topics_.color, header) +
+                     " is older than or as old as the last frame (stamp " +
+                     stampText(last_input_stamp_) + "): out-of-order or repeated stamp");
+      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
+      return;
+    }
+    handleTimeJumpBack(header.stamp, back_s);
   }
   last_input_stamp_ = header.stamp;
   pending_.push_back(std::move(frame));
@@ -88,9 +95,32 @@ void KeyframeBuffer::addFrame(PendingFrame frame) {
   resolvePendingFrames();
 }
 
+void KeyframeBuffer::handleTimeJumpBack(const ros::Time& stamp, double back_s) {
+  const size_t dropped_frames = pending_.size();
+  pending_.clear();
+  dropPosesAfter(stamp + ros::Duration(kTimeJumpBackS));
+  selector_.reset();
+  if (on_time_jump_) on_time_jump_(stamp + ros::Duration(kTimeJumpBackS));
+  stats_->update([](ObjectDetectionStatistics& stats) { ++stats.time_jumps; });
+  char seconds[32];
+  std::snprintf(seconds, sizeof(seconds), "%.3f", back_s);
+  ROS_WARN(
+      "detected jump back in time of %s s on '%s' (stamp %s after %s; a restarted bag?): "
+      "%zu waiting frames, later poses and detections dropped, keyframe selection restarted; "
+      "the map is kept (call ~reset to clear it)",
+      seconds, topics_.color.c_str(), stampText(stamp).c_str(),
+      stampText(last_input_stamp_).c_str(), dropped_frames);
+}
+
+void KeyframeBuffer::dropPosesAfter(const ros::Time& stamp) {
+  while (!poses_.empty() && poses_.back().header.stamp > stamp) poses_.pop_back();
+}
+
 void KeyframeBuffer::reset() {
   std::lock_guard<std::mutex> lock(mutex_);
   pending_.clear();
+  poses_.clear();
+  if (on_time_jump_) on_time_jump_(ros::Time());  // all detections
   selector_.reset();
   last_input_stamp_ = ros::Time();  // a restarted bag may begin again
   keyframe_path_.poses.clear();
@@ -117,6 +147,13 @@ void KeyframeBuffer::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg)
                   config_.world_frame + "': used as if it were world_frame");
   }
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!poses_.empty() &&
+      (poses_.back().header.stamp - msg->header.stamp).toSec() > kTimeJumpBackS) {
+    warnThrottled("camera pose " + describeInput(pose_sub_.getTopic(), msg->header) +
+                  ": time jumped back from " + stampText(poses_.back().header.stamp) +
+                  ": the buffered poses after it are dropped");
+    dropPosesAfter(msg->header.stamp + ros::Duration(kTimeJumpBackS));
+  }
   const auto it =
       std::upper_bound(poses_.begin(), poses_.end(), msg->header.stamp,
                        [](const ros::Time& stamp, const geometry_msgs::PoseStamped& pose) {

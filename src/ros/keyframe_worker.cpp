@@ -42,7 +42,9 @@ KeyframeWorker::KeyframeWorker(const ClassPriors& priors,
       max_queue_size_(config->get().processing_queue_size),
       mapper_(std::make_unique<ObjectMapper>(config->get().mapperConfig(), priors)),
       segmenter_(std::move(segmenter)),
-      segmenter_injected_(segmenter_injected) {}
+      segmenter_injected_(segmenter_injected) {
+  updateSnapshotLocked();  // no other thread yet
+}
 
 KeyframeWorker::~KeyframeWorker() { stop(); }
 
@@ -183,6 +185,29 @@ bool KeyframeWorker::updateGravityFromTf(const std::string& what) {
   return true;
 }
 
+void KeyframeWorker::capDetections(int max_detections, const std::string& what,
+                                   std::vector<Detection2D>* detections) {
+  const size_t max = static_cast<size_t>(std::max(1, max_detections));
+  if (detections->size() <= max) return;
+  const size_t dropped = detections->size() - max;
+  warnThrottled(what + ": " + std::to_string(detections->size()) + " detections; only the " +
+                std::to_string(max) + " highest-scoring are used (max_detections_per_frame)");
+  std::vector<size_t> order(detections->size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [detections](size_t a, size_t b) {
+    return (*detections)[a].score > (*detections)[b].score;
+  });
+  order.resize(max);
+  std::sort(order.begin(), order.end());  // the detector's order
+  std::vector<Detection2D> kept;
+  kept.reserve(max);
+  for (const size_t i : order) kept.push_back(std::move((*detections)[i]));
+  *detections = std::move(kept);
+  stats_->update([dropped](ObjectDetectionStatistics& stats) {
+    stats.detections_capped += static_cast<int>(dropped);
+  });
+}
+
 void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   const std_msgs::Header& header = job.msgs.color->header;
   const std::string what = "keyframe " + describeInput(topics_.color, header);
@@ -211,7 +236,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   double detection_ms = 0.0;
   if (config.detector == "topic") {
     if (!detections_->waitFor(job, config.detections_max_age_s, frame.color_bgr.size(), what,
-                              &detections)) {
+                              static_cast<size_t>(config.max_detections_per_frame), &detections)) {
       stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
       return;
     }
@@ -232,6 +257,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
                                     return !(d.score >= config.segmenter.score_threshold);
                                   }),
                    detections.end());
+  capDetections(config.max_detections_per_frame, what, &detections);
 
   publishers_->publishDetectionImage(frame.color_bgr, detections, header);
 
@@ -244,6 +270,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
         mapper_->keyframesProcessed() % config.refine_every_n_keyframes == 0) {
       refineLocked("every " + std::to_string(config.refine_every_n_keyframes) + " keyframes");
     }
+    if (processed) updateSnapshotLocked();
   }
   if (!processed) {
     failed(what + " skipped: " + processed.message());
@@ -259,7 +286,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     stats.detection_ms = detection_ms;
     stats.stage_times = report.times;
   });
-  publishers_->publishMap(objects(), header.stamp);
+  publishers_->publishMap(snapshot()->objects, header.stamp);
 }
 
 void KeyframeWorker::refineLocked(const std::string& why) {
@@ -281,25 +308,39 @@ void KeyframeWorker::refineLocked(const std::string& why) {
 // ---------------------------------------------------------------------------------------------
 // The map, for the services
 
-std::vector<MapObject> KeyframeWorker::objects() const {
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
-  return databaseObjects(mapper_->database());
+void KeyframeWorker::updateSnapshotLocked() {
+  auto snapshot = std::make_shared<MapSnapshot>();
+  snapshot->objects = databaseObjects(mapper_->database());
+  snapshot->summary.keyframes = mapper_->keyframesProcessed();
+  snapshot->summary.gravity_down_W = -mapper_->gravity().up;
+  snapshot->summary.removed_atypical = removed_atypical_;
+  snapshot->summary.removed_intersecting = removed_intersecting_;
+  std::lock_guard<std::mutex> lock(snapshot_mutex_);
+  snapshot_ = std::move(snapshot);
 }
+
+std::shared_ptr<const KeyframeWorker::MapSnapshot> KeyframeWorker::snapshot() const {
+  std::lock_guard<std::mutex> lock(snapshot_mutex_);
+  return snapshot_;
+}
+
+std::vector<MapObject> KeyframeWorker::objects() const { return snapshot()->objects; }
 
 void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const {
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
-  *objects = databaseObjects(mapper_->database());
-  summary->keyframes = mapper_->keyframesProcessed();
-  summary->gravity_down_W = -mapper_->gravity().up;
-  summary->removed_atypical = removed_atypical_;
-  summary->removed_intersecting = removed_intersecting_;
+  const std::shared_ptr<const MapSnapshot> map = snapshot();
+  *objects = map->objects;
+  *summary = map->summary;
 }
 
-void KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary) {
+Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects,
+                                  const MapSummary& summary) {
   std::lock_guard<std::mutex> lock(mapper_mutex_);
-  mapper_->mutableDatabase().setObjects(objects);
+  const Status replaced = mapper_->mutableDatabase().setObjects(objects);
+  if (!replaced) return replaced;
   removed_atypical_ = summary.removed_atypical;
   removed_intersecting_ = summary.removed_intersecting;
+  updateSnapshotLocked();
+  return Status::Ok();
 }
 
 size_t KeyframeWorker::resetMap() {
@@ -308,6 +349,7 @@ size_t KeyframeWorker::resetMap() {
   mapper_->reset();
   removed_atypical_ = 0;
   removed_intersecting_ = 0;
+  updateSnapshotLocked();
   return removed;
 }
 
@@ -320,6 +362,7 @@ KeyframeWorker::Refinement KeyframeWorker::refine(const std::string& why) {
   refinement.removed_atypical = removed_atypical_ - atypical_before;
   refinement.removed_intersecting = removed_intersecting_ - intersecting_before;
   refinement.objects_left = mapper_->database().size();
+  updateSnapshotLocked();
   return refinement;
 }
 

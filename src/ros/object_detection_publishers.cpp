@@ -98,6 +98,8 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
       keyValue("frames received", stats.frames_received),
       keyValue("frames rejected", stats.frames_rejected),
       keyValue("pose failures", stats.pose_failures),
+      keyValue("time jumps back", stats.time_jumps),
+      keyValue("detections capped", stats.detections_capped),
       keyValue("keyframes selected", stats.keyframes_selected),
       keyValue("keyframes dropped", stats.keyframes_dropped),
       keyValue("keyframes processed", stats.keyframes_processed),

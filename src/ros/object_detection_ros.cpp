@@ -84,15 +84,21 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   input_ = std::make_unique<RgbdInput>(nh_, nh_private_, config, &stats_, shut_down_);
   publishers_ = std::make_unique<ObjectDetectionPublishers>(nh_, nh_private_, config, &stats_);
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-  if (config.detector == "topic") detections_ = std::make_unique<DetectionsBuffer>(shut_down_);
+  if (config.detector == "topic")
+    detections_ = std::make_unique<DetectionsBuffer>(shut_down_, &stats_);
   worker_ = std::make_unique<KeyframeWorker>(priors, std::move(segmenter), segmenter_injected,
                                              input_->topics(), config_.get(), *tf_buffer_,
                                              detections_.get(), publishers_.get(), &stats_);
   buffer_ = std::make_unique<KeyframeBuffer>(
       config, input_->topics(), *tf_buffer_, publishers_.get(), &stats_, shut_down_,
       [this](KeyframeJob job) { worker_->enqueue(std::move(job)); });
+  if (detections_) {
+    buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
+  }
   services_ = std::make_unique<ObjectDetectionServices>(
-      nh_private_, config.world_frame, worker_.get(), buffer_.get(), publishers_.get(), &stats_);
+      nh_private_, config.world_frame,
+      MapPathPolicy{config.map_directory, config.allow_any_map_path}, worker_.get(), buffer_.get(),
+      publishers_.get(), &stats_);
 
   // Dynamic reconfigure starts from the values in effect, not from the .cfg defaults.
   reconfigure_server_ = std::make_unique<ReconfigureServer>(reconfigure_mutex_, nh_private_);

@@ -64,6 +64,10 @@ Status ObjectDetectionRosConfig::isValid() const {
     return Status::Error("detections_max_age_s must be >= 0 (got " +
                          std::to_string(detections_max_age_s) + ")");
   }
+  if (max_detections_per_frame < 1 || max_detections_per_frame > 10000) {
+    return Status::Error("max_detections_per_frame must be in [1, 10000] (got " +
+                         std::to_string(max_detections_per_frame) + ")");
+  }
   if (processing_queue_size < 1) {
     return Status::Error("processing_queue_size must be >= 1 (got " +
                          std::to_string(processing_queue_size) + ")");
@@ -103,6 +107,9 @@ std::string ObjectDetectionRosConfig::print() const {
       << "score_threshold: " << segmenter.score_threshold << "\n"
       << "detector_backend: " << segmenter.backend << "\n"
       << "detections_max_age_s: " << detections_max_age_s << "\n"
+      << "max_detections_per_frame: " << max_detections_per_frame << "\n"
+      << "map_directory: " << (map_directory.empty() ? "(~/.ros default)" : map_directory) << "\n"
+      << "allow_any_map_path: " << (allow_any_map_path ? "true" : "false") << "\n"
       << "processing_queue_size: " << processing_queue_size << "\n"
       << "refine_every_n_keyframes: " << refine_every_n_keyframes << "\n"
       << "priors_file: " << priors_file << "\n"

@@ -10,10 +10,12 @@ namespace mvod {
 
 ObjectDetectionServices::ObjectDetectionServices(const ros::NodeHandle& nh_private,
                                                  const std::string& world_frame,
+                                                 const MapPathPolicy& map_paths,
                                                  KeyframeWorker* worker, KeyframeBuffer* buffer,
                                                  ObjectDetectionPublishers* publishers,
                                                  SharedStatistics* stats)
     : world_frame_(world_frame),
+      map_paths_(map_paths),
       worker_(worker),
       buffer_(buffer),
       publishers_(publishers),
@@ -52,20 +54,22 @@ bool ObjectDetectionServices::getObjects(
 
 bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Request& request,
                                       multiview_object_detection::MapFile::Response& response) {
-  if (request.path.empty()) {
+  std::string path;
+  Status status = resolveMapPath(request.path, map_paths_, true, &path);
+  if (!status) {
     response.success = false;
-    response.message = "save_map: the path is empty";
+    response.message = "save_map refused: " + status.message();
+    ROS_ERROR("%s", response.message.c_str());
     return true;
   }
   std::vector<MapObject> objects;
   MapSummary summary;
   worker_->mapSnapshot(&objects, &summary);
   summary.frames = stats_->get().frames_received;
-  const Status written = writeFileAtomic(request.path, objectsToJson(objects, summary, true));
+  const Status written = writeFileAtomic(path, objectsToJson(objects, summary, true));
   response.success = written.ok();
-  response.message = written
-                         ? "saved " + std::to_string(objects.size()) + " objects to " + request.path
-                         : "save_map: " + written.message();
+  response.message = written ? "saved " + std::to_string(objects.size()) + " objects to " + path
+                             : "save_map: " + written.message();
   if (written) {
     ROS_INFO("%s", response.message.c_str());
   } else {
@@ -79,19 +83,21 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
   std::string text;
   std::vector<MapObject> loaded;
   MapSummary summary;
-  Status status = readFile(request.path, &text);
+  std::string path;
+  Status status = resolveMapPath(request.path, map_paths_, false, &path);
+  if (status) status = readFile(path, &text);
   if (status) status = objectsFromJson(text, &loaded, &summary);
+  if (status) status = worker_->replaceMap(loaded, summary);
   if (!status) {
     response.success = false;
     response.message = "load_map refused '" + request.path + "': " + status.message() +
-                       "; the current map (" + std::to_string(worker_->objects().size()) +
+                       "; the current map (" + std::to_string(worker_->snapshot()->objects.size()) +
                        " objects) is kept";
     ROS_ERROR("%s", response.message.c_str());
     return true;
   }
-  worker_->replaceMap(loaded, summary);
   response.success = true;
-  response.message = "loaded " + std::to_string(loaded.size()) + " objects from " + request.path;
+  response.message = "loaded " + std::to_string(loaded.size()) + " objects from " + path;
   ROS_INFO("%s", response.message.c_str());
   publishers_->publishMap(worker_->objects(), ros::Time::now());
   return true;

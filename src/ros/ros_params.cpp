@@ -4,6 +4,8 @@
 
 #include <vector>
 
+#include "multiview_object_detection/io/map_path.h"
+
 namespace mvod {
 namespace {
 
@@ -90,6 +92,10 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "maskrcnn_graph", &seg.maskrcnn_graph, e);
   readParam(nh, "maskrcnn_labels", &seg.maskrcnn_labels, e);
   readParam(nh, "detections_max_age_s", &cfg.detections_max_age_s, e);
+  readParam(nh, "max_detections_per_frame", &cfg.max_detections_per_frame, e);
+  readParam(nh, "map_directory", &cfg.map_directory, e);
+  readParam(nh, "allow_any_map_path", &cfg.allow_any_map_path, e);
+  if (cfg.map_directory.empty()) cfg.map_directory = defaultMapDirectory();
 
   readParam(nh, "processing_queue_size", &cfg.processing_queue_size, e);
   readParam(nh, "refine_every_n_keyframes", &cfg.refine_every_n_keyframes, e);

@@ -24,6 +24,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -35,9 +36,9 @@
 
 #include "cli_args.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
-#include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
+#include "multiview_object_detection/ros/conversions.h"
 
 namespace mvod {
 namespace {
@@ -90,6 +91,24 @@ struct Options {
   bool lz4 = false;
   bool quiet = false;
 };
+
+bool isValidGraphName(const std::string& name) {
+  if (name.empty()) return false;
+  size_t start = name[0] == '/' ? 1 : 0;
+  if (start == name.size()) return false;
+  while (start <= name.size()) {
+    size_t end = name.find('/', start);
+    if (end == std::string::npos) end = name.size();
+    if (end == start) return false;  // "//" or a trailing '/'
+    if (!std::isalpha(static_cast<unsigned char>(name[start]))) return false;
+    for (size_t i = start; i < end; ++i) {
+      const unsigned char c = static_cast<unsigned char>(name[i]);
+      if (!std::isalnum(c) && c != '_') return false;
+    }
+    start = end + 1;
+  }
+  return true;
+}
 
 int usageError(const std::string& message) {
   std::cerr << "dataset_to_bag: " << message << "\n" << kUsage;
@@ -174,6 +193,20 @@ int parseOptions(int argc, char** argv, Options* options) {
   if (options->output_path.empty()) return usageError("--output is required");
   if (options->camera.empty() || options->world_frame.empty() || options->pose_topic.empty()) {
     return usageError("--camera, --world-frame and --pose-topic must not be empty");
+  }
+  // ROS graph names: segments of [A-Za-z][A-Za-z0-9_]* joined by single '/' (a bag with other
+  // topic names cannot be subscribed to).
+  const std::pair<const char*, const std::string*> names[] = {
+      {"--camera", &options->camera},
+      {"--pose-topic", &options->pose_topic},
+      {"--detections-topic", &options->detections_topic},
+      {"--world-frame", &options->world_frame}};
+  for (const auto& name : names) {
+    if (!isValidGraphName(*name.second)) {
+      return usageError(std::string(name.first) + " '" + *name.second +
+                        "' is not a valid ROS name: use letters, digits and '_', segments "
+                        "separated by single '/', each starting with a letter");
+    }
   }
   if (options->last >= 0 && options->last < options->first) {
     return usageError("--last " + std::to_string(options->last) + " is before --first " +
@@ -400,7 +433,8 @@ int convert(const Options& options) {
         }
       }
       try {
-        bag.write(options.detections_topic, header.stamp, detectionsToMsg(detections, header));
+        bag.write(options.detections_topic, header.stamp,
+                  detectionsToMsg(detections, frame.color_bgr.size(), header));
       } catch (const std::exception& e) {
         return fail(options.output_path + ": cannot write: " + e.what());
       }

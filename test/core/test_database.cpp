@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "multiview_object_detection/pipeline/object_database.h"
@@ -334,10 +335,34 @@ TEST_F(ObjectDatabaseTest, IdsAreNeverReused) {
   MapObject loaded;
   loaded.id = 42;
   loaded.class_name = "cup";
-  database.setObjects({loaded});
+  ASSERT_TRUE(database.setObjects({loaded}).ok());
   EXPECT_EQ(database.size(), 1u);
   EXPECT_NE(database.find(42), nullptr);
   EXPECT_EQ(database.nextId(), 43);
+
+  // Ids near INT_MAX (a hand-edited or hostile map) are refused, and the map is kept: the next
+  // id can never overflow.
+  MapObject huge = loaded;
+  huge.id = std::numeric_limits<int>::max();
+  const Status refused = database.setObjects({huge});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("2147483647"), std::string::npos) << refused.message();
+  EXPECT_NE(database.find(42), nullptr);
+  EXPECT_FALSE(database.setObjects({loaded, loaded}).ok());  // repeated id
+  EXPECT_NE(database.find(42), nullptr);
+
+  // The largest id allowed still leaves a next id: no object is dropped.
+  huge.id = kMaxObjectId;
+  ASSERT_TRUE(database.setObjects({huge}).ok());
+  const ObjectDatabase::FusionResult next = database.fuseOrInsert(
+      observation("chair", {20.0, 0.0, 0.5}, 0.8, 3), centroidProcessor(&calls));
+  EXPECT_GE(next.object_id, 0);
+  EXPECT_NE(next.object_id, kMaxObjectId);
+  EXPECT_EQ(database.size(), 2u);
+  const ObjectDatabase::FusionResult after = database.fuseOrInsert(
+      observation("chair", {30.0, 0.0, 0.5}, 0.8, 4), centroidProcessor(&calls));
+  EXPECT_EQ(database.size(), 3u);
+  EXPECT_NE(after.object_id, next.object_id);
 }
 
 TEST_F(ObjectDatabaseTest, ConfigValidation) {

@@ -12,9 +12,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/dnn_instance_segmenter.h"
 #include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 #include "shared_data.h"
 
 namespace mvod {
@@ -70,8 +70,8 @@ TEST(FastestDetDecodeTest, BoxesScoresAndClasses) {
   EXPECT_NEAR(first.box_px.y, 231.3 - 120, 1.5);
   EXPECT_NEAR(first.box_px.width, 160, 2);
   EXPECT_NEAR(first.box_px.height, 240, 2);
-  // The box is the mask.
-  ASSERT_EQ(first.mask.size(), cv::Size(640, 480));
+  // The box is the mask (box-sized).
+  ASSERT_EQ(first.mask.size(), first.box_px.size());
   EXPECT_EQ(cv::countNonZero(first.mask), first.box_px.area());
   EXPECT_EQ(detections[1].class_name, "cup");
   EXPECT_NEAR(detections[1].score, 0.63f, 1e-4);
@@ -170,13 +170,14 @@ TEST_F(MaskRcnnDecodeTest, MaskOfTheDetectedClassIsStretchedOverTheBox) {
   EXPECT_EQ(chair.class_name, "chair");
   EXPECT_EQ(chair.class_id, cocoClassId("chair"));
   EXPECT_EQ(chair.box_px, cv::Rect(160, 120, 320, 240));
-  ASSERT_EQ(chair.mask.size(), cv::Size(640, 480));
+  ASSERT_EQ(chair.mask.size(), chair.box_px.size());  // box-sized
   // Left ~7/15 of the box is set, nothing outside the box.
-  const int area = cv::countNonZero(chair.mask);
+  const cv::Mat full = maskInRegion(chair, cv::Size(640, 480), cv::Rect(0, 0, 640, 480));
+  const int area = cv::countNonZero(full);
   EXPECT_NEAR(area, 320 * 240 * 7.0 / 15.0, 320 * 240 * 0.06);
-  EXPECT_EQ(cv::countNonZero(chair.mask(cv::Rect(0, 0, 160, 480))), 0);
-  EXPECT_GT(chair.mask.at<uint8_t>(240, 170), 0);
-  EXPECT_EQ(chair.mask.at<uint8_t>(240, 470), 0);
+  EXPECT_EQ(cv::countNonZero(full(cv::Rect(0, 0, 160, 480))), 0);
+  EXPECT_GT(full.at<uint8_t>(240, 170), 0);
+  EXPECT_EQ(full.at<uint8_t>(240, 470), 0);
   EXPECT_EQ(detections[1].class_name, "person");
   EXPECT_EQ(cv::countNonZero(detections[1].mask), 0);
 }
@@ -247,7 +248,7 @@ class FastestDetRealTest : public ::testing::Test {
     std::vector<std::string> names;
     for (const Detection2D& d : detections) {
       names.push_back(d.class_name);
-      EXPECT_EQ(d.mask.size(), bgr.size());
+      EXPECT_EQ(d.mask.size(), d.box_px.size());  // box-sized
       EXPECT_GT(cv::countNonZero(d.mask), 0);
     }
     return names;

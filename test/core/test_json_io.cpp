@@ -1,12 +1,15 @@
 // objects.json: round trip, validation of malformed documents, atomic writes.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_path.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
 #include "test_files.h"
 
@@ -368,6 +371,130 @@ TEST_F(AtomicWriteTest, MapFileRoundTrip) {
   ASSERT_TRUE(objectsFromJson(text, &loaded, &summary).ok());
   ASSERT_EQ(loaded.size(), 1u);
   expectSameObject(objects[0], loaded[0], true);
+}
+
+TEST_F(AtomicWriteTest, ReplacedFilesKeepTheirModeAndKilledSavesLeaveNoTemporaries) {
+  const std::string path = (dir_ / "map.json").string();
+  ASSERT_TRUE(writeFileAtomic(path, "first").ok());
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);  // 0600
+  // Temporaries of a save that was killed, and one of another file that is not ours to remove.
+  std::ofstream((dir_ / "map.json.tmp.AbC123").string()) << "orphan";
+  std::ofstream((dir_ / "map.json.tmp.XyZ789").string()) << "orphan";
+  std::ofstream((dir_ / "other.json.tmp.AbC123").string()) << "not ours";
+  ASSERT_TRUE(writeFileAtomic(path, "second").ok());
+  EXPECT_EQ(fs::status(path).permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_FALSE(fs::exists(dir_ / "map.json.tmp.AbC123"));
+  EXPECT_FALSE(fs::exists(dir_ / "map.json.tmp.XyZ789"));
+  EXPECT_TRUE(fs::exists(dir_ / "other.json.tmp.AbC123"));
+  // A directory is not replaced.
+  fs::create_directories(dir_ / "folder.json");
+  EXPECT_FALSE(writeFileAtomic((dir_ / "folder.json").string(), "x").ok());
+}
+
+TEST_F(AtomicWriteTest, ReadRefusesFifosDevicesDirectoriesAndHugeFilesAtOnce) {
+  const std::string fifo = (dir_ / "map.fifo").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string content = "untouched";
+  // Without a writer, opening the FIFO for reading would block forever.
+  Status read = readFile(fifo, &content);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.message().find("FIFO"), std::string::npos) << read.message();
+  read = readFile("/dev/zero", &content);  // would read until memory runs out
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.message().find("character device"), std::string::npos) << read.message();
+  read = readFile(dir_.string(), &content);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.message().find("directory"), std::string::npos) << read.message();
+  EXPECT_EQ(content, "untouched");
+  const std::string big = (dir_ / "big.json").string();
+  ASSERT_TRUE(writeFileAtomic(big, std::string(1000, 'x')).ok());
+  read = readFile(big, &content, 999);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.message().find("limit"), std::string::npos) << read.message();
+  ASSERT_TRUE(readFile(big, &content, 1000).ok());
+  EXPECT_EQ(content.size(), 1000u);
+}
+
+TEST_F(JsonIoErrorTest, ParseErrorsDoNotQuoteTheFile) {
+  // A file that is not a map (say /etc/shadow) must not have its bytes echoed in the error.
+  const Status status = objectsFromJson("root:$6$secret:19000:0:99999:7:::\n", nullptr, nullptr);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().find("root"), std::string::npos) << status.message();
+  EXPECT_EQ(status.message().find("r'"), std::string::npos) << status.message();
+}
+
+TEST_F(JsonIoErrorTest, ValuesThatWouldNotSurviveTheNextSaveAreRefused) {
+  nlohmann::json doc = good_;
+  doc["objects"][0]["points"][0] = {1e39, 0.0, 0.0};  // beyond float
+  expectError(doc.dump(), "objects[0].points[0]");
+  doc = good_;
+  doc["objects"][0]["center"] = {0.0, 2e5, 0.0};
+  expectError(doc.dump(), "objects[0].center");
+  doc = good_;
+  doc["objects"][0]["probability"] = 5.0;  // a percentage-style score
+  expectError(doc.dump(), "objects[0].probability");
+  doc = good_;
+  doc["objects"][0]["id"] = 2147483647;
+  expectError(doc.dump(), "objects[0].id");
+}
+
+TEST(JsonIoTest, WhatTheMapHoldsRoundTrips) {
+  // Class names are detector strings: bytes that are not UTF-8 must not make the map unsavable.
+  std::vector<MapObject> objects = {makeObject(1, "chair", 0.1, 4)};
+  objects[0].class_name = std::string("ch\xff\xfeir");
+  const std::string text = objectsToJson(objects, makeSummary(), true);
+  std::vector<MapObject> loaded;
+  ASSERT_TRUE(objectsFromJson(text, &loaded, nullptr).ok());
+  ASSERT_EQ(loaded.size(), 1u);
+  // Saved again, it reads the same.
+  std::vector<MapObject> again;
+  ASSERT_TRUE(objectsFromJson(objectsToJson(loaded, makeSummary(), true), &again, nullptr).ok());
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].class_name, loaded[0].class_name);
+}
+
+class MapPathTest : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = test::freshTestDir("mvod_map_path"); }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(MapPathTest, RelativePathsResolveIntoTheMapDirectoryAndOthersAreRefused) {
+  MapPathPolicy policy;
+  policy.directory = (dir_ / "maps").string();
+  std::string resolved;
+  ASSERT_TRUE(resolveMapPath("kitchen.json", policy, true, &resolved).ok());
+  EXPECT_EQ(resolved, (dir_ / "maps" / "kitchen.json").string());
+  EXPECT_TRUE(fs::is_directory(dir_ / "maps"));  // created for writing
+  ASSERT_TRUE(resolveMapPath("floor1/kitchen.json", policy, true, &resolved).ok());
+  EXPECT_TRUE(fs::is_directory(dir_ / "maps" / "floor1"));
+  ASSERT_TRUE(resolveMapPath((dir_ / "maps" / "a.json").string(), policy, false, &resolved).ok());
+
+  for (const std::string& outside :
+       {std::string("/etc/shadow"), std::string("../escape.json"),
+        (dir_ / "maps" / ".." / "x.json").string(), (dir_ / "mapsX" / "y.json").string()}) {
+    const Status status = resolveMapPath(outside, policy, true, &resolved);
+    ASSERT_FALSE(status.ok()) << outside;
+    EXPECT_NE(status.message().find("map_directory"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("allow_any_map_path"), std::string::npos);
+  }
+  // A link inside the directory that leads out of it is refused too.
+  fs::create_symlink("/etc", dir_ / "maps" / "etc");
+  EXPECT_FALSE(resolveMapPath("etc/passwd", policy, false, &resolved).ok());
+  EXPECT_FALSE(resolveMapPath("", policy, false, &resolved).ok());
+  EXPECT_FALSE(resolveMapPath("maps/", policy, false, &resolved).ok());
+
+  policy.allow_any_path = true;
+  ASSERT_TRUE(resolveMapPath((dir_ / "elsewhere.json").string(), policy, true, &resolved).ok());
+  EXPECT_EQ(resolved, (dir_ / "elsewhere.json").string());
+}
+
+TEST(MapPathDefaultTest, DefaultIsUnderRosHome) {
+  const std::string directory = defaultMapDirectory();
+  EXPECT_NE(directory.find("multiview_object_detection/maps"), std::string::npos);
+  EXPECT_EQ(directory[0], '/');
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
-// Mask R-CNN through OpenCV DNN without the real weights: test/tools/make_random_maskrcnn_graph writes a
-// frozen graph with random weights for the shared text graph (../shared/models); the "maskrcnn"
-// segmenter must load it, run a forward pass on a real 640x480 photo and decode the outputs.
-// Skipped when the text graph, labels or photo are absent. The layers are made 4x thinner
+// Mask R-CNN through OpenCV DNN without the real weights: test/tools/make_random_maskrcnn_graph
+// writes a frozen graph with random weights for the shared text graph (../shared/models); the
+// "maskrcnn" segmenter must load it, run a forward pass on a real 640x480 photo and decode the
+// outputs. Skipped when the text graph, labels or photo are absent. The layers are made 4x thinner
 // (--depth-multiplier 0.25: same graph, op types and output shapes) so a forward pass takes ~0.4 s
 // instead of ~2-3 s on two CPU cores.
 #include <gtest/gtest.h>
@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 #include "shared_data.h"
 
 namespace mvod {
@@ -147,13 +147,10 @@ TEST_F(MaskRcnnRandomWeightsTest, SegmenterDetectsAndDecodesMasks) {
     EXPECT_LE(d.score, 1.f);
     EXPECT_GT(d.box_px.area(), 0);
     EXPECT_EQ(d.box_px & cv::Rect(cv::Point(), kImageSize), d.box_px);
-    ASSERT_EQ(d.mask.size(), kImageSize);
+    // Box-sized: the stretched low-resolution mask stays inside its box by construction.
+    ASSERT_EQ(d.mask.size(), d.box_px.size());
     ASSERT_EQ(d.mask.type(), CV_8UC1);
-    // The stretched low-resolution mask stays inside its box.
-    cv::Mat outside = d.mask.clone();
-    outside(d.box_px).setTo(0);
-    EXPECT_EQ(cv::countNonZero(outside), 0);
-    masks_with_pixels += cv::countNonZero(d.mask(d.box_px)) > 0;
+    masks_with_pixels += cv::countNonZero(d.mask) > 0;
   }
   EXPECT_GT(masks_with_pixels, 0);
 }

@@ -270,6 +270,44 @@ TEST(ObjectCloudExtractorTest, UnregisteredFrameUsesColourProjection) {
   }
 }
 
+TEST(ObjectCloudExtractorTest, BoxSizedMasksGiveTheSameCloudsAsImageSizedOnes) {
+  const CameraIntrinsics K{30.0, 30.0, 15.5, 11.5, 32, 24};
+  const RgbdFrame frame = makeRegisteredFrame(smoothDepthMm(32, 24), K);
+  // An ellipse in a box inside the image, and one in a box at the image's corner.
+  std::vector<Detection2D> full;
+  for (const cv::Rect& box : {cv::Rect(6, 4, 14, 12), cv::Rect(0, 0, 10, 9)}) {
+    cv::Mat mask = cv::Mat::zeros(24, 32, CV_8UC1);
+    cv::ellipse(mask, (box.tl() + box.br()) / 2, cv::Size(box.width / 2 - 1, box.height / 2 - 1), 0,
+                0, 360, cv::Scalar(255), -1);
+    Detection2D detection = maskDetection(mask);
+    detection.box_px = box;
+    full.push_back(detection);
+  }
+  std::vector<Detection2D> cropped = full;
+  for (Detection2D& detection : cropped) {
+    cropMaskToBox(&detection, cv::Size(32, 24));
+    ASSERT_EQ(detection.mask.size(), detection.box_px.size());
+  }
+  for (const int erosion_px : {0, 1, 2}) {
+    ObjectCloudExtractor::Config config;
+    config.mask_erosion_px = erosion_px;
+    const ObjectCloudExtractor extractor(config);
+    std::vector<PointCloud> from_full;
+    std::vector<PointCloud> from_cropped;
+    ASSERT_TRUE(extractor.extract(frame, full, &from_full).ok());
+    ASSERT_TRUE(extractor.extract(frame, cropped, &from_cropped).ok());
+    ASSERT_EQ(from_full.size(), 2u);
+    ASSERT_EQ(from_cropped.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+      EXPECT_GT(from_full[i].size(), 0u);
+      ASSERT_EQ(from_full[i].size(), from_cropped[i].size()) << "erosion " << erosion_px;
+      for (size_t j = 0; j < from_full[i].size(); ++j) {
+        EXPECT_EQ(from_full[i][j], from_cropped[i][j]);
+      }
+    }
+  }
+}
+
 TEST(ObjectCloudExtractorTest, MasksOfTheWrongSizeOrTypeAreErrors) {
   const CameraIntrinsics K{30.0, 30.0, 7.5, 5.5, 16, 12};
   const RgbdFrame frame = makeRegisteredFrame(smoothDepthMm(16, 12), K);
@@ -277,8 +315,10 @@ TEST(ObjectCloudExtractorTest, MasksOfTheWrongSizeOrTypeAreErrors) {
   const cv::Mat good(12, 16, CV_8UC1, cv::Scalar(255));
 
   std::vector<PointCloud> clouds;
-  Status status = extractor.extract(
-      frame, {maskDetection(good), maskDetection(cv::Mat(12, 15, CV_8UC1))}, &clouds);
+  // Neither the image's size nor its box's (10x8).
+  Detection2D wrong_size = maskDetection(cv::Mat(12, 15, CV_8UC1, cv::Scalar(255)));
+  wrong_size.box_px = cv::Rect(2, 2, 10, 8);
+  Status status = extractor.extract(frame, {maskDetection(good), wrong_size}, &clouds);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("detection 1"), std::string::npos) << status.message();
   EXPECT_NE(status.message().find("15x12"), std::string::npos) << status.message();

@@ -428,6 +428,21 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   }
 }
 
+TEST(RosConversionsTest, EmptyMapsAndExtremeIdsConvert) {
+  // An empty map (after ~reset): a valid cloud of no points (no iterator over no data).
+  sensor_msgs::PointCloud2 cloud;
+  objectsToPointCloud2({}, makeHeader("map", 4.0), &cloud);
+  EXPECT_EQ(cloud.width * cloud.height, 0u);
+  EXPECT_EQ(cloud.fields.size(), 4u);
+  // Ids and classes at the ends of int get colours in [0, 1] (3 * id + 7 would overflow int).
+  for (const int id : {0, 1, std::numeric_limits<int>::max(), std::numeric_limits<int>::min()}) {
+    for (const std_msgs::ColorRGBA& c : {objectColor(id), classColor(id)}) {
+      EXPECT_TRUE(c.r >= 0.f && c.r <= 1.f && c.g >= 0.f && c.g <= 1.f && c.b >= 0.f && c.b <= 1.f)
+          << id;
+    }
+  }
+}
+
 TEST(RosConversionsTest, PointCloud2HoldsEveryObjectPointColouredPerObject) {
   std::vector<MapObject> objects = {
       makeObject(1, "chair", Eigen::Vector3d(1, 1, 0.45), Eigen::Vector3d(0.5, 0.6, 0.9), 0.3),
@@ -472,7 +487,7 @@ TEST(RosConversionsTest, DetectionsRoundTripWithMasks) {
       makeDetection("chair", 0.9f, cv::Rect(4, 6, 20, 30), size),
       makeDetection("cup", 0.55f, cv::Rect(40, 10, 12, 12), size)};
   const multiview_object_detection::InstanceDetections msg =
-      detectionsToMsg(detections, makeHeader("camera", 8.0));
+      detectionsToMsg(detections, size, makeHeader("camera", 8.0));
   ASSERT_EQ(msg.masks.size(), 2u);
   EXPECT_EQ(msg.masks[0].encoding, enc::MONO8);
 
@@ -486,9 +501,56 @@ TEST(RosConversionsTest, DetectionsRoundTripWithMasks) {
     EXPECT_EQ(back[i].class_name, detections[i].class_name);
     EXPECT_FLOAT_EQ(back[i].score, detections[i].score);
     EXPECT_EQ(back[i].box_px, detections[i].box_px);
-    ASSERT_EQ(back[i].mask.size(), size);
-    EXPECT_EQ(cv::countNonZero(back[i].mask != detections[i].mask), 0);
+    // Box-sized masks (a detection costs its box, not the image), the same pixels.
+    ASSERT_EQ(back[i].mask.size(), detections[i].box_px.size());
+    const cv::Rect image_rect(cv::Point(0, 0), size);
+    EXPECT_EQ(cv::countNonZero(maskInRegion(back[i], size, image_rect) != detections[i].mask), 0);
   }
+  // And back into a message: image-sized masks again.
+  const multiview_object_detection::InstanceDetections again =
+      detectionsToMsg(back, size, makeHeader("camera", 8.0));
+  ASSERT_EQ(again.masks.size(), 2u);
+  EXPECT_EQ(again.masks[0].data, msg.masks[0].data);
+  EXPECT_EQ(again.masks[1].data, msg.masks[1].data);
+}
+
+TEST(RosConversionsTest, ScoresOutsideZeroOneAreDroppedAndLargeMessagesCapped) {
+  const cv::Size size(64, 48);
+  multiview_object_detection::InstanceDetections msg;
+  msg.header = makeHeader("camera", 8.0);
+  // 2000 boxes covering the whole image (what a hostile or broken detector may send), with a
+  // percentage score and an absurd one among them.
+  for (int i = 0; i < 2000; ++i) {
+    sensor_msgs::RegionOfInterest roi;
+    roi.width = 64;
+    roi.height = 48;
+    msg.boxes.push_back(roi);
+    msg.class_ids.push_back(cocoClassId("chair"));
+    msg.scores.push_back(0.5f + 0.4f * static_cast<float>(i % 1000) / 1000.f);
+  }
+  msg.scores[3] = 5.f;
+  msg.scores[4] = 1e30f;
+  msg.scores[5] = -0.1f;
+  std::vector<Detection2D> detections;
+  std::vector<std::string> warnings;
+  size_t capped = 0;
+  ASSERT_TRUE(
+      detectionsFromMsg(msg, size, "detections", &detections, &warnings, 100, &capped).ok());
+  ASSERT_EQ(detections.size(), 100u);
+  EXPECT_EQ(capped, 1997u - 100u);
+  for (const Detection2D& d : detections) {
+    EXPECT_GE(d.score, 0.5f + 0.4f * 949.f / 1000.f);  // the highest-scoring
+    EXPECT_LE(d.score, 1.f);
+    EXPECT_EQ(d.mask.size(), d.box_px.size());
+  }
+  int score_warnings = 0;
+  int cap_warnings = 0;
+  for (const std::string& warning : warnings) {
+    if (contains(warning, "not a probability")) ++score_warnings;
+    if (contains(warning, "max_detections_per_frame")) ++cap_warnings;
+  }
+  EXPECT_EQ(score_warnings, 3);
+  EXPECT_EQ(cap_warnings, 1);
 }
 
 TEST(RosConversionsTest, DetectionsWithoutMasksUseTheBoxAndNamesDecideUnknownIds) {
@@ -510,8 +572,8 @@ TEST(RosConversionsTest, DetectionsWithoutMasksUseTheBoxAndNamesDecideUnknownIds
   EXPECT_EQ(detections[0].class_id, cocoClassId("chair"));
   EXPECT_EQ(detections[1].class_id, -1);  // the mapper reports it as an unknown class
   EXPECT_EQ(detections[1].class_name, "unicorn");
+  EXPECT_EQ(detections[0].mask.size(), cv::Size(20, 10));  // box-sized
   EXPECT_EQ(cv::countNonZero(detections[0].mask), 200);
-  EXPECT_EQ(cv::countNonZero(detections[0].mask(cv::Rect(10, 5, 20, 10))), 200);
 
   // A class id wins over a differing name.
   msg.class_ids = {cocoClassId("tv"), -1};
@@ -534,7 +596,7 @@ TEST(RosConversionsTest, DetectionsWithInconsistentArraysOrMasksAreRefused) {
   multiview_object_detection::InstanceDetections msg =
       detectionsToMsg({makeDetection("chair", 0.9f, cv::Rect(4, 6, 20, 30), size),
                        makeDetection("cup", 0.6f, cv::Rect(40, 10, 12, 12), size)},
-                      makeHeader("camera", 8.0));
+                      size, makeHeader("camera", 8.0));
   std::vector<Detection2D> detections(1);
 
   multiview_object_detection::InstanceDetections bad = msg;

@@ -4,11 +4,19 @@
 // takes its pose from a topic, /object_detection_tf from TF (for the missing-TF case).
 #include <gtest/gtest.h>
 
+#include <std_srvs/Trigger.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
 
 #include "multiview_object_detection/GetObjects.h"
+#include "multiview_object_detection/MapFile.h"
 #include "test_node_common.h"
 
 namespace mvod_test {
@@ -189,7 +197,9 @@ TEST_F(NodeBadInputTest, GoodFramesAfterBadOnesAreMapped) {
 TEST_F(NodeBadInputTest, OutOfOrderFrameIsDroppedAndLaterFramesProcessed) {
   const size_t keyframes = pose_node_->keyframePoses();
   ASSERT_GT(keyframes, 0u) << "needs the good frames first";
-  const ros::Time old_stamp = stampAt(7);  // older than the last processed frame (stamp 12)
+  // Half a second older than the last processed frame (stamp 12): out of order. (More than 1 s
+  // older is a jump back in time, below.)
+  const ros::Time old_stamp = stampAt(12) - ros::Duration(0.5);
   const ros::Time since = ros::Time::now();
   inputs_->publish(stream_->make(5, old_stamp), true, true, true);
   EXPECT_TRUE(reported(*pose_node_, {}, {"older", "order"}, since));
@@ -202,6 +212,177 @@ TEST_F(NodeBadInputTest, OutOfOrderFrameIsDroppedAndLaterFramesProcessed) {
   EXPECT_EQ(pose_node_->keyframePoses(), keyframes + 1);
   EXPECT_TRUE(answers(kPoseNode));
   EXPECT_TRUE(answers(kTfNode));
+}
+
+// ---- Hostile input (issue 12) -------------------------------------------------------------------
+
+// Calls a MapFile service; false when the call itself failed. `seconds` gets its duration.
+bool callMapFile(const std::string& service, const std::string& path,
+                 multiview_object_detection::MapFile* srv, double* seconds) {
+  srv->request.path = path;
+  const ros::WallTime start = ros::WallTime::now();
+  const bool called = ros::service::call(service, *srv);
+  *seconds = (ros::WallTime::now() - start).toSec();
+  return called;
+}
+
+std::string testMapDirectory() {
+  std::string directory;
+  ros::param::get(std::string(kPoseNode) + "/map_directory", directory);
+  return directory;
+}
+
+TEST_F(NodeBadInputTest, OneFutureStampDoesNotStopMapping) {
+  ASSERT_GT(pose_node_->keyframePoses(), 0u) << "needs the good frames first";
+  // A frame stamped a year ahead (a camera with a broken clock): images and detections only.
+  const ros::Time future = stampAt(365 * 24 * 3600);
+  const ros::Time since = ros::Time::now();
+  inputs_->publish(stream_->make(4, future), false, true, false);
+  ros::WallDuration(0.3).sleep();
+  // Later frames with the right clock are mapped again, by both nodes.
+  for (int i = 0; i < 2; ++i) {
+    const ros::Time stamp = stampAt(20 + i);
+    inputs_->publish(stream_->make(i, stamp), true, true, true);
+    EXPECT_TRUE(pose_node_->waitForObjectsAt(stamp, 20.0)) << "frame " << i << "\n"
+                                                           << pose_node_->allLogs();
+    EXPECT_TRUE(tf_node_->waitForObjectsAt(stamp, 20.0)) << "frame " << i << " (TF node)\n"
+                                                         << tf_node_->allLogs();
+  }
+  EXPECT_TRUE(reported(*pose_node_, {"jump back in time"}, {}, since));
+}
+
+TEST_F(NodeBadInputTest, ReplayingFromAnEarlierStampWithoutResetIsMapped) {
+  // A bag restarted without ~reset: time jumps back 6 s (within TF's 10 s cache, so the TF node
+  // can follow too; a replay with --clock clears TF itself).
+  for (const int second : {30, 31}) {
+    inputs_->publish(stream_->make(second - 30, stampAt(second)), true, true, true);
+    ASSERT_TRUE(pose_node_->waitForObjectsAt(stampAt(second), 20.0)) << pose_node_->allLogs();
+  }
+  const size_t keyframes = pose_node_->keyframePoses();
+  for (const int second : {25, 26}) {
+    const ros::Time stamp = stampAt(second);
+    inputs_->publish(stream_->make(second - 25, stamp), true, true, true);
+    EXPECT_TRUE(pose_node_->waitForObjectsAt(stamp, 20.0)) << second << "\n"
+                                                           << pose_node_->allLogs();
+    EXPECT_TRUE(tf_node_->waitForObjectsAt(stamp, 20.0)) << second << " (TF node)\n"
+                                                         << tf_node_->allLogs();
+  }
+  EXPECT_EQ(pose_node_->keyframePoses(), keyframes + 2);
+}
+
+TEST_F(NodeBadInputTest, ResetClearsThePoseBufferSoARestartedBagIsMapped) {
+  // A long run fills the pose buffer (2000 poses) with later stamps.
+  FrameMsgs later = stream_->make(0, stampAt(100));
+  for (int i = 0; i < 2100; ++i) {
+    later.pose.header.stamp = stampAt(100) + ros::Duration(0.01 * i);
+    inputs_->pose_.publish(later.pose);
+    if (i % 200 == 0) ros::WallDuration(0.02).sleep();
+  }
+  ros::WallDuration(0.5).sleep();
+  std_srvs::Trigger reset;
+  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/reset", reset));
+  ASSERT_TRUE(reset.response.success);
+  const ros::Time stamp = stampAt(40);
+  inputs_->publish(stream_->make(1, stamp), true, true, true);
+  EXPECT_TRUE(pose_node_->waitForObjectsAt(stamp, 20.0)) << pose_node_->allLogs();
+}
+
+TEST_F(NodeBadInputTest, TwoThousandBoxesAreCappedAndServicesKeepAnswering) {
+  const ros::Time stamp = stampAt(50);
+  FrameMsgs frame = stream_->make(2, stamp);
+  // 2000 whole-image boxes and two scores that are not probabilities (5: a percentage-style
+  // detector; 1e30).
+  const int width = static_cast<int>(frame.rgb.width);
+  const int height = static_cast<int>(frame.rgb.height);
+  multiview_object_detection::InstanceDetections& detections = frame.detections;
+  const auto original_boxes = detections.boxes.size();
+  for (int i = 0; i < 2000; ++i) {
+    sensor_msgs::RegionOfInterest roi;
+    roi.x_offset = static_cast<uint32_t>(i % 7);
+    roi.y_offset = static_cast<uint32_t>(i % 5);
+    roi.width = static_cast<uint32_t>(width);
+    roi.height = static_cast<uint32_t>(height);
+    detections.boxes.push_back(roi);
+    if (!detections.class_ids.empty()) detections.class_ids.push_back(56);  // chair
+    if (!detections.class_names.empty()) detections.class_names.push_back("chair");
+    detections.scores.push_back(i == 0 ? 5.f : (i == 1 ? 1e30f : 0.55f));
+  }
+  detections.masks.clear();  // box-only
+  ASSERT_GT(detections.boxes.size(), original_boxes);
+  const ros::Time since = ros::Time::now();
+  inputs_->publish(frame, true, true, true);
+  // The services answer while the keyframe is processed.
+  const ros::WallTime start = ros::WallTime::now();
+  EXPECT_TRUE(answers(kPoseNode));
+  EXPECT_LT((ros::WallTime::now() - start).toSec(), 5.0);
+  EXPECT_TRUE(pose_node_->waitForObjectsAt(stamp, 60.0)) << pose_node_->allLogs();
+  EXPECT_TRUE(reported(*pose_node_, {"max_detections_per_frame"}, {}, since));
+  EXPECT_TRUE(reported(*pose_node_, {"not a probability"}, {}, since));
+
+  // Whatever the map now holds saves and loads back.
+  multiview_object_detection::MapFile srv;
+  double seconds = 0.0;
+  const std::string name = "bad_input_" + std::to_string(::getpid()) + ".json";
+  ASSERT_TRUE(callMapFile(std::string(kPoseNode) + "/save_map", name, &srv, &seconds));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  ASSERT_TRUE(callMapFile(std::string(kPoseNode) + "/load_map", name, &srv, &seconds));
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
+  std::remove((testMapDirectory() + "/" + name).c_str());
+}
+
+TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
+  const std::string directory = testMapDirectory();
+  ASSERT_FALSE(directory.empty()) << "node_bad_input.test sets map_directory";
+  std::filesystem::create_directories(directory);
+  const std::string service = std::string(kPoseNode) + "/load_map";
+  const std::string tag = std::to_string(::getpid());
+  GetObjects before;
+  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/get_objects", before));
+  multiview_object_detection::MapFile srv;
+  double seconds = 0.0;
+
+  // A FIFO nobody writes to: refused at once, not after a writer appears.
+  const std::string fifo = directory + "/fifo_" + tag + ".json";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  ASSERT_TRUE(callMapFile(service, fifo, &srv, &seconds));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("FIFO"), std::string::npos) << srv.response.message;
+  EXPECT_LT(seconds, 5.0);
+  std::remove(fifo.c_str());
+
+  // A map with a point at 1e39 m (beyond float): refused, naming the field.
+  const std::string huge = "huge_" + tag + ".json";
+  {
+    std::ofstream out(directory + "/" + huge);
+    out << R"({"frames": 1, "keyframes": 1, "gravity_down": [0, 0, -1],
+      "removed": {"atypical": 0, "intersecting": 0},
+      "stage_ms": {"extraction": 0, "filter": 0, "lccp": 0, "manhattan": 0, "fusion": 0,
+                   "refinement": 0, "total": 0},
+      "objects": [{"id": 7, "class_name": "chair", "class_id": 56, "probability": 0.8,
+        "observations": 1, "center": [1, 1, 0.5], "size": [0.5, 0.5, 0.9],
+        "rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "yaw": 0, "num_points": 1,
+        "first_keyframe": 0, "last_keyframe": 0, "first_seen": 0, "last_seen": 0,
+        "points": [[1e39, 0, 0]]}]})";
+  }
+  ASSERT_TRUE(callMapFile(service, huge, &srv, &seconds));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("points[0]"), std::string::npos) << srv.response.message;
+  std::remove((directory + "/" + huge).c_str());
+
+  // Paths outside map_directory are refused for saving and loading.
+  ASSERT_TRUE(callMapFile(std::string(kPoseNode) + "/save_map", "/tmp/outside_" + tag + ".json",
+                          &srv, &seconds));
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("map_directory"), std::string::npos)
+      << srv.response.message;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/outside_" + tag + ".json"));
+  ASSERT_TRUE(callMapFile(service, "/etc/passwd", &srv, &seconds));
+  EXPECT_FALSE(srv.response.success);
+
+  // The map is what it was.
+  GetObjects after;
+  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/get_objects", after));
+  EXPECT_EQ(after.response.objects.objects.size(), before.response.objects.objects.size());
 }
 
 }  // namespace

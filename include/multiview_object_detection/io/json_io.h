@@ -41,9 +41,15 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
                        MapSummary* summary);
 
-// Atomic write (temporary file + rename) and whole-file read.
+// Atomic write: a temporary file beside `path`, then rename. A replaced file keeps its mode; the
+// temporaries of `path` a killed save left behind are removed first. Refuses to replace anything
+// but a regular file.
 Status writeFileAtomic(const std::string& path, const std::string& content);
-Status readFile(const std::string& path, std::string* content);
+// Whole-file read of a regular file of at most max_bytes: a FIFO, device or directory is refused
+// at once (never blocks, never reads forever).
+constexpr size_t kDefaultMaxFileBytes = size_t{1} << 30;  // 1 GiB
+Status readFile(const std::string& path, std::string* content,
+                size_t max_bytes = kDefaultMaxFileBytes);
 
 std::vector<MapObject> databaseObjects(const ObjectDatabase& database);
 

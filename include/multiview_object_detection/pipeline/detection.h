@@ -10,8 +10,10 @@
 
 namespace mvod {
 
-// One instance in a colour image. mask is CV_8UC1 with the colour image's size, non-zero = object; a detector
-// that only gives boxes fills the box.
+// One instance in a colour image. mask is CV_8UC1, non-zero = object, either box-sized (its pixel
+// (0, 0) is box_px.tl(); what the detectors and the node store, so a detection costs its box, not
+// a whole image) or the colour image's size (accepted from callers). A detector that only gives
+// boxes fills the box.
 struct Detection2D {
   int class_id = -1;  // index into cocoClassNames(), -1 when unknown
   std::string class_name;
@@ -20,13 +22,26 @@ struct Detection2D {
   cv::Mat mask;
 };
 
-// Colour image -> instance detections. Implementations: FileInstanceSegmenter (precomputed JSON + PNG masks);
-// the OpenCV DNN backends live in their own files.
+// Where the mask's pixel (0, 0) lies in a colour image of `image_size`: box_px.tl() for a
+// box-sized mask, (0, 0) for an image-sized one. False for an empty mask, a type other than
+// CV_8UC1, or any other size.
+bool maskOrigin(const Detection2D& detection, const cv::Size& image_size, cv::Point* origin);
+// The mask over `region` of the colour image: CV_8UC1 of region's size, 0 where the mask does
+// not reach. All zeros when maskOrigin() is false.
+cv::Mat maskInRegion(const Detection2D& detection, const cv::Size& image_size,
+                     const cv::Rect& region);
+// Makes an image-sized mask box-sized (a copy of the box's pixels); other masks are left as they
+// are.
+void cropMaskToBox(Detection2D* detection, const cv::Size& image_size);
+
+// Colour image -> instance detections. Implementations: FileInstanceSegmenter (precomputed JSON +
+// PNG masks); the OpenCV DNN backends live in their own files.
 class InstanceSegmenter {
  public:
   virtual ~InstanceSegmenter() = default;
-  // frame_name identifies the frame for backends that read precomputed results (e.g. "frame-000010").
-  // Detections of classes the segmenter cannot name are dropped and reported through `warnings`.
+  // frame_name identifies the frame for backends that read precomputed results (e.g.
+  // "frame-000010"). Detections of classes the segmenter cannot name are dropped and reported
+  // through `warnings`.
   virtual Status detect(const cv::Mat& image_bgr, const std::string& frame_name,
                         std::vector<Detection2D>* detections,
                         std::vector<std::string>* warnings = nullptr) = 0;

@@ -65,6 +65,10 @@ struct MapObject {
 using FusedCloudProcessor = std::function<bool(const PointCloud& points_W, PointCloud* segment_W,
                                                OrientedBox* box, double* yaw_rad)>;
 
+// Object ids lie in [0, kMaxObjectId]: far more than any map holds, and far enough from INT_MAX
+// that the next id never overflows.
+constexpr int kMaxObjectId = 1000000000;
+
 class ObjectDatabase {
  public:
   struct Config {
@@ -121,12 +125,15 @@ class ObjectDatabase {
   bool remove(int id);
   // Removes every object. Ids are still never reused: next_id_ keeps counting.
   void clear();
-  // Replaces the content (map loading); next ids continue after the largest loaded id.
-  void setObjects(const std::vector<MapObject>& objects);
+  // Replaces the content (map loading); next ids continue after the largest loaded id. Refuses
+  // (and keeps the content) ids outside [0, kMaxObjectId] or repeated.
+  Status setObjects(const std::vector<MapObject>& objects);
   int nextId() const { return next_id_; }
   size_t size() const { return objects_.size(); }
 
  private:
+  int takeNextId();
+
   Config config_;
   ClassPriors priors_;
   std::map<int, MapObject> objects_;

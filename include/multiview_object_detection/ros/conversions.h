@@ -76,16 +76,19 @@ geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T);
 // InstanceDetections -> Detection2D for an image of image_size. Array length mismatches are an
 // error (nothing is returned); per-detection problems (a mask of the wrong size or encoding, a box
 // outside the image) drop that detection and are described in `warnings`. class_id -1 or outside
-// COCO-80 takes the class from class_names.
+// COCO-80 takes the class from class_names. A score outside [0, 1] drops its detection; of more
+// than `max_detections`, the highest-scoring are kept (message order) and `capped` says how many
+// were dropped. Masks come back box-sized (see Detection2D).
 Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& msg,
                          const cv::Size& image_size, const std::string& topic,
                          std::vector<Detection2D>* detections,
-                         std::vector<std::string>* warnings = nullptr);
-// The reverse (tests, and a detector node of this package's format); include_masks false leaves
-// `masks` empty (boxes are the masks).
+                         std::vector<std::string>* warnings = nullptr, size_t max_detections = 100,
+                         size_t* capped = nullptr);
+// The reverse (tests, and a detector node of this package's format): masks of the image's size;
+// include_masks false leaves `masks` empty (boxes are the masks).
 multiview_object_detection::InstanceDetections detectionsToMsg(
-    const std::vector<Detection2D>& detections, const std_msgs::Header& header,
-    bool include_masks = true);
+    const std::vector<Detection2D>& detections, const cv::Size& image_size,
+    const std_msgs::Header& header, bool include_masks = true);
 
 // ---- Objects ----------------------------------------------------------------------------------
 multiview_object_detection::Object objectToMsg(const MapObject& object);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/pending_frames.h"
 
 namespace mvod {
@@ -21,7 +22,8 @@ namespace mvod {
 class DetectionsBuffer {
  public:
   // `shut_down` set: waitFor() gives up (wake it with wakeWaiting()).
-  explicit DetectionsBuffer(const std::atomic<bool>& shut_down) : shut_down_(shut_down) {}
+  DetectionsBuffer(const std::atomic<bool>& shut_down, SharedStatistics* stats)
+      : shut_down_(shut_down), stats_(stats) {}
 
   DetectionsBuffer(const DetectionsBuffer&) = delete;
   DetectionsBuffer& operator=(const DetectionsBuffer&) = delete;
@@ -34,14 +36,21 @@ class DetectionsBuffer {
   // converts them for an image of `image_size`; false (logged, naming the keyframe as `what`) when
   // none came or they are malformed. Keyframes must come in stamp order: older detections are
   // discarded.
+  // Of more than max_detections, the highest-scoring are converted (counted in `stats`).
   bool waitFor(const KeyframeJob& job, double max_age_s, const cv::Size& image_size,
-               const std::string& what, std::vector<Detection2D>* detections);
+               const std::string& what, size_t max_detections,
+               std::vector<Detection2D>* detections);
   void wakeWaiting();
+  // Drops the buffered detections stamped after `stamp` (a zero stamp: all of them); called when
+  // time jumped back and on ~reset.
+  void dropAfter(const ros::Time& stamp);
 
  private:
   void detectionsCallback(const multiview_object_detection::InstanceDetectionsConstPtr& msg);
+  void dropAfterLocked(const ros::Time& stamp);  // needs mutex_
 
   const std::atomic<bool>& shut_down_;
+  SharedStatistics* stats_;
   ros::Subscriber sub_;
 
   std::mutex mutex_;

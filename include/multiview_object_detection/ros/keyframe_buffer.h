@@ -29,6 +29,9 @@ class KeyframeBuffer {
  public:
   // Gets each selected keyframe, with input order kept (called with the buffer's lock held).
   using KeyframeCallback = std::function<void(KeyframeJob job)>;
+  // Told when time jumped back (and on reset): what other buffers hold after `stamp` belongs to
+  // the abandoned timeline (a zero stamp: everything).
+  using TimeJumpCallback = std::function<void(const ros::Time& stamp)>;
 
   KeyframeBuffer(const ObjectDetectionRosConfig& config, const RgbdTopics& topics,
                  const tf2_ros::Buffer& tf_buffer, ObjectDetectionPublishers* publishers,
@@ -43,10 +46,16 @@ class KeyframeBuffer {
   void start(ros::NodeHandle nh);
   void stop();
 
-  // A checked input from RgbdInput (ROS callback thread). Refused unless newer than the last one.
+  void setTimeJumpCallback(TimeJumpCallback on_time_jump) {
+    on_time_jump_ = std::move(on_time_jump);
+  }
+
+  // A checked input from RgbdInput (ROS callback thread). Refused when up to 1 s older than the
+  // last one (out of order); more than 1 s older is a jump back in time (a restarted bag, or a
+  // bogus future stamp before): the buffers are cleared and the frame is taken.
   void addFrame(PendingFrame frame);
-  // Forgets the waiting frames, the selector's state, the last stamp (a restarted bag may begin
-  // again) and the keyframe path, and publishes the empty path.
+  // Forgets the waiting frames, the buffered poses and detections, the selector's state, the last
+  // stamp (a restarted bag may begin again) and the keyframe path, and publishes the empty path.
   void reset();
   // Keyframe thresholds changed by dynamic reconfigure.
   void setKeyframeConfig(const KeyframeSelector::Config& keyframes);
@@ -56,7 +65,9 @@ class KeyframeBuffer {
 
   void poseCallback(const geometry_msgs::PoseStampedConstPtr& msg);
   void keyframeCallback(const geometry_msgs::PoseStampedConstPtr& msg);
-  void resolvePendingFrames();  // needs mutex_
+  void resolvePendingFrames();                                     // needs mutex_
+  void handleTimeJumpBack(const ros::Time& stamp, double back_s);  // needs mutex_
+  void dropPosesAfter(const ros::Time& stamp);                     // needs mutex_
   Lookup lookupCameraPose(const PendingFrame& frame, bool timed_out, Eigen::Isometry3d* T_W_C,
                           Eigen::Isometry3d* T_C_D, std::string* error);  // needs mutex_
 
@@ -67,6 +78,7 @@ class KeyframeBuffer {
   SharedStatistics* stats_;
   const std::atomic<bool>& shut_down_;
   KeyframeCallback on_keyframe_;
+  TimeJumpCallback on_time_jump_;
 
   ros::Subscriber pose_sub_;
   ros::Subscriber keyframe_sub_;

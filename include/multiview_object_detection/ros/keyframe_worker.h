@@ -55,12 +55,20 @@ class KeyframeWorker {
   void enqueue(KeyframeJob job);
   void clearQueue();
 
-  // The map, under the lock the worker holds while it processes a keyframe.
+  // The map as of the last finished keyframe or map change: reading it never waits for a keyframe
+  // being processed (~get_objects and ~save_map answer at once).
+  struct MapSnapshot {
+    std::vector<MapObject> objects;
+    MapSummary summary;  // all but `frames`
+  };
+  std::shared_ptr<const MapSnapshot> snapshot() const;
   std::vector<MapObject> objects() const;
   // The objects and the summary for objects.json (all but `frames`).
   void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const;
-  // Replaces the objects (~load_map); the keyframe count and gravity are kept.
-  void replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary);
+  // The map changes below wait for the keyframe being processed (bounded by
+  // max_detections_per_frame). Replaces the objects (~load_map); the keyframe count and gravity are
+  // kept. Refused (map unchanged) when the ids are out of range or repeated.
+  Status replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary);
   // Empties the map; ids keep counting. Returns the number of objects removed.
   size_t resetMap();
   // Sec. 3.5 on the current map.
@@ -70,8 +78,12 @@ class KeyframeWorker {
   void workerLoop();
   void processKeyframe(const KeyframeJob& job);
   void applyPendingReconfigure();
+  // Keeps the max_detections highest-scoring detections (in their order), counted and warned.
+  void capDetections(int max_detections, const std::string& what,
+                     std::vector<Detection2D>* detections);
   bool updateGravityFromTf(const std::string& what);
   void refineLocked(const std::string& why);  // needs mapper_mutex_
+  void updateSnapshotLocked();                // needs mapper_mutex_
 
   const RgbdTopics topics_;
   RuntimeConfig* config_;
@@ -93,6 +105,10 @@ class KeyframeWorker {
   std::unique_ptr<ObjectMapper> mapper_;
   int removed_atypical_ = 0;
   int removed_intersecting_ = 0;
+
+  // What the services read (snapshot_mutex_, innermost but for the statistics).
+  mutable std::mutex snapshot_mutex_;
+  std::shared_ptr<const MapSnapshot> snapshot_ = std::make_shared<MapSnapshot>();
 
   // The worker thread's own.
   std::unique_ptr<InstanceSegmenter> segmenter_;

@@ -5,9 +5,9 @@
 
 #include <string>
 
+#include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/pipeline/keyframe_selector.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
-#include "multiview_object_detection/detectors/segmenter_factory.h"
 
 namespace mvod {
 
@@ -43,6 +43,15 @@ struct ObjectDetectionRosConfig {
   SegmenterOptions segmenter;
   double detections_max_age_s =
       1.0;  // detector topic: how long a keyframe waits for its detections
+  // Of more detections in one frame, the highest-scoring are used (any detector); bounds the
+  // memory and time one frame can cost.
+  int max_detections_per_frame = 100;
+
+  // ~save_map / ~load_map: relative paths resolve into map_directory, and absolute paths must lie
+  // in it, unless allow_any_map_path. Empty = $ROS_HOME/multiview_object_detection/maps
+  // (~/.ros/...); ros_params fills it in.
+  std::string map_directory;
+  bool allow_any_map_path = false;
 
   int processing_queue_size = 2;      // keyframes waiting for the worker; the oldest is dropped
   int refine_every_n_keyframes = 10;  // 0 = only on ~refine and at shutdown

@@ -1,5 +1,6 @@
 // The node's services: ~get_objects, ~save_map, ~load_map, ~reset and ~refine. They run on their
-// own callback queue and thread, so a slow keyframe does not stall the input callbacks.
+// own callback queue and thread, so a slow keyframe does not stall the input callbacks; reading the
+// map (~get_objects, ~save_map) never waits for a keyframe. Map files lie in map_directory.
 #pragma once
 
 #include <multiview_object_detection/GetObjects.h>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "multiview_object_detection/io/map_path.h"
 #include "multiview_object_detection/ros/keyframe_buffer.h"
 #include "multiview_object_detection/ros/keyframe_worker.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
@@ -22,8 +24,9 @@ class ObjectDetectionServices {
  public:
   // Advertises the services in nh_private's namespace and starts their thread.
   ObjectDetectionServices(const ros::NodeHandle& nh_private, const std::string& world_frame,
-                          KeyframeWorker* worker, KeyframeBuffer* buffer,
-                          ObjectDetectionPublishers* publishers, SharedStatistics* stats);
+                          const MapPathPolicy& map_paths, KeyframeWorker* worker,
+                          KeyframeBuffer* buffer, ObjectDetectionPublishers* publishers,
+                          SharedStatistics* stats);
 
   ObjectDetectionServices(const ObjectDetectionServices&) = delete;
   ObjectDetectionServices& operator=(const ObjectDetectionServices&) = delete;
@@ -41,6 +44,7 @@ class ObjectDetectionServices {
   bool refine(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
 
   const std::string world_frame_;
+  const MapPathPolicy map_paths_;
   KeyframeWorker* worker_;
   KeyframeBuffer* buffer_;
   ObjectDetectionPublishers* publishers_;

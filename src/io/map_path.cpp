@@ -1,0 +1,71 @@
+#include "multiview_object_detection/io/map_path.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+
+namespace mvod {
+namespace fs = std::filesystem;
+
+std::string defaultMapDirectory() {
+  const char* ros_home = std::getenv("ROS_HOME");
+  if (ros_home != nullptr && ros_home[0] == '/') {
+    return std::string(ros_home) + "/multiview_object_detection/maps";
+  }
+  const char* home = std::getenv("HOME");
+  if (home != nullptr && home[0] == '/') {
+    return std::string(home) + "/.ros/multiview_object_detection/maps";
+  }
+  return "/tmp/multiview_object_detection/maps";
+}
+
+namespace {
+
+// `child` is `parent` or below it (both normal, absolute).
+bool liesIn(const fs::path& child, const fs::path& parent) {
+  auto c = child.begin();
+  for (auto p = parent.begin(); p != parent.end(); ++p, ++c) {
+    if (p->empty()) continue;  // a trailing separator
+    if (c == child.end() || *c != *p) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool for_writing,
+                      std::string* resolved) {
+  if (path.empty()) return Status::Error("the path is empty");
+  if (path.back() == '/') return Status::Error("'" + path + "' names a directory, not a file");
+  const std::string directory = policy.directory.empty() ? defaultMapDirectory() : policy.directory;
+  if (directory.empty() || directory[0] != '/') {
+    return Status::Error("map_directory '" + directory + "' is not an absolute path");
+  }
+  std::error_code error;
+  const fs::path dir = fs::weakly_canonical(fs::path(directory), error);
+  if (error) {
+    return Status::Error("map_directory '" + directory + "': " + error.message());
+  }
+  const fs::path requested = fs::path(path).is_absolute() ? fs::path(path) : dir / path;
+  // Links and '..' resolved: what the open would reach.
+  const fs::path target = fs::weakly_canonical(requested, error);
+  if (error) return Status::Error("'" + path + "': " + error.message());
+  const bool inside = liesIn(target, dir) && target != dir;
+  if (!inside && !policy.allow_any_path) {
+    return Status::Error("'" + path + "' (" + target.string() + ") is outside map_directory " +
+                         dir.string() +
+                         ": give a path relative to it, or set allow_any_map_path to allow "
+                         "any path");
+  }
+  if (for_writing && inside) {
+    fs::create_directories(target.parent_path(), error);
+    if (error) {
+      return Status::Error("cannot create " + target.parent_path().string() + ": " +
+                           error.message());
+    }
+  }
+  *resolved = target.string();
+  return Status::Ok();
+}
+
+}  // namespace mvod
