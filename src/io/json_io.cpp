@@ -225,7 +225,8 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
     const double size_m = (*evidence)["voxel_size_m"].get<double>();
     if (!(std::isfinite(size_m) && size_m > 0.0))
       return fieldError(where, "voxel_size_m must be > 0");
-    object.evidence_voxel_size_m = size_m;
+    // No voxels = no grid yet (0), as objectsToJson writes no "evidence" then: the map round-trips.
+    object.evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
     for (const json& voxel : (*evidence)["voxels"]) {
       bool ok = voxel.is_array() && voxel.size() == 5;
       for (size_t i = 0; ok && i < 5; ++i) ok = voxel[i].is_number_integer();

@@ -1,8 +1,11 @@
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <sstream>
+#include <thread>
 
 namespace mvod {
 namespace {
@@ -47,6 +50,10 @@ Status ObjectMapper::Config::isValid() const {
   if (!gravity_down_W.allFinite()) {
     return Status::Error("gravity_down_W must be finite (zero = estimate it)");
   }
+  if (num_threads < 0 || num_threads > 256) {
+    return Status::Error("num_threads must be in [0, 256] (got " + std::to_string(num_threads) +
+                         ")");
+  }
   if (min_object_points < 1) {
     return Status::Error("min_object_points must be >= 1 (got " +
                          std::to_string(min_object_points) + ")");
@@ -70,7 +77,8 @@ std::string ObjectMapper::Config::print() const {
   out << "min_probability: " << min_probability << "\n"
       << "gravity_down_W: [" << gravity_down_W.x() << ", " << gravity_down_W.y() << ", "
       << gravity_down_W.z() << "]" << (gravity_down_W.isZero() ? " (estimated)" : "") << "\n"
-      << "min_object_points: " << min_object_points << "\n";
+      << "min_object_points: " << min_object_points << "\n"
+      << "num_threads: " << num_threads << "\n";
   appendSection("extractor", extractor.print(), &out);
   appendSection("filter", filter.print(), &out);
   appendSection("lccp", lccp.print(), &out);
@@ -239,24 +247,41 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   }
   out.times.extraction_ms = msSince(t);
 
+  // Sec. 3.2-3.3 for each detection, on the thread pool: each reads the frame and the mapper's
+  // settings only, and writes its own slot.
+  struct SingleView {
+    Status status;
+    ObjectObservation observation;
+    StageTimes times;
+  };
+  std::vector<SingleView> views(kept.size());
+  const auto run_one = [&](size_t k) {
+    if (clouds_D[k].empty()) {
+      views[k].status = Status::Error("no valid depth inside the mask");
+      return;
+    }
+    ViewContext context;
+    context.frame = &frame;
+    context.detection = &kept[k];
+    context.view = need_view ? &view : nullptr;
+    views[k].status =
+        runSingleView(clouds_D[k], frame.T_W_D, context, &views[k].observation, &views[k].times);
+  };
+  parallelFor(kept.size(), threadCount(), run_one);
+
+  // Eq. 5-8 in detection order: the same map whatever the thread count.
   for (size_t k = 0; k < kept.size(); ++k) {
     const Detection2D& detection = kept[k];
     const std::string what = label + ": " + detectionLabel(kept_index[k], detection);
-    if (clouds_D[k].empty()) {
-      out.warnings.push_back(what + ": no valid depth inside the mask");
+    // Stage times are summed over detections (CPU time when they ran in parallel).
+    out.times.filter_ms += views[k].times.filter_ms;
+    out.times.lccp_ms += views[k].times.lccp_ms;
+    out.times.manhattan_ms += views[k].times.manhattan_ms;
+    if (!views[k].status) {
+      out.warnings.push_back(what + ": " + views[k].status.message());
       continue;
     }
-    ObjectObservation observation;
-    ViewContext context;
-    context.frame = &frame;
-    context.detection = &detection;
-    context.view = need_view ? &view : nullptr;
-    const Status single =
-        runSingleView(clouds_D[k], frame.T_W_D, context, &observation, &out.times);
-    if (!single) {
-      out.warnings.push_back(what + ": " + single.message());
-      continue;
-    }
+    ObjectObservation& observation = views[k].observation;
     ++out.with_box;
     observation.class_id = detection.class_id;
     observation.class_name = detection.class_name;
@@ -285,6 +310,29 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   }
   out.times.total_ms = msSince(start);
   return Status::Ok();
+}
+
+int ObjectMapper::threadCount() const {
+  if (config_.num_threads > 0) return config_.num_threads;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+void ObjectMapper::parallelFor(size_t count, int threads, const std::function<void(size_t)>& job) {
+  const size_t workers = std::min(count, static_cast<size_t>(std::max(1, threads)));
+  if (workers <= 1) {
+    for (size_t k = 0; k < count; ++k) job(k);
+    return;
+  }
+  // Detections differ a lot in size: each worker takes the next one as it finishes.
+  std::atomic<size_t> next{0};
+  const auto work = [&] {
+    for (size_t k = next++; k < count; k = next++) job(k);
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(workers - 1);
+  for (size_t w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (std::thread& thread : pool) thread.join();
 }
 
 bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,

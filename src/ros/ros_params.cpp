@@ -110,6 +110,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   ObjectMapper::Config& m = cfg.mapper;
   readParam(nh, "min_probability", &m.min_probability, e);
   readParam(nh, "min_object_points", &m.min_object_points, e);
+  readParam(nh, "num_threads", &m.num_threads, e);
 
   readParam(nh, "extractor/min_valid_depth_m", &m.extractor.min_valid_depth_m, e);
   readParam(nh, "extractor/max_valid_depth_m", &m.extractor.max_valid_depth_m, e);

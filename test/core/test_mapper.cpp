@@ -122,6 +122,63 @@ TEST_F(ObjectMapperTest, SecondViewFusesIntoTheSameObject) {
   EXPECT_GT(report.times.fusion_ms, 0.0);
 }
 
+TEST_F(ObjectMapperTest, OneThreadAndManyThreadsGiveIdenticalMaps) {
+  // Several detections per keyframe (a mask, its box, a part of it, one on the wall), three views:
+  // the single-view stage runs on the pool, fusion in detection order.
+  std::vector<std::pair<RgbdFrame, std::vector<Detection2D>>> keyframes;
+  const Eigen::Vector3d positions[] = {{0.0, 0.0, 1.0}, {0.4, 0.1, 1.0}, {-0.3, 0.2, 1.1}};
+  const double tilts[] = {20.0, 25.0, 18.0};
+  for (int i = 0; i < 3; ++i) {
+    cv::Mat mask;
+    const RgbdFrame frame =
+        renderFrame(scene_, test::cameraLookingAlongY(positions[i], tilts[i]), i + 1, &mask);
+    std::vector<Detection2D> detections = {detectionFromMask(mask, "chair", 0.9f)};
+    Detection2D box_only = detectionFromMask(mask, "couch", 0.6f);
+    box_only.mask.setTo(0);
+    box_only.mask(box_only.box_px).setTo(255);
+    detections.push_back(box_only);
+    cv::Mat top = mask.clone();
+    top(cv::Rect(0, top.rows / 2, top.cols, top.rows - top.rows / 2)).setTo(0);
+    if (cv::countNonZero(top) > 100) detections.push_back(detectionFromMask(top, "cup", 0.7f));
+    cv::Mat wall = cv::Mat::zeros(mask.size(), CV_8UC1);
+    wall(cv::Rect(40, 20, 120, 60)).setTo(255);
+    wall.setTo(0, mask);
+    if (cv::countNonZero(wall) > 100) detections.push_back(detectionFromMask(wall, "tv", 0.8f));
+    keyframes.emplace_back(frame, detections);
+  }
+  std::vector<std::vector<MapObject>> maps;
+  for (const int threads : {1, 4}) {
+    ObjectMapper::Config config = config_;
+    config.num_threads = threads;
+    ObjectMapper mapper(config, priors_);
+    for (const auto& keyframe : keyframes) {
+      KeyframeReport report;
+      ASSERT_TRUE(mapper.processKeyframe(keyframe.first, keyframe.second, &report).ok());
+      EXPECT_GE(report.with_box, 1);
+    }
+    std::vector<MapObject> objects;
+    for (const auto& entry : mapper.database().objects()) objects.push_back(entry.second);
+    maps.push_back(objects);
+  }
+  ASSERT_GE(maps[0].size(), 2u);
+  ASSERT_EQ(maps[0].size(), maps[1].size());
+  for (size_t i = 0; i < maps[0].size(); ++i) {
+    const MapObject& a = maps[0][i];
+    const MapObject& b = maps[1][i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.class_name, b.class_name);
+    EXPECT_EQ(a.observations, b.observations);
+    EXPECT_EQ(a.probability, b.probability);
+    EXPECT_EQ(a.box.center_m, b.box.center_m) << a.class_name;
+    EXPECT_EQ(a.box.size_m, b.box.size_m) << a.class_name;
+    EXPECT_EQ(a.box.rotation, b.box.rotation) << a.class_name;
+    EXPECT_EQ(a.points_W, b.points_W) << a.class_name;
+    EXPECT_EQ(a.segment_W, b.segment_W) << a.class_name;
+  }
+  config_.num_threads = -1;
+  EXPECT_FALSE(config_.isValid().ok());
+}
+
 TEST_F(ObjectMapperTest, DetectionBelowTheThresholdIsDropped) {
   config_.min_probability = 0.5;
   ObjectMapper mapper(config_, priors_);

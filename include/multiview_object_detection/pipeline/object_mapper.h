@@ -2,6 +2,7 @@
 // and the tests all drive it.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -50,6 +51,11 @@ class ObjectMapper {
     // World gravity, pointing down. Zero vector = estimate it from the dominant horizontal plane.
     Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
     int min_object_points = 50;  // fewer points after filtering: the detection is dropped
+    // Threads for a keyframe's detections (floor cut, filter, LCCP, selection, box); 0 = one per
+    // core. The database is updated in detection order afterwards. Default 1: PCL's supervoxels
+    // visit voxels in heap-address order, so with more threads the same input can give slightly
+    // different segments (README, Bugs and limitations).
+    int num_threads = 1;
     ObjectCloudExtractor::Config extractor;
     PointCloudFilter::Config filter;
     LccpSegmenter::Config lccp;
@@ -119,6 +125,10 @@ class ObjectMapper {
     const SegmentSelector::FrameView* view = nullptr;
   };
   // processSingleView with the reason a detection was dropped.
+  int threadCount() const;
+  // job(0) ... job(count - 1) on up to `threads` threads (the caller's included); returns when all
+  // are done.
+  static void parallelFor(size_t count, int threads, const std::function<void(size_t)>& job);
   Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                        const ViewContext& context, ObjectObservation* observation,
                        StageTimes* times) const;
