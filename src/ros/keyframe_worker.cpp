@@ -287,6 +287,19 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     stats.stage_times = report.times;
   });
   publishers_->publishMap(snapshot()->objects, header.stamp);
+  recordLatency(msSince(job.received));
+}
+
+void KeyframeWorker::recordLatency(double latency_ms) {
+  latencies_ms_.push_back(latency_ms);
+  if (latencies_ms_.size() > 100) latencies_ms_.pop_front();
+  std::vector<double> sorted(latencies_ms_.begin(), latencies_ms_.end());
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median_ms = sorted[sorted.size() / 2];
+  stats_->update([latency_ms, median_ms](ObjectDetectionStatistics& stats) {
+    stats.latency_ms = latency_ms;
+    stats.latency_median_ms = median_ms;
+  });
 }
 
 void KeyframeWorker::refineLocked(const std::string& why) {

@@ -116,6 +116,8 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
       keyValue("fusion ms", stats.stage_times.fusion_ms),
       keyValue("refinement ms", stats.stage_times.refinement_ms),
       keyValue("keyframe total ms", stats.stage_times.total_ms),
+      keyValue("latency ms", stats.latency_ms),
+      keyValue("latency median ms", stats.latency_median_ms),
   };
   diagnostic_msgs::DiagnosticArray array;
   array.header.stamp = ros::Time::now();

@@ -114,6 +114,8 @@ class KeyframeWorker {
   std::unique_ptr<InstanceSegmenter> segmenter_;
   const bool segmenter_injected_;
   bool gravity_from_tf_known_ = false;
+  std::deque<double> latencies_ms_;  // the last 100 keyframes'
+  void recordLatency(double latency_ms);
 };
 
 }  // namespace mvod

@@ -25,6 +25,10 @@ struct ObjectDetectionStatistics {
   bool waiting_for_gravity = false;
   double detection_ms = 0.0;  // last keyframe
   StageTimes stage_times;     // last keyframe
+  // From a keyframe's images arriving to its objects being published (queueing, pose wait,
+  // detection and mapping): the last one and the median of the last 100.
+  double latency_ms = 0.0;
+  double latency_median_ms = 0.0;
 };
 
 // The counters behind one mutex, written from the callback, worker and service threads. The mutex
