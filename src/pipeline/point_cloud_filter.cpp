@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <sstream>
@@ -67,17 +68,20 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   // then outliers on the uniform-density cloud.
   const PointCloud in_range = passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m);
   const PointCloud voxelized = voxelize(in_range, config_.voxel_leaf_size_m);
-  return removeStatisticalOutliers(voxelized, config_.sor_mean_k, config_.sor_stddev_mul);
+  return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
+                                         config_.voxel_leaf_size_m);
 }
 
 PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
   if (!config_.enable) return points_W;
   // No pass-through: the fused cloud (Eq. 7) is in the world frame, depth means nothing there.
   if (on_grid_m == config_.voxel_leaf_size_m) {
-    return removeStatisticalOutliers(points_W, config_.sor_mean_k, config_.sor_stddev_mul);
+    return removeStatisticalOutliersOnGrid(points_W, config_.sor_mean_k, config_.sor_stddev_mul,
+                                           config_.voxel_leaf_size_m);
   }
   const PointCloud voxelized = voxelize(points_W, config_.voxel_leaf_size_m);
-  return removeStatisticalOutliers(voxelized, config_.sor_mean_k, config_.sor_stddev_mul);
+  return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
+                                         config_.voxel_leaf_size_m);
 }
 
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
@@ -156,6 +160,142 @@ PointCloud PointCloudFilter::removeStatisticalOutliers(const PointCloud& points,
   PointCloud out;
   out.reserve(kept.size());
   for (const auto index : kept) out.push_back(finite[static_cast<std::size_t>(index)]);
+  return out;
+}
+
+PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
+                                                             double stddev_mul, double cell_m) {
+  PointCloud finite = finitePoints(points);
+  if (mean_k < 1 || !std::isfinite(stddev_mul) ||
+      finite.size() < static_cast<std::size_t>(mean_k) + 1) {
+    return finite;
+  }
+  if (!(std::isfinite(cell_m) && cell_m > 0.0)) {
+    return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+  }
+  // Cells of the grid over the cloud's bounding box.
+  Eigen::Vector3f lo = finite[0];
+  Eigen::Vector3f hi = finite[0];
+  for (const Eigen::Vector3f& p : finite) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double inv_cell = 1.0 / cell_m;
+  Eigen::Array3i dims;
+  for (int d = 0; d < 3; ++d) {
+    const double cells = std::floor((static_cast<double>(hi[d]) - lo[d]) * inv_cell) + 1.0;
+    if (!(cells < 1e6)) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+    dims[d] = static_cast<int>(cells);
+  }
+  const std::int64_t num_cells =
+      static_cast<std::int64_t>(dims[0]) * dims[1] * static_cast<std::int64_t>(dims[2]);
+  // A dense table of cells when it is small (a view of an object); else the k-d tree.
+  if (num_cells > 16 * 1000 * 1000) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+  const std::size_t n = finite.size();
+  std::vector<Eigen::Array3i> cell_of(n);
+  std::vector<std::int32_t> count(static_cast<std::size_t>(num_cells) + 1, 0);
+  auto index_of = [&dims](const Eigen::Array3i& c) {
+    return (static_cast<std::int64_t>(c[2]) * dims[1] + c[1]) * dims[0] + c[0];
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const int c =
+          static_cast<int>(std::floor((static_cast<double>(finite[i][d]) - lo[d]) * inv_cell));
+      cell_of[i][d] = std::min(std::max(c, 0), dims[d] - 1);
+    }
+    ++count[static_cast<std::size_t>(index_of(cell_of[i])) + 1];
+  }
+  // Points sorted by cell (counting sort): cell c holds order[start[c] .. start[c + 1]).
+  std::vector<std::int32_t>& start = count;
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::int32_t> order(n);
+  {
+    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(index_of(cell_of[i]))]++)] =
+          static_cast<std::int32_t>(i);
+    }
+  }
+
+  // The exact k + 1 nearest (the query included, as PCL's search returns it), shell by shell of
+  // cells: a point in a cell s + 1 cells away (Chebyshev) is at least s cells away in space, so
+  // once the k + 1-th distance is within s cells nothing further can be nearer. Squared distances
+  // in float, summed dimension by dimension as FLANN's L2 does, so the result is PCL's.
+  const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
+  std::vector<float> mean_distance(n);
+  std::vector<float> best;  // max-heap of the smallest squared distances
+  best.reserve(want + 1);
+  const int max_shell = std::max({dims[0], dims[1], dims[2]});
+  // Sparse clouds (many isolated points far apart) would visit many empty cells: past this budget
+  // the k-d tree is cheaper.
+  const std::int64_t budget = 400 * static_cast<std::int64_t>(n) + 1000000;
+  std::int64_t visited = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& q = finite[i];
+    const Eigen::Array3i& qc = cell_of[i];
+    best.clear();
+    auto visit = [&](int x, int y, int z) {
+      ++visited;
+      if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
+      const std::int64_t c = index_of(Eigen::Array3i(x, y, z));
+      for (std::int32_t k = start[static_cast<std::size_t>(c)];
+           k < start[static_cast<std::size_t>(c) + 1]; ++k) {
+        const Eigen::Vector3f& p =
+            finite[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
+        float d2 = 0.f;
+        const float dx = q.x() - p.x();
+        d2 += dx * dx;
+        const float dy = q.y() - p.y();
+        d2 += dy * dy;
+        const float dz = q.z() - p.z();
+        d2 += dz * dz;
+        if (best.size() < want) {
+          best.push_back(d2);
+          std::push_heap(best.begin(), best.end());
+        } else if (d2 < best.front()) {
+          std::pop_heap(best.begin(), best.end());
+          best.back() = d2;
+          std::push_heap(best.begin(), best.end());
+        }
+      }
+    };
+    for (int s = 0; s <= max_shell; ++s) {
+      for (int dz = -s; dz <= s; ++dz) {
+        for (int dy = -s; dy <= s; ++dy) {
+          const bool inner = std::abs(dz) < s && std::abs(dy) < s;
+          for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
+            visit(qc[0] + dx, qc[1] + dy, qc[2] + dz);
+            if (s == 0) break;
+          }
+        }
+      }
+      if (best.size() == want) {
+        const double reach = s * cell_m;
+        if (static_cast<double>(best.front()) < reach * reach * (1.0 - 1e-6)) break;
+      }
+    }
+    if (visited > budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+    std::sort_heap(best.begin(), best.end());
+    double sum = 0.0;
+    for (std::size_t k = 1; k < best.size(); ++k) sum += std::sqrt(best[k]);
+    mean_distance[i] = static_cast<float>(sum / mean_k);
+  }
+  // PCL's threshold: mean + stddev_mul * standard deviation of the mean distances.
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance) {
+    sum += distance;
+    sq_sum += distance * distance;
+  }
+  const double count_d = static_cast<double>(n);
+  const double mean = sum / count_d;
+  const double variance = (sq_sum - sum * sum / count_d) / (count_d - 1.0);
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
+  }
   return out;
 }
 

@@ -127,6 +127,40 @@ TEST(PointCloudFilterOutliers, RemovesIsolatedPointsKeepsPlane) {
   for (const Eigen::Vector3f& p : out) EXPECT_NEAR(p.z(), 1.0f, 0.002f);
 }
 
+TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
+  // Voxelised surfaces (a floor, a box, a noisy sphere) plus scattered outliers, at several cell
+  // sizes and neighbour counts: the grid's k nearest neighbours give PCL's kept points.
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(0.f, 0.004f);
+  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+  PointCloud raw;
+  for (int i = 0; i < 20000; ++i) {
+    raw.emplace_back(uniform(rng), uniform(rng), noise(rng));                              // floor
+    raw.emplace_back(0.3f + 0.2f * uniform(rng), 0.2f * uniform(rng), 0.5f + noise(rng));  // top
+    Eigen::Vector3f d(noise(rng), noise(rng), noise(rng));
+    raw.push_back(Eigen::Vector3f(-0.5f, 0.5f, 0.3f) + 0.2f * d.normalized() + d);  // sphere
+  }
+  for (int i = 0; i < 300; ++i) raw.emplace_back(uniform(rng), uniform(rng), 1.f + uniform(rng));
+  for (const double leaf : {0.01, 0.02, 0.035}) {
+    const PointCloud voxelized = PointCloudFilter::voxelize(raw, leaf);
+    for (const int k : {5, 20}) {
+      for (const double mul : {1.0, 2.5}) {
+        const PointCloud pcl = PointCloudFilter::removeStatisticalOutliers(voxelized, k, mul);
+        const PointCloud grid =
+            PointCloudFilter::removeStatisticalOutliersOnGrid(voxelized, k, mul, leaf);
+        ASSERT_EQ(pcl.size(), grid.size()) << "leaf " << leaf << " k " << k << " mul " << mul;
+        EXPECT_LT(pcl.size(), voxelized.size());
+        for (size_t i = 0; i < pcl.size(); ++i) ASSERT_EQ(pcl[i], grid[i]);
+      }
+    }
+    // Not voxelised (several points per cell) and a cell size unlike the leaf: still exact.
+    const PointCloud pcl = PointCloudFilter::removeStatisticalOutliers(raw, 20, 2.5);
+    const PointCloud grid = PointCloudFilter::removeStatisticalOutliersOnGrid(raw, 20, 2.5, leaf);
+    ASSERT_EQ(pcl.size(), grid.size()) << "raw, cell " << leaf;
+    for (size_t i = 0; i < pcl.size(); ++i) ASSERT_EQ(pcl[i], grid[i]);
+  }
+}
+
 TEST(PointCloudFilterOutliers, TooFewPointsPassThrough) {
   const PointCloud points = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0.01f, 1),
                              Eigen::Vector3f(5, 5, 5)};

@@ -36,8 +36,14 @@ class PointCloudFilter {
   static PointCloud voxelize(const PointCloud& points, double leaf_size_m);
   static PointCloud passThroughDepth(const PointCloud& points_C, double min_depth_m,
                                      double max_depth_m);
+  // PCL's StatisticalOutlierRemoval (k-d tree).
   static PointCloud removeStatisticalOutliers(const PointCloud& points, int mean_k,
                                               double stddev_mul);
+  // The same result, with the k nearest neighbours found on a grid of cell_m cells (exact, shell
+  // by shell) instead of a k-d tree: several times faster on voxelised clouds, which have at most
+  // one point per cell. Falls back to the k-d tree for clouds spanning too many cells.
+  static PointCloud removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
+                                                    double stddev_mul, double cell_m);
 
  private:
   Config config_;
