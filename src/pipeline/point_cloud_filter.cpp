@@ -173,6 +173,9 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
   if (!(std::isfinite(cell_m) && cell_m > 0.0)) {
     return removeStatisticalOutliers(finite, mean_k, stddev_mul);
   }
+  // On a voxelised surface the k nearest lie within about sqrt(k) / 2 voxels: cells that wide keep
+  // the search to the 27 cells around the point (the result does not depend on it).
+  cell_m *= std::max(1.0, std::round(std::sqrt(mean_k + 1.0) / 1.5));
   // Cells of the grid over the cloud's bounding box.
   Eigen::Vector3f lo = finite[0];
   Eigen::Vector3f hi = finite[0];
@@ -217,14 +220,18 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
     }
   }
 
+  // Points in cell order, for locality.
+  std::vector<Eigen::Vector3f> sorted(n);
+  for (std::size_t k = 0; k < n; ++k) sorted[k] = finite[static_cast<std::size_t>(order[k])];
+
   // The exact k + 1 nearest (the query included, as PCL's search returns it), shell by shell of
   // cells: a point in a cell s + 1 cells away (Chebyshev) is at least s cells away in space, so
   // once the k + 1-th distance is within s cells nothing further can be nearer. Squared distances
-  // in float, summed dimension by dimension as FLANN's L2 does, so the result is PCL's.
+  // in float, summed dimension by dimension as FLANN's L2 does, and their roots added in ascending
+  // order as PCL does, so the result is PCL's.
   const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
   std::vector<float> mean_distance(n);
-  std::vector<float> best;  // max-heap of the smallest squared distances
-  best.reserve(want + 1);
+  std::vector<float> candidates;
   const int max_shell = std::max({dims[0], dims[1], dims[2]});
   // Sparse clouds (many isolated points far apart) would visit many empty cells: past this budget
   // the k-d tree is cheaper.
@@ -233,15 +240,14 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3f& q = finite[i];
     const Eigen::Array3i& qc = cell_of[i];
-    best.clear();
+    candidates.clear();
     auto visit = [&](int x, int y, int z) {
       ++visited;
       if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
-      const std::int64_t c = index_of(Eigen::Array3i(x, y, z));
-      for (std::int32_t k = start[static_cast<std::size_t>(c)];
-           k < start[static_cast<std::size_t>(c) + 1]; ++k) {
-        const Eigen::Vector3f& p =
-            finite[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])];
+      const std::size_t c = static_cast<std::size_t>(index_of(Eigen::Array3i(x, y, z)));
+      const std::int32_t end = start[c + 1];
+      for (std::int32_t k = start[c]; k < end; ++k) {
+        const Eigen::Vector3f& p = sorted[static_cast<std::size_t>(k)];
         float d2 = 0.f;
         const float dx = q.x() - p.x();
         d2 += dx * dx;
@@ -249,14 +255,7 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
         d2 += dy * dy;
         const float dz = q.z() - p.z();
         d2 += dz * dz;
-        if (best.size() < want) {
-          best.push_back(d2);
-          std::push_heap(best.begin(), best.end());
-        } else if (d2 < best.front()) {
-          std::pop_heap(best.begin(), best.end());
-          best.back() = d2;
-          std::push_heap(best.begin(), best.end());
-        }
+        candidates.push_back(d2);
       }
     };
     for (int s = 0; s <= max_shell; ++s) {
@@ -269,15 +268,19 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
           }
         }
       }
-      if (best.size() == want) {
+      if (s > 0 && candidates.size() >= want) {
+        // Keep only the `want` smallest so far.
+        std::nth_element(candidates.begin(), candidates.begin() + (want - 1), candidates.end());
+        candidates.resize(want);
+        const float kth = *std::max_element(candidates.begin(), candidates.end());
         const double reach = s * cell_m;
-        if (static_cast<double>(best.front()) < reach * reach * (1.0 - 1e-6)) break;
+        if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
       }
     }
     if (visited > budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
-    std::sort_heap(best.begin(), best.end());
+    std::sort(candidates.begin(), candidates.end());
     double sum = 0.0;
-    for (std::size_t k = 1; k < best.size(); ++k) sum += std::sqrt(best[k]);
+    for (std::size_t k = 1; k < want && k < candidates.size(); ++k) sum += std::sqrt(candidates[k]);
     mean_distance[i] = static_cast<float>(sum / mean_k);
   }
   // PCL's threshold: mean + stddev_mul * standard deviation of the mean distances.
