@@ -228,7 +228,8 @@ class Demo:
         command = ['roslaunch', '-p', str(port), PKG, 'replay.launch', 'bag:=' + a.bag, 'play:=false',
                    'rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
                    'pose_source:=topic', 'keyframe_mode:=every_n', 'keyframe_every_n:=%d' % a.keyframe_every,
-                   'processing_queue_size:=%d' % a.queue_size]
+                   'processing_queue_size:=%d' % a.queue_size,
+                   'map_directory:=' + os.path.abspath(a.output_dir)]
         if a.rviz_config:
             command.append('rviz_config:=' + a.rviz_config)
         if a.model_dir:

@@ -7,7 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <sstream>
+
+#include "multiview_object_detection/io/image_io.h"
 
 namespace mvod {
 namespace {
@@ -15,6 +18,11 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kFrameRateHz = 30.0;  // 7-Scenes (Kinect v1)
+constexpr double kMaxGravityComponent = 1e6;
+// Frames whose headers are read at open() to learn the cameras' image sizes.
+constexpr size_t kSizeProbeFrames = 10;
+// Missing files listed by name in a warning; the rest are counted.
+constexpr size_t kMaxNamedFrames = 5;
 
 std::string matTypeName(const cv::Mat& m) {
   static const char* const kDepthNames[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
@@ -100,6 +108,42 @@ bool parseDepthFileName(const std::string& file_name, int* index) {
   }
   *index = std::stoi(digits);
   return SevenScenesDataset::frameName(*index) + kSuffix == file_name;
+}
+
+// Frames that have a colour image or a pose but no depth image are not listed (a frame is its
+// depth image): say so, naming the missing files, instead of dropping them silently.
+std::vector<std::string> missingDepthWarnings(const fs::path& dir,
+                                              const std::vector<int>& frame_indices) {
+  const std::set<int> listed(frame_indices.begin(), frame_indices.end());
+  std::set<int> without_depth;
+  std::error_code error;
+  for (fs::directory_iterator it(dir, error), end; !error && it != end; it.increment(error)) {
+    const std::string file_name = it->path().filename().string();
+    for (const std::string suffix : {".color.png", ".color.jpg", ".pose.txt"}) {
+      if (file_name.size() <= suffix.size() ||
+          file_name.compare(file_name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+        continue;
+      }
+      const std::string stem = file_name.substr(0, file_name.size() - suffix.size());
+      int index = 0;
+      if (parseDepthFileName(stem + ".depth.png", &index) && listed.count(index) == 0) {
+        without_depth.insert(index);
+      }
+    }
+  }
+  if (without_depth.empty()) return {};
+  std::string names;
+  size_t named = 0;
+  for (const int index : without_depth) {
+    if (named == kMaxNamedFrames) break;
+    names += (named++ == 0 ? "" : ", ") + SevenScenesDataset::frameName(index) + ".depth.png";
+  }
+  if (without_depth.size() > named) {
+    names += " and " + std::to_string(without_depth.size() - named) + " more";
+  }
+  return {dir.string() + ": " + std::to_string(without_depth.size()) +
+          " frame(s) have a colour image or pose but no depth image and are skipped: missing " +
+          names};
 }
 
 }  // namespace
@@ -196,9 +240,22 @@ Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset
     std::vector<double> g;
     status = readNumbers(gravity_path.string(), 3, &g);
     if (!status) return status;
+    // A direction in any unit (m/s^2, mm/s^2, a unit vector); a huge value would overflow the
+    // norm and normalise to zero, which downstream means "estimate gravity".
+    for (const double value : g) {
+      if (std::abs(value) > kMaxGravityComponent) {
+        char text[64];
+        std::snprintf(text, sizeof(text), "%g", value);
+        return Status::Error(gravity_path.string() + ": gravity component " + text +
+                             " is out of range (|value| <= 1e6 expected); fix the file, or remove "
+                             "it to estimate gravity from the floor");
+      }
+    }
     const Eigen::Vector3d gravity(g[0], g[1], g[2]);
     if (!(gravity.norm() > 1e-9)) {
-      return Status::Error(gravity_path.string() + ": gravity direction is zero");
+      return Status::Error(gravity_path.string() +
+                           ": gravity direction is zero; fix the file, or remove it to estimate "
+                           "gravity from the floor");
     }
     result.gravity_down_W_ = gravity.normalized();
     result.has_gravity_ = true;
@@ -216,9 +273,33 @@ Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset
     return Status::Error(directory + ": no frame-NNNNNN.depth.png files");
   }
   std::sort(result.frame_indices_.begin(), result.frame_indices_.end());
+  result.warnings_ = missingDepthWarnings(dir, result.frame_indices_);
+  result.probeImageSizes();
 
   *dataset = std::move(result);
   return Status::Ok();
+}
+
+void SevenScenesDataset::probeImageSizes() {
+  const fs::path dir(directory_);
+  for (size_t k = 0; k < frame_indices_.size() && k < kSizeProbeFrames; ++k) {
+    const std::string stem = frameName(frame_indices_[k]);
+    ImageHeader header;
+    const fs::path depth_path = dir / (stem + ".depth.png");
+    if (depth_size_.empty() && readImageFileHeader(depth_path.string(), &header) &&
+        int64_t{header.size.width} * header.size.height <= kDefaultMaxImagePixels) {
+      depth_size_ = header.size;
+      depth_size_source_ = depth_path.filename().string();
+    }
+    // A JPEG may be turned by its EXIF orientation when decoded: its stored size says too little.
+    const fs::path color_path = dir / (stem + ".color.png");
+    if (color_size_.empty() && readImageFileHeader(color_path.string(), &header) &&
+        int64_t{header.size.width} * header.size.height <= kDefaultMaxImagePixels) {
+      color_size_ = header.size;
+      color_size_source_ = color_path.filename().string();
+    }
+    if (!depth_size_.empty() && !color_size_.empty()) break;
+  }
 }
 
 Status SevenScenesDataset::load(int index, RgbdFrame* frame) const {
@@ -243,22 +324,22 @@ Status SevenScenesDataset::load(int index, RgbdFrame* frame) const {
   Status status = readPose(pose_path.string(), &result.T_W_D);
   if (!status) return status;
 
-  try {
-    result.depth = cv::imread(depth_path.string(), cv::IMREAD_UNCHANGED);
-    result.color_bgr = cv::imread(color_path.string(), cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    return Status::Error(std::string("cannot read an image of ") + stem + ": " + e.what());
-  }
-  if (result.depth.empty()) {
-    return Status::Error(depth_path.string() + ": cannot read the image");
-  }
+  // Sizes are checked from the headers before anything is decoded (image bombs).
+  status = readImageChecked(depth_path.string(), cv::IMREAD_UNCHANGED, depth_size_,
+                            kDefaultMaxImagePixels, &result.depth,
+                            "the depth camera's size, from " + depth_size_source_);
+  if (!status) return status;
   if (result.depth.type() != CV_16UC1) {
     return Status::Error(depth_path.string() + ": depth is " + matTypeName(result.depth) +
                          ", expected 16-bit single channel (16UC1, millimetres)");
   }
-  if (result.color_bgr.empty()) {
-    return Status::Error(color_path.string() + ": cannot read the image");
-  }
+  const cv::Size expected_color_size = registered_ ? result.depth.size() : color_size_;
+  status = readImageChecked(color_path.string(), cv::IMREAD_COLOR, expected_color_size,
+                            kDefaultMaxImagePixels, &result.color_bgr,
+                            registered_ ? "the depth image's size: without color-intrinsics.txt "
+                                          "colour and depth are registered"
+                                        : "the colour camera's size, from " + color_size_source_);
+  if (!status) return status;
   if (registered_ && result.color_bgr.size() != result.depth.size()) {
     return Status::Error(depth_path.string() + ": depth " + sizeText(result.depth) +
                          " but colour " + sizeText(result.color_bgr) + " (" +

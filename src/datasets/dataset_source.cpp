@@ -47,6 +47,7 @@ Status openDatasetSource(const std::string& directory, const std::string& format
     opened.frame_name = [](int index) { return SevenScenesDataset::frameName(index); };
     opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
     opened.check = [](int) { return Status::Ok(); };
+    opened.warnings = dataset->warnings();
     opened.has_gravity = dataset->hasGravity();
     opened.gravity_down_W = dataset->gravityDown_W();
     if (dataset->hasGravity()) {
@@ -76,6 +77,7 @@ Status openDatasetSource(const std::string& directory, const std::string& format
     opened.frame_name = [](int index) { return SceneNNDataset::frameName(index); };
     opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
     opened.check = [dataset](int index) { return dataset->checkFrame(index); };
+    opened.warnings = dataset->warnings();
     opened.has_timestamps = dataset->hasTimestamps();
     // The SceneNN mesh and trajectory frame is y-up (shared/formats/scenenn.md).
     opened.has_gravity = true;

@@ -10,7 +10,10 @@
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <sstream>
+
+#include "multiview_object_detection/io/image_io.h"
 
 namespace mvod {
 namespace {
@@ -84,6 +87,42 @@ std::string fileNumber(int index) {
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), "%05d", index);
   return buffer;
+}
+
+// Frames whose headers are read at open() to learn the camera's image size.
+constexpr size_t kSizeProbeFrames = 10;
+// Missing files listed by name in a warning; the rest are counted.
+constexpr size_t kMaxNamedFrames = 5;
+
+// Colour images image/imageNNNNN.png without depth/depthNNNNN.png are not frames (a frame is its
+// depth image): say so, naming the missing files, instead of dropping them silently.
+std::vector<std::string> missingDepthWarnings(const fs::path& dir,
+                                              const std::vector<int>& frame_indices) {
+  const std::set<int> listed(frame_indices.begin(), frame_indices.end());
+  std::set<int> without_depth;
+  std::error_code error;
+  for (fs::directory_iterator it(dir / "image", error), end; !error && it != end;
+       it.increment(error)) {
+    const std::string file_name = it->path().filename().string();
+    int index = 0;
+    // "image00012.png" has the shape of "depth00012.png".
+    if (file_name.compare(0, 5, "image") == 0 &&
+        parseDepthFileName("depth" + file_name.substr(5), &index) && !listed.count(index)) {
+      without_depth.insert(index);
+    }
+  }
+  if (without_depth.empty()) return {};
+  std::string names;
+  size_t named = 0;
+  for (const int index : without_depth) {
+    if (named == kMaxNamedFrames) break;
+    names += (named++ == 0 ? "" : ", ") + ("depth/depth" + fileNumber(index) + ".png");
+  }
+  if (without_depth.size() > named) {
+    names += " and " + std::to_string(without_depth.size() - named) + " more";
+  }
+  return {dir.string() + ": " + std::to_string(without_depth.size()) +
+          " colour image(s) have no depth image and are skipped: missing " + names};
 }
 
 }  // namespace
@@ -276,6 +315,19 @@ Status SceneNNDataset::open(const std::string& directory, SceneNNDataset* datase
     return Status::Error(depth_dir.string() + ": no depthNNNNN.png files");
   }
   std::sort(result.frame_indices_.begin(), result.frame_indices_.end());
+  result.warnings_ = missingDepthWarnings(dir, result.frame_indices_);
+  // The camera's image size from the first readable depth header (no decoding).
+  for (size_t k = 0; k < result.frame_indices_.size() && k < kSizeProbeFrames; ++k) {
+    const fs::path depth_path =
+        depth_dir / ("depth" + fileNumber(result.frame_indices_[k]) + ".png");
+    ImageHeader header;
+    if (readImageFileHeader(depth_path.string(), &header) &&
+        int64_t{header.size.width} * header.size.height <= kDefaultMaxImagePixels) {
+      result.image_size_ = header.size;
+      result.image_size_source_ = "depth/" + depth_path.filename().string();
+      break;
+    }
+  }
 
   const std::string trajectory_path = (dir / "trajectory.log").string();
   Status status = readTrajectory(trajectory_path, &result.T_W_C_by_index_);
@@ -322,20 +374,19 @@ Status SceneNNDataset::load(int index, RgbdFrame* frame) const {
   result.stamp_s = hasTimestamps() ? stamps_s_.at(index) : (index - 1) / kDefaultFrameRateHz;
   result.T_W_D = T_W_C_by_index_.at(index - 1);
 
-  try {
-    result.depth = cv::imread(depth_path.string(), cv::IMREAD_UNCHANGED);
-    result.color_bgr = cv::imread(color_path.string(), cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    return Status::Error("cannot read an image of " + result.name + ": " + e.what());
-  }
-  if (result.depth.empty()) return Status::Error(depth_path.string() + ": cannot read the image");
+  // Sizes are checked from the headers before anything is decoded (image bombs).
+  Status status = readImageChecked(depth_path.string(), cv::IMREAD_UNCHANGED, image_size_,
+                                   kDefaultMaxImagePixels, &result.depth,
+                                   "the camera's size, from " + image_size_source_);
+  if (!status) return status;
   if (result.depth.type() != CV_16UC1) {
     return Status::Error(depth_path.string() +
                          ": expected a 16-bit single-channel depth image (millimetres)");
   }
-  if (result.color_bgr.empty()) {
-    return Status::Error(color_path.string() + ": cannot read the image");
-  }
+  status = readImageChecked(color_path.string(), cv::IMREAD_COLOR, result.depth.size(),
+                            kDefaultMaxImagePixels, &result.color_bgr,
+                            "the depth image's size: SceneNN depth is registered to colour");
+  if (!status) return status;
   if (result.color_bgr.size() != result.depth.size()) {
     return Status::Error(depth_path.string() + ": depth " + sizeText(result.depth) +
                          " but colour " + sizeText(result.color_bgr) +
@@ -348,7 +399,7 @@ Status SceneNNDataset::load(int index, RgbdFrame* frame) const {
   result.registered = true;
   result.T_C_D = Eigen::Isometry3d::Identity();
 
-  const Status status = result.validate();
+  status = result.validate();
   if (!status) return status;
   *frame = std::move(result);
   return Status::Ok();

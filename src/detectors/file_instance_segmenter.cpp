@@ -4,6 +4,7 @@
 // warning; a file that is not a JSON array of objects is an error.
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "multiview_object_detection/io/image_io.h"
 #include "multiview_object_detection/pipeline/class_priors.h"
 
 namespace mvod {
@@ -25,9 +27,26 @@ std::string sizeText(const cv::Size& size) {
   return std::to_string(size.width) + "x" + std::to_string(size.height);
 }
 
-// Reads one entry; false with *problem set when the entry has to be skipped.
+// "%g" of a number, for messages (std::to_string(1e30) prints 31 digits).
+std::string numberText(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
+// One entry that passed the cheap checks (class, score, box); its mask is made only if it is kept.
+struct Candidate {
+  size_t entry = 0;  // index in the document
+  Detection2D detection;
+  bool has_box = false;
+  fs::path mask_path;  // empty: the box is the mask
+};
+
+// Reads one entry without touching its mask file; false with *problem set when the entry has to
+// be skipped.
 bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& image_size,
-                Detection2D* detection, std::string* problem) {
+                Candidate* candidate, std::string* problem) {
+  Detection2D* detection = &candidate->detection;
   if (!entry.is_object()) {
     *problem = "not an object";
     return false;
@@ -65,8 +84,9 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
     return false;
   }
   const double score = score_it->get<double>();
-  if (!(score >= 0.0 && score <= 1.0)) {
-    *problem = "\"score\" " + std::to_string(score) + " is not in [0, 1]";
+  if (!std::isfinite(score) || score < 0.0 || score > 1.0) {
+    *problem = "\"score\" " + numberText(score) + " is not a probability in [0, 1]" +
+               (std::isfinite(score) && score > 1.0 && score <= 100.0 ? " (a percentage?)" : "");
     return false;
   }
   detection->score = static_cast<float>(score);
@@ -113,26 +133,31 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
       *problem = "\"mask\" is not a file name";
       return false;
     }
-    fs::path mask_path(mask_it->get<std::string>());
-    if (mask_path.is_relative()) mask_path = directory / mask_path;
-    std::error_code error;
-    if (!fs::is_regular_file(mask_path, error)) {
-      *problem = "mask " + mask_path.string() + ": no such file";
-      return false;
+    candidate->mask_path = fs::path(mask_it->get<std::string>());
+    if (candidate->mask_path.is_relative()) {
+      candidate->mask_path = directory / candidate->mask_path;
     }
+  } else if (!has_box) {
+    *problem = "neither \"box\" nor \"mask\"";
+    return false;
+  }
+  candidate->has_box = has_box;
+  return true;
+}
+
+// Reads the candidate's mask (or fills its box); false with *problem set when it has to be
+// skipped. The mask file's size is checked from its header before it is decoded.
+bool makeMask(const cv::Size& image_size, Candidate* candidate, std::string* problem) {
+  Detection2D* detection = &candidate->detection;
+  const bool has_box = candidate->has_box;
+  if (!candidate->mask_path.empty()) {
+    const fs::path& mask_path = candidate->mask_path;
     cv::Mat raw;
-    try {
-      raw = cv::imread(mask_path.string(), cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-      raw.release();
-    }
-    if (raw.empty()) {
-      *problem = "mask " + mask_path.string() + ": cannot read the image";
-      return false;
-    }
-    if (raw.size() != image_size) {
-      *problem = "mask " + mask_path.string() + " is " + sizeText(raw.size()) +
-                 ", expected the colour image's " + sizeText(image_size);
+    const Status read = readImageChecked(mask_path.string(), cv::IMREAD_UNCHANGED, image_size,
+                                         int64_t{image_size.width} * image_size.height, &raw,
+                                         "the colour image's size");
+    if (!read) {
+      *problem = "mask " + read.message();
       return false;
     }
     if (raw.channels() > 1) {
@@ -149,10 +174,6 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
       }
     }
   } else {
-    if (!has_box) {
-      *problem = "neither \"box\" nor \"mask\"";
-      return false;
-    }
     // A box-only detector: the box is the mask.
     detection->mask = cv::Mat::zeros(image_size, CV_8UC1);
     detection->mask(detection->box_px).setTo(255);
@@ -162,6 +183,14 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
 
 }  // namespace
 
+FileInstanceSegmenter::FileInstanceSegmenter(std::string directory)
+    : FileInstanceSegmenter(std::move(directory), Config()) {}
+
+Status FileInstanceSegmenter::Config::isValid() const {
+  if (max_detections < 1) return Status::Error("max_detections must be >= 1");
+  return Status::Ok();
+}
+
 Status FileInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string& frame_name,
                                      std::vector<Detection2D>* detections,
                                      std::vector<std::string>* warnings) {
@@ -169,40 +198,126 @@ Status FileInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string
   detections->clear();
   if (frame_name.empty()) return Status::Error("file detector: empty frame name");
   if (image_bgr.empty()) return Status::Error("file detector: " + frame_name + ": empty image");
+  const Status valid = config_.isValid();
+  if (!valid) return Status::Error("file detector: " + valid.message());
 
   const fs::path directory(directory_);
   const fs::path path = directory / (frame_name + ".json");
   std::error_code error;
-  if (!fs::exists(path, error)) return Status::Ok();  // no detections for this frame
-
-  std::ifstream in(path);
+  const fs::file_status status = fs::status(path, error);
+  if (status.type() == fs::file_type::not_found) return Status::Ok();  // no detections here
+  if (error) return Status::Error(path.string() + ": cannot be read: " + error.message());
+  // A folder or a FIFO is an error, not an exception or a blocked read.
+  if (status.type() != fs::file_type::regular) {
+    return Status::Error(path.string() +
+                         ": not a regular file (expected a JSON array of "
+                         "detections)");
+  }
+  const std::uintmax_t size_bytes = fs::file_size(path, error);
+  if (error) return Status::Error(path.string() + ": cannot be read: " + error.message());
+  if (size_bytes > static_cast<std::uintmax_t>(kMaxDetectionFileBytes)) {
+    return Status::Error(path.string() + ": " + std::to_string(size_bytes) +
+                         " bytes, more than the limit of " +
+                         std::to_string(kMaxDetectionFileBytes) + " bytes for a detection file");
+  }
+  std::ifstream in(path, std::ios::binary);
   if (!in) return Status::Error(path.string() + ": cannot be read");
+  std::string text(static_cast<size_t>(size_bytes), '\0');
+  in.read(&text[0], static_cast<std::streamsize>(text.size()));
+  if (in.bad() || static_cast<size_t>(in.gcount()) != text.size()) {
+    return Status::Error(path.string() + ": cannot be read");
+  }
+  return parseDetections(text, path.string(), directory_, image_bgr.size(), config_, detections,
+                         warnings);
+}
+
+Status FileInstanceSegmenter::parseDetections(const std::string& text, const std::string& source,
+                                              const std::string& mask_directory,
+                                              const cv::Size& image_size, const Config& config,
+                                              std::vector<Detection2D>* detections,
+                                              std::vector<std::string>* warnings) {
+  if (detections == nullptr) return Status::Error("parseDetections: detections is null");
+  detections->clear();
+  if (image_size.width <= 0 || image_size.height <= 0) {
+    return Status::Error(source + ": empty colour image");
+  }
+  const Status valid = config.isValid();
+  if (!valid) return Status::Error(source + ": " + valid.message());
   json document;
   try {
-    document = json::parse(in);
-  } catch (const json::exception& e) {
-    return Status::Error(path.string() + ": malformed JSON: " + e.what());
+    document = json::parse(text);
+  } catch (const std::exception& e) {  // json::exception, std::bad_alloc
+    return Status::Error(source + ": malformed JSON: " + e.what());
   }
   if (!document.is_array()) {
-    return Status::Error(path.string() +
+    return Status::Error(source +
                          ": expected a JSON array of detections [{\"class_name\", \"score\", "
                          "\"box\", \"mask\"}, ...]");
   }
 
+  // Warnings in entry order, whichever pass found them.
+  std::vector<std::pair<size_t, std::string>> problems;
+  const auto skip = [&problems](size_t entry, const std::string& problem) {
+    problems.emplace_back(entry, problem);
+  };
+
+  // Pass 1: the cheap checks (class, score, box) on every entry; no mask is read or made yet.
+  const fs::path directory(mask_directory);
+  std::vector<Candidate> candidates;
   for (size_t i = 0; i < document.size(); ++i) {
-    Detection2D detection;
+    Candidate candidate;
+    candidate.entry = i;
     std::string problem;
     try {
-      if (parseEntry(document[i], directory, image_bgr.size(), &detection, &problem)) {
-        detections->push_back(std::move(detection));
+      if (parseEntry(document[i], directory, image_size, &candidate, &problem)) {
+        candidates.push_back(std::move(candidate));
         continue;
       }
     } catch (const json::exception& e) {
       problem = e.what();
     }
-    if (warnings != nullptr) {
-      warnings->push_back(path.string() + ": entry " + std::to_string(i) + ": " + problem +
-                          "; skipped");
+    skip(i, problem);
+  }
+
+  // Pass 2: masks for the highest scores only, at most max_detections (each mask costs an image).
+  // Equal scores keep the file's order.
+  std::vector<size_t> order(candidates.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&candidates](size_t a, size_t b) {
+    return candidates[a].detection.score > candidates[b].detection.score;
+  });
+  const size_t max_detections = static_cast<size_t>(config.max_detections);
+  std::vector<size_t> kept;
+  size_t next = 0;
+  for (; next < order.size() && kept.size() < max_detections; ++next) {
+    Candidate& candidate = candidates[order[next]];
+    std::string problem;
+    if (makeMask(image_size, &candidate, &problem)) {
+      kept.push_back(order[next]);
+    } else {
+      skip(candidate.entry, problem);
+    }
+  }
+  const size_t dropped = order.size() - next;
+
+  // The file's order for what is kept.
+  std::sort(kept.begin(), kept.end());
+  for (const size_t k : kept) detections->push_back(std::move(candidates[k].detection));
+
+  if (warnings != nullptr) {
+    std::stable_sort(problems.begin(), problems.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& problem : problems) {
+      warnings->push_back(source + ": entry " + std::to_string(problem.first) + ": " +
+                          problem.second + "; skipped");
+    }
+    if (dropped > 0) {
+      warnings->push_back(
+          source + ": " + std::to_string(kept.size() + dropped) +
+          " detections passed the checks, more than max_detections " +
+          std::to_string(config.max_detections) + ": kept the " + std::to_string(kept.size()) +
+          " highest scores, dropped " + std::to_string(dropped) +
+          " (scores <= " + numberText(candidates[order[next]].detection.score) + ")");
     }
   }
   return Status::Ok();

@@ -12,7 +12,8 @@ Status SegmenterOptions::isValid() const {
   if (detector == "simulated") {
     return Status::Error(
         "detector 'simulated' is the benchmark's ground-truth detector: offline_detection, "
-        "dataset_to_bag and ablation offer it, the node does not (use files, fastestdet, maskrcnn)");
+        "dataset_to_bag and ablation offer it, the node does not (use files, fastestdet, "
+        "maskrcnn)");
   }
   if (detector != "files" && detector != "fastestdet" && detector != "maskrcnn") {
     return Status::Error("detector '" + detector +
@@ -34,6 +35,7 @@ Status SegmenterOptions::isValidExceptDetector() const {
   if (!(mask_threshold > 0.f && mask_threshold < 1.f)) {
     return Status::Error("mask_threshold must be in (0, 1)");
   }
+  if (max_detections < 1) return Status::Error("max_detections must be >= 1");
   if (backend != "cpu" && backend != "cuda") {
     return Status::Error("backend '" + backend + "' is unknown (use cpu or cuda)");
   }
@@ -57,7 +59,9 @@ Status createInstanceSegmenter(const SegmenterOptions& options,
   const Status valid = options.isValid();
   if (!valid) return valid;
   if (options.detector == "files") {
-    *segmenter = std::make_unique<FileInstanceSegmenter>(options.detections_dir);
+    FileInstanceSegmenter::Config config;
+    config.max_detections = options.max_detections;
+    *segmenter = std::make_unique<FileInstanceSegmenter>(options.detections_dir, config);
     return Status::Ok();
   }
   DnnModelOptions dnn;

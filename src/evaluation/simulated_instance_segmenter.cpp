@@ -16,9 +16,10 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
+#include "multiview_object_detection/io/image_io.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 
 namespace mvod {
 namespace {
@@ -349,13 +350,12 @@ Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::s
                          ": no such file (the simulated detector needs the frame's "
                          "instance label image)");
   }
+  // The size is checked from the PNG header before decoding (a small file can claim 20000x20000).
   cv::Mat labels;
-  try {
-    labels = cv::imread(path, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    labels.release();
-  }
-  if (labels.empty()) return Status::Error(path + ": cannot read the image");
+  const Status read = readImageChecked(path, cv::IMREAD_UNCHANGED, image_bgr.size(),
+                                       int64_t{image_bgr.cols} * image_bgr.rows, &labels,
+                                       "the colour image's size");
+  if (!read) return read;
   if (labels.type() != CV_16UC1) {
     return Status::Error(path + ": label image is " + typeText(labels) +
                          ", expected a 16-bit single-channel PNG (CV_16UC1)");

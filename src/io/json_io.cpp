@@ -69,7 +69,10 @@ Status readInt(const json& parent, const std::string& path, const char* key, int
   Status status = member(parent, path, key, &value);
   if (!status) return status;
   if (!value->is_number_integer()) return fieldError(path + key, "expected an integer");
-  const long long v = value->get<long long>();
+  // An unsigned value above LLONG_MAX would wrap to a negative long long (2^64 - 1 -> -1).
+  const bool huge = value->is_number_unsigned() &&
+                    value->get<unsigned long long>() > std::numeric_limits<int>::max();
+  const long long v = huge ? std::numeric_limits<long long>::max() : value->get<long long>();
   if (v < min_value || v > std::numeric_limits<int>::max()) {
     return fieldError(path + key, "out of range (" + std::to_string(v) + ")");
   }
@@ -229,7 +232,13 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
     object.evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
     for (const json& voxel : (*evidence)["voxels"]) {
       bool ok = voxel.is_array() && voxel.size() == 5;
-      for (size_t i = 0; ok && i < 5; ++i) ok = voxel[i].is_number_integer();
+      // Unsigned values beyond INT64_MAX would wrap to negative numbers below: refused here.
+      for (size_t i = 0; ok && i < 5; ++i) {
+        ok = voxel[i].is_number_integer() &&
+             !(voxel[i].is_number_unsigned() &&
+               voxel[i].get<std::uint64_t>() >
+                   static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()));
+      }
       if (ok) {
         for (int i = 0; i < 3; ++i) {
           const std::int64_t v = voxel[i].get<std::int64_t>();

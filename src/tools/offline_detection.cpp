@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -58,6 +59,9 @@ const char* const kUsage =
     "  --score-threshold S    detector score below which detections are not reported (default: "
     "0.5)\n"
     "  --backend NAME         cpu | cuda: where OpenCV DNN runs the detector (default: cpu)\n"
+    "  --max-detections N     files: at most N detections per frame, the highest scores\n"
+    "                         (default: 100)\n"
+    "  --threads N            threads for a keyframe's detections (0 = one per core) (default: 1)\n"
     "  --every N              every N-th frame is a keyframe (default: 10)\n"
     "  --first N, --last N    only frames with index in [first, last]\n"
     "  --output FILE          objects.json to write (default: objects.json)\n"
@@ -90,6 +94,8 @@ struct Options {
   std::string model_dir;
   double score_threshold = 0.5;
   std::string backend = "cpu";
+  int max_detections = 100;
+  int threads = 1;
   int every = 10;
   int first = std::numeric_limits<int>::min();
   int last = std::numeric_limits<int>::max();
@@ -177,6 +183,19 @@ std::string parseArguments(int argc, char** argv, Options* options) {
         }
         options->format = text;
       }
+    } else if (arg == "--threads") {
+      long parsed = 0;
+      if (!value(&text) || !mvod::cli::parseLong(text, 0, 256, &parsed)) {
+        return "--threads needs an integer in [0, 256]";
+      }
+      options->threads = static_cast<int>(parsed);
+    } else if (arg == "--max-detections") {
+      long parsed = 0;
+      if (!value(&text) ||
+          !mvod::cli::parseLong(text, 1, std::numeric_limits<int>::max(), &parsed)) {
+        return "--max-detections needs an integer >= 1";
+      }
+      options->max_detections = static_cast<int>(parsed);
     } else if (arg == "--every" || arg == "--first" || arg == "--last") {
       long parsed = 0;
       if (!value(&text) || !mvod::cli::parseLong(text, std::numeric_limits<int>::min(),
@@ -334,7 +353,10 @@ void printTable(const std::vector<mvod::MapObject>& objects) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+// main() without the last-resort catch.
+int run(int argc, char** argv) {
   Options options;
   const std::string bad_arguments = parseArguments(argc, argv, &options);
   if (options.help) {
@@ -355,6 +377,7 @@ int main(int argc, char** argv) {
   segmenter_options.model_dir = options.model_dir;
   segmenter_options.score_threshold = static_cast<float>(options.score_threshold);
   segmenter_options.backend = options.backend;
+  segmenter_options.max_detections = options.max_detections;
   if (options.simulated_perfect) {
     segmenter_options.simulated = mvod::SimulatedInstanceSegmenter::Config::perfect();
   }
@@ -410,6 +433,7 @@ int main(int argc, char** argv) {
   if (!options.fusion.empty()) config.database.fusion = options.fusion;
   if (options.no_floor) config.floor.enable = false;
   config.min_probability = options.min_probability;
+  config.num_threads = options.threads;
   config.filter.enable = !options.no_filter;
   config.lccp.enable = !options.no_lccp;
   config.database.disable_fusion = options.single_frame;
@@ -612,4 +636,19 @@ int main(int argc, char** argv) {
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
   }
   return exit_code;
+}
+
+}  // namespace
+
+// Every input problem should be a Status with a message; anything thrown past that (a library's
+// exception, memory) still ends with a message and exit 1 instead of an abort.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "\noffline_detection: error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "\noffline_detection: error: unknown exception\n";
+  }
+  return kExitFailure;
 }

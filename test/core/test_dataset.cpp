@@ -171,8 +171,12 @@ TEST_F(SevenScenesDatasetTest, TwoCameraDatasetWithGravity) {
       Eigen::Translation3d(0.025, 0.0, -0.001) * Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY());
   writeText("depth-to-color.txt", poseText(T_C_D));
   writeText("gravity-direction.txt", "0.0 9.81 0\n");
-  // Colour at twice the depth's resolution: fine for a two-camera dataset.
-  ASSERT_TRUE(cv::imwrite((dir_ / "frame-000005.color.png").string(), testColour(5, 16, 12)));
+  // Colour at twice the depth's resolution: fine for a two-camera dataset (every frame's colour
+  // is the colour camera's size).
+  for (const int index : {0, 5, 10}) {
+    ASSERT_TRUE(cv::imwrite((dir_ / (SevenScenesDataset::frameName(index) + ".color.png")).string(),
+                            testColour(index, 16, 12)));
+  }
 
   const SevenScenesDataset dataset = openOk();
   EXPECT_FALSE(dataset.registered());

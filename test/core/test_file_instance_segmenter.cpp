@@ -8,8 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 #include "test_files.h"
 
 namespace mvod {

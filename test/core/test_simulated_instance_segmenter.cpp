@@ -11,10 +11,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 
 namespace mvod {
 namespace {

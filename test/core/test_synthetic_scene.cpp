@@ -13,9 +13,9 @@
 #include <set>
 #include <sstream>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/evaluation/synthetic_scene.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -13,8 +13,8 @@
 #include <set>
 #include <sstream>
 
-#include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "test_files.h"
 

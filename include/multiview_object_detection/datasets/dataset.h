@@ -6,7 +6,11 @@
 //   optional gravity-direction.txt (3 numbers: world gravity, pointing down; normalised on
 //   reading).
 // A frame is listed when its frame-NNNNNN.depth.png exists; its colour image (.png or .jpg) and
-// pose are checked by load(). Time stamps are index / 30 s (7-Scenes is 30 Hz).
+// pose are checked by load(). Frames with a colour image or pose but no depth image are skipped
+// with a warning (warnings()). Time stamps are index / 30 s (7-Scenes is 30 Hz).
+// Image sizes: open() reads the headers (no decoding) of the first frames to learn each camera's
+// image size; load() refuses, before decoding, an image of another size or above
+// kDefaultMaxImagePixels (io/image_io.h), so a small PNG claiming 20000x20000 pixels costs nothing.
 #pragma once
 
 #include <string>
@@ -33,6 +37,9 @@ class SevenScenesDataset {
   bool registered() const { return registered_; }
   // Depth camera -> colour camera (identity when registered or without depth-to-color.txt).
   const Eigen::Isometry3d& depthToColor() const { return T_C_D_; }
+  // What may make the results wrong, found by open() (e.g. frames skipped for a missing depth
+  // image).
+  const std::vector<std::string>& warnings() const { return warnings_; }
   bool hasGravity() const { return has_gravity_; }
   Eigen::Vector3d gravityDown_W() const { return gravity_down_W_; }
 
@@ -43,6 +50,9 @@ class SevenScenesDataset {
   static Status readPose(const std::string& path, Eigen::Isometry3d* T_W_C);
 
  private:
+  // Sets depth_size_ / color_size_ from the first frames' image headers (PNG, or JPEG colour).
+  void probeImageSizes();
+
   std::string directory_;
   std::vector<int> frame_indices_;
   CameraIntrinsics K_depth_;
@@ -51,6 +61,13 @@ class SevenScenesDataset {
   Eigen::Isometry3d T_C_D_ = Eigen::Isometry3d::Identity();
   bool has_gravity_ = false;
   Eigen::Vector3d gravity_down_W_ = Eigen::Vector3d(0, 0, -1);
+  std::vector<std::string> warnings_;
+  // Each camera's image size and the file it was read from (empty = unknown: any size within
+  // kDefaultMaxImagePixels).
+  cv::Size depth_size_;
+  std::string depth_size_source_;
+  cv::Size color_size_;
+  std::string color_size_source_;
 };
 
 }  // namespace mvod

@@ -14,6 +14,10 @@
 //                          240. Looked for in DIR, DIR/intrinsic and DIR/../intrinsic (the main
 //                          repo keeps one intrinsic/asus.ini for all sequences); none found = those
 //                          defaults.
+// Image sizes: open() reads the first frames' PNG headers (no decoding) to learn the camera's
+// image size; load() refuses, before decoding, images of another size or above
+// kDefaultMaxImagePixels (io/image_io.h). Colour images without a depth image are skipped with a
+// warning (warnings()).
 // A frame is listed when depth/depthNNNNN.png exists; checkFrame() (cheap, no image read) and
 // load() fail for a frame without a pose (or without a time stamp when timestamp.txt exists), so a
 // sequence with more images than poses can still be used up to its last pose.
@@ -54,6 +58,9 @@ class SceneNNDataset {
   const CameraIntrinsics& intrinsics() const { return K_; }
   const std::string& intrinsicsPath() const { return intrinsics_path_; }  // "" = defaults
   bool hasTimestamps() const { return !stamps_s_.empty(); }
+  // What may make the results wrong, found by open() (e.g. frames skipped for a missing depth
+  // image).
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
   // File parsers, public for tests. The message names the file.
   // asus.ini -> fx, fy, cx, cy (width/height 0); absent keys keep the defaults above.
@@ -71,6 +78,11 @@ class SceneNNDataset {
   CameraIntrinsics K_;
   std::map<int, Eigen::Isometry3d> T_W_C_by_index_;
   std::map<int, double> stamps_s_;
+  std::vector<std::string> warnings_;
+  // The camera's image size (depth and colour are registered) and the file it was read from;
+  // empty = unknown (any size within kDefaultMaxImagePixels).
+  cv::Size image_size_;
+  std::string image_size_source_;
 };
 
 // Registers a depth image to the colour camera (what a Kinect driver's depth_registered topic

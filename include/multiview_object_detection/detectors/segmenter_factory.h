@@ -26,6 +26,8 @@ struct SegmenterOptions {
   float nms_threshold = 0.4f;   // FastestDet
   float mask_threshold = 0.3f;  // Mask R-CNN: mask probability -> binary
   std::string backend = "cpu";  // cpu | cuda (needs an OpenCV built with CUDA)
+  // files: at most this many detections per frame (the highest scores), with a warning.
+  int max_detections = 100;
   Status isValid() const;
   // The checks shared with the benchmark's options: thresholds and backend, not the name.
   Status isValidExceptDetector() const;
