@@ -207,6 +207,18 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
                              ": unknown class (not a COCO class name), skipped");
       continue;
     }
+    // The consistent cut refuses a box over (nearly) the whole image; it is refused here already,
+    // before its cloud (the whole view) is extracted.
+    const cv::Rect image_rect(cv::Point(0, 0), frame.color_bgr.size());
+    const cv::Rect box = named.box_px & image_rect;
+    if (config_.selection.consistent() &&
+        box.area() > config_.selection.max_box_image_fraction * image_rect.area()) {
+      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
+                             ": no object in the cut: the box covers the whole image (" +
+                             std::to_string(100 * box.area() / std::max(1, image_rect.area())) +
+                             " %): no background to cut the object from");
+      continue;
+    }
     kept.push_back(std::move(named));
     kept_index.push_back(i);
   }
