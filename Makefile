@@ -18,7 +18,7 @@ export CCACHE_DIR ?= $(ROOT)/build/ccache
 export CCACHE_BASEDIR ?= $(ROOT)
 export PATH := /usr/bin:$(PATH)
 
-.PHONY: all deps build test demo clean format
+.PHONY: all deps build test test-sanitize demo clean format
 
 all: build
 
@@ -39,10 +39,52 @@ test: build
 	@catkin_test_results $(WS)/build/test_results || true
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
 
+# make test-sanitize: the same tests built with ASan + UBSan in their own workspace (build/.ws-sanitize), the
+# core gtests, conversion and dataset_to_bag gtests and the rostests. Every sanitizer report (those of the nodes
+# under rostest too) is collected from $(SAN_LOGS) and the test log and printed; any report, or any failed
+# test, makes it exit non-zero. Flags, options, suppressions (upstream code only): test/sanitize/README.md.
+SAN_WS ?= $(ROOT)/build/.ws-sanitize
+SAN_LOGS := $(SAN_WS)/sanitizer_logs
+# Debian's PCL is not instrumented: EIGEN_MALLOC_ALREADY_ALIGNED=1 keeps Eigen's allocator the one PCL was
+# built with (Eigen turns it off under ASan), so memory allocated in our code and freed in PCL (or back) matches.
+SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1
+SAN_CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+	-DCMAKE_BUILD_TYPE=RelWithDebInfo '-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG' \
+	'-DCMAKE_CXX_FLAGS=$(SAN_FLAGS)' -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON
+SAN_SUPP := $(ROOT)/test/sanitize
+# ASan and LSan write their reports to $(SAN_LOGS)/asan.<pid>; gcc's UBSan runtime is a separate library that
+# ignores log_path, so its reports go to stderr: the test log, and the ROS logs (ROS_LOG_DIR) of the nodes.
+SAN_ENV := ASAN_OPTIONS=alloc_dealloc_mismatch=0:detect_leaks=1:log_path=$(SAN_LOGS)/asan \
+	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=0:suppressions=$(SAN_SUPP)/ubsan.supp \
+	LSAN_OPTIONS=suppressions=$(SAN_SUPP)/lsan.supp:print_suppressions=0 ROS_LOG_DIR=$(SAN_LOGS)/ros
+
+$(SAN_WS)/src/$(PKG):
+	@mkdir -p $(SAN_WS)/src
+	@ln -sfn $(ROOT) $(SAN_WS)/src/$(PKG)
+
+test-sanitize: deps $(SAN_WS)/src/$(PKG)
+	@cd $(SAN_WS) && catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
+	@rm -rf $(SAN_WS)/build/test_results $(SAN_LOGS) && mkdir -p $(SAN_LOGS)
+	@cd $(SAN_WS) && $(SAN_ENV) catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(SAN_WS)/run_tests.log \
+		| grep -E '^\[ *(RUN|OK|FAILED|PASSED|SKIPPED) |^\[==|FAILURE|ERROR|Skipping|SKIP|error:|Error [0-9]|undefined reference' || true
+	@catkin_test_results $(SAN_WS)/build/test_results || true
+	@tests=0; /usr/bin/python3 scripts/test_summary.py $(SAN_WS)/build/test_results || tests=$$?; \
+		reports=0; /usr/bin/python3 test/sanitize/check_reports.py $(SAN_LOGS) $(SAN_WS)/run_tests.log || reports=$$?; \
+		[[ $$tests -eq 0 && $$reports -eq 0 ]]
+
 # make demo DATASET=DIR [FIRST=N LAST=M]: a 7-Scenes-layout folder or SceneNN sequence instead, FastestDet in the node.
 DATASET ?=
 demo: build
 	@bash scripts/demo.sh $(WS) $(DATASET)
+
+# make fuzz [FUZZ_SECONDS=N]: the libFuzzer harnesses of test/fuzz/ (map JSON loader with its save/reload
+# round trip, detection JSON reader, depth/mask image decoding), built with clang (ASan + UBSan) outside
+# catkin into build/fuzz and run N seconds each (default 60) on copies of their seed corpora. Any crash fails.
+FUZZ_SECONDS ?= 60
+.PHONY: fuzz
+fuzz:
+	@bash scripts/install_deps.sh tools/fuzz-packages.txt
+	@bash test/fuzz/run_fuzzers.sh $(ROOT)/build/fuzz $(FUZZ_SECONDS)
 
 format:
 	@clang-format -i $$(git ls-files '*.cpp' '*.h')
