@@ -403,6 +403,14 @@ TEST_F(DatasetToBagTest, BadUsageAndBadData) {
   EXPECT_EQ(runDatasetToBag(io + " --format tum", dir_).exit_code, 2);
   EXPECT_EQ(runDatasetToBag(io + " --first 5 --last 2", dir_).exit_code, 2);
   EXPECT_EQ(runDatasetToBag(io + " --last", dir_).exit_code, 2);
+  // Names a bag could not be subscribed to with.
+  for (const std::string bad : {"'1 bad//name'", "cam//era", "camera/", "9camera", "cam-era"}) {
+    const ToolResult named = runDatasetToBag(io + " --camera " + bad, dir_);
+    EXPECT_EQ(named.exit_code, 2) << bad;
+    EXPECT_NE(named.stderr_text.find("not a valid ROS name"), std::string::npos)
+        << named.stderr_text;
+  }
+  EXPECT_EQ(runDatasetToBag(io + " --pose-topic /slam//pose", dir_).exit_code, 2);
   EXPECT_FALSE(fs::exists(bag_path));
 
   ToolResult run = runDatasetToBag(
