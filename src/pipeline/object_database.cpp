@@ -50,6 +50,17 @@ void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* ev
   }
 }
 
+// The cut's normals into the voxels they lie in (the voxels are in `evidence` already).
+void addNormals(const ObjectObservation& observation, double voxel_size_m, EvidenceMap* evidence) {
+  if (observation.segment_normals_W.size() != observation.segment_W.size()) return;
+  for (size_t i = 0; i < observation.segment_W.size(); ++i) {
+    const Eigen::Vector3f& n = observation.segment_normals_W[i];
+    if (!n.allFinite()) continue;
+    const auto it = evidence->find(voxelKeyOf(observation.segment_W[i], voxel_size_m));
+    if (it != evidence->end()) it->second.normal_sum += n;
+  }
+}
+
 }  // namespace
 
 std::int64_t ObjectDatabase::voxelKey(const Eigen::Vector3f& p_W) const {
@@ -62,16 +73,29 @@ Eigen::Vector3f ObjectDatabase::voxelCentre(std::int64_t key) const {
       .cast<float>();
 }
 
-PointCloud ObjectDatabase::supportedVoxels(const MapObject& object) const {
-  PointCloud centres;
+PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
+                                           std::vector<Eigen::Vector3f>* normals_W) const {
+  std::vector<std::pair<std::int64_t, const VoxelEvidence*>> supported;
+  supported.reserve(object.evidence.size());
   for (const auto& entry : object.evidence) {
     const VoxelEvidence& e = entry.second;
-    if (e.inside >= 1 && e.inside >= e.outside) centres.push_back(voxelCentre(entry.first));
+    if (e.inside >= 1 && e.inside >= e.outside) supported.emplace_back(entry.first, &e);
   }
-  // Hash order is not stable across library versions: sort for reproducible boxes.
-  std::sort(centres.begin(), centres.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  });
+  // Hash order is not stable across library versions: key order for reproducible boxes.
+  std::sort(supported.begin(), supported.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  PointCloud centres;
+  centres.reserve(supported.size());
+  if (normals_W != nullptr) {
+    normals_W->clear();
+    normals_W->reserve(supported.size());
+  }
+  for (const auto& voxel : supported) {
+    centres.push_back(voxelCentre(voxel.first));
+    if (normals_W == nullptr) continue;
+    const float norm = voxel.second->normal_sum.norm();
+    if (norm > 1e-6f && std::isfinite(norm)) normals_W->push_back(voxel.second->normal_sum / norm);
+  }
   return centres;
 }
 
@@ -165,6 +189,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     }
     const PointCloud* to_process = &object.points_W;
     PointCloud supported;
+    std::vector<Eigen::Vector3f> supported_normals;
     if (config_.fusion == "evidence") {
       // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
       if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
@@ -175,6 +200,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       // This view's votes: inside for the voxels of its cut, outside for the voxels it saw surface
       // in but left out of the cut. Cost: the view's points, not the object's size.
       countInside(cut, &object.evidence);
+      addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
       std::unordered_set<std::int64_t> outside;
       for (const Eigen::Vector3f& p : observation.seen_W) {
         const std::int64_t key = voxelKey(p);
@@ -182,7 +208,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
       }
-      supported = supportedVoxels(object);
+      supported = supportedVoxels(object, &supported_normals);
       object.points_W.clear();
       for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
       to_process = &supported;
@@ -199,7 +225,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     PointCloud segment_W;
     OrientedBox box;
     double yaw_rad = object.yaw_rad;
-    if (process && process(*to_process, &segment_W, &box, &yaw_rad)) {
+    if (process && process(*to_process, supported_normals, &segment_W, &box, &yaw_rad)) {
       object.segment_W = std::move(segment_W);
       object.box = box;
       object.yaw_rad = yaw_rad;
@@ -228,6 +254,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     // The object is what the cut holds; its cloud is the voxels with evidence, as after fusions.
     object.class_scores[observation.class_name] = observation.probability;
     countInside(cut, &object.evidence);
+    addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
     object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
     for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
   } else {

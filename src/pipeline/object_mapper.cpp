@@ -1,5 +1,6 @@
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -97,12 +98,26 @@ void ObjectMapper::Config::usePaperMethod() {
   database.fusion = "paper";
   floor.enable = false;
   box.extent_trim_fraction = 0.0;
+  box.depth_step_per_m2 = 0.0;
+  extractor.min_consistent_neighbours = 0;
+  filter.statistical_outlier_removal = true;
   intersection_filter.duplicate_ratio = 0.0;
 }
 
+namespace {
+
+// Table 3's -Filter switches the depth-edge test of the extraction off with the filters.
+ObjectCloudExtractor::Config extractorConfig(const ObjectMapper::Config& config) {
+  ObjectCloudExtractor::Config extractor = config.extractor;
+  if (!config.filter.enable) extractor.min_consistent_neighbours = 0;
+  return extractor;
+}
+
+}  // namespace
+
 ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
     : config_(config),
-      extractor_(config.extractor),
+      extractor_(extractorConfig(config)),
       filter_(config.filter),
       lccp_(config.lccp),
       selector_(config.selection),
@@ -117,7 +132,7 @@ Status ObjectMapper::updateConfig(const Config& config) {
   const Status valid = config.isValid();
   if (!valid) return valid;
   config_ = config;
-  extractor_ = ObjectCloudExtractor(config.extractor);
+  extractor_ = ObjectCloudExtractor(extractorConfig(config));
   filter_ = PointCloudFilter(config.filter);
   lccp_ = LccpSegmenter(config.lccp);
   selector_ = SegmentSelector(config.selection);
@@ -304,11 +319,12 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
     t = Clock::now();
     StageTimes fused_times;
-    const FusedCloudProcessor process = [this, &fused_times](const PointCloud& points_W,
-                                                             PointCloud* segment_W,
-                                                             OrientedBox* box, double* yaw_rad) {
-      return processFused(points_W, segment_W, box, yaw_rad, &fused_times);
-    };
+    const FusedCloudProcessor process =
+        [this, &fused_times](const PointCloud& points_W,
+                             const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                             OrientedBox* box, double* yaw_rad) {
+          return processFused(points_W, normals_W, segment_W, box, yaw_rad, &fused_times);
+        };
     const ObjectDatabase::FusionResult result = database_.fuseOrInsert(observation, process);
     out.times.fusion_ms += msSince(t);
     out.times.filter_ms += fused_times.filter_ms;
@@ -453,8 +469,26 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   PointCloud segment_W = transformCloud(cut_D, T_W_D);
   t = Clock::now();
   OrientedBox box;
-  const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box);
+  const bool keep_normals = config_.database.fusion == "evidence";
+  std::vector<Eigen::Vector3f> normals_W;
+  // The cut's median depth sets the normal radius (the sensor's depth layers).
+  std::vector<float> depths_m;
+  depths_m.reserve(cut_D.size());
+  for (const Eigen::Vector3f& p : cut_D) depths_m.push_back(p.z());
+  std::nth_element(depths_m.begin(), depths_m.begin() + depths_m.size() / 2, depths_m.end());
+  const double median_depth_m = depths_m[depths_m.size() / 2];
+  const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box, nullptr,
+                                               keep_normals ? &normals_W : nullptr, median_depth_m);
   if (boxed) groundBox(&box);
+  if (keep_normals) {
+    // Turned towards the camera: every view of a surface then adds the same sign in a voxel.
+    const Eigen::Vector3f camera_W = T_W_D.translation().cast<float>();
+    for (size_t i = 0; i < normals_W.size(); ++i) {
+      if (normals_W[i].allFinite() && normals_W[i].dot(camera_W - segment_W[i]) < 0.f) {
+        normals_W[i] = -normals_W[i];
+      }
+    }
+  }
   stage.manhattan_ms += msSince(t);
   if (!boxed) return Status::Error("no box: " + boxed.message());
 
@@ -472,20 +506,30 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
 
   observation->points_W = std::move(points_W);
   observation->segment_W = std::move(segment_W);
+  observation->segment_normals_W = std::move(normals_W);
   observation->box = box;
   observation->yaw_rad = gravity_frame.yawOf(box.rotation.col(0));
   return Status::Ok();
 }
 
-bool ObjectMapper::processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
-                                double* yaw_rad, StageTimes* times) const {
+bool ObjectMapper::processFused(const PointCloud& points_W,
+                                const std::vector<Eigen::Vector3f>& normals_W,
+                                PointCloud* segment_W, OrientedBox* box, double* yaw_rad,
+                                StageTimes* times) const {
   Clock::time_point t;
   if (config_.database.fusion == "evidence") {
-    // The supported voxels are the object: box them (robust extents, grounded), nothing else.
+    // The supported voxels are the object: box them (robust extents, grounded), nothing else. The
+    // yaw comes from the normals the views left in the voxels; a map saved before they were kept
+    // (too few of them) has its normals estimated once more.
     t = Clock::now();
     const GravityFrame gravity_frame = gravity();
     OrientedBox fused_box;
-    if (!box_estimator_.estimate(points_W, gravity_frame, &fused_box)) return false;
+    const bool kept_normals = normals_W.size() >= 1000 || normals_W.size() * 8 >= points_W.size();
+    const Status boxed =
+        kept_normals
+            ? box_estimator_.estimateFromNormals(points_W, normals_W, gravity_frame, &fused_box)
+            : box_estimator_.estimate(points_W, gravity_frame, &fused_box);
+    if (!boxed) return false;
     groundBox(&fused_box);
     times->manhattan_ms += msSince(t);
     *segment_W = points_W;

@@ -57,6 +57,7 @@ std::string PointCloudFilter::Config::print() const {
       << "voxel_leaf_size_m: " << voxel_leaf_size_m << "\n"
       << "min_depth_m: " << min_depth_m << "\n"
       << "max_depth_m: " << max_depth_m << "\n"
+      << "statistical_outlier_removal: " << (statistical_outlier_removal ? "true" : "false") << "\n"
       << "sor_mean_k: " << sor_mean_k << "\n"
       << "sor_stddev_mul: " << sor_stddev_mul << "\n";
   return out.str();
@@ -68,6 +69,7 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   // then outliers on the uniform-density cloud.
   const PointCloud in_range = passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m);
   const PointCloud voxelized = voxelize(in_range, config_.voxel_leaf_size_m);
+  if (!config_.statistical_outlier_removal) return voxelized;
   return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
                                          config_.voxel_leaf_size_m);
 }
@@ -75,6 +77,10 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
 PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
   if (!config_.enable) return points_W;
   // No pass-through: the fused cloud (Eq. 7) is in the world frame, depth means nothing there.
+  if (!config_.statistical_outlier_removal) {
+    return on_grid_m == config_.voxel_leaf_size_m ? points_W
+                                                  : voxelize(points_W, config_.voxel_leaf_size_m);
+  }
   if (on_grid_m == config_.voxel_leaf_size_m) {
     return removeStatisticalOutliersOnGrid(points_W, config_.sor_mean_k, config_.sor_stddev_mul,
                                            config_.voxel_leaf_size_m);

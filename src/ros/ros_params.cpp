@@ -116,11 +116,15 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "extractor/max_valid_depth_m", &m.extractor.max_valid_depth_m, e);
   readParam(nh, "extractor/mask_erosion_px", &m.extractor.mask_erosion_px, e);
   readParam(nh, "extractor/pixel_stride", &m.extractor.pixel_stride, e);
+  readParam(nh, "extractor/min_consistent_neighbours", &m.extractor.min_consistent_neighbours, e);
+  readNumber(nh, "extractor/consistency_tolerance_m", &m.extractor.consistency_tolerance_m, e);
+  readNumber(nh, "extractor/depth_step_per_m2", &m.extractor.depth_step_per_m2, e);
 
   readParam(nh, "filter/enable", &m.filter.enable, e);
   readParam(nh, "filter/voxel_leaf_size_m", &m.filter.voxel_leaf_size_m, e);
   readParam(nh, "filter/min_depth_m", &m.filter.min_depth_m, e);
   readParam(nh, "filter/max_depth_m", &m.filter.max_depth_m, e);
+  readParam(nh, "filter/statistical_outlier_removal", &m.filter.statistical_outlier_removal, e);
   readParam(nh, "filter/sor_mean_k", &m.filter.sor_mean_k, e);
   readParam(nh, "filter/sor_stddev_mul", &m.filter.sor_stddev_mul, e);
 
@@ -158,6 +162,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "box/gravity_constrained", &m.box.manhattan.gravity_constrained, e);
   readParam(nh, "box/min_points", &m.box.min_points, e);
   readNumber(nh, "box/extent_trim_fraction", &m.box.extent_trim_fraction, e);
+  readNumber(nh, "box/depth_step_per_m2", &m.box.depth_step_per_m2, e);
 
   readParam(nh, "database/fusion_voxel_size_m", &m.database.fusion_voxel_size_m, e);
   readParam(nh, "database/no_fusion_within_keyframe", &m.database.no_fusion_within_keyframe, e);

@@ -51,8 +51,8 @@ class ObjectDatabaseTest : public ::testing::Test {
 
   // A processor that accepts the fused cloud: box centre = centroid, segment = the cloud.
   static FusedCloudProcessor centroidProcessor(int* calls) {
-    return [calls](const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
-                   double* yaw_rad) {
+    return [calls](const PointCloud& points_W, const std::vector<Eigen::Vector3f>&,
+                   PointCloud* segment_W, OrientedBox* box, double* yaw_rad) {
       ++*calls;
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
       for (const auto& p : points_W) sum += p.cast<double>();
@@ -284,8 +284,9 @@ TEST_F(ObjectDatabaseTest, FailedReprocessingKeepsThePreviousBox) {
   const ObjectObservation first_obs = observation("chair", {1.0, 2.0, 0.5}, 0.8, 0);
   const auto first = database.fuseOrInsert(first_obs, centroidProcessor(&calls));
   int failed_calls = 0;
-  const FusedCloudProcessor failing = [&failed_calls](const PointCloud&, PointCloud*,
-                                                      OrientedBox* box, double*) {
+  const FusedCloudProcessor failing = [&failed_calls](const PointCloud&,
+                                                      const std::vector<Eigen::Vector3f>&,
+                                                      PointCloud*, OrientedBox* box, double*) {
     ++failed_calls;
     box->center_m = Eigen::Vector3d(9, 9, 9);  // must be ignored
     return false;
@@ -395,10 +396,11 @@ TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideThe
     obs.seen_W = obs.points_W;
     obs.seen_W.insert(obs.seen_W.end(), floor_strip.begin(), floor_strip.end());
     if (k == 0) obs.segment_W.insert(obs.segment_W.end(), floor_strip.begin(), floor_strip.end());
-    const auto processor = [&](const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
-                               double* yaw_rad) {
+    const auto processor = [&](const PointCloud& points_W,
+                               const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                               OrientedBox* box, double* yaw_rad) {
       last_supported = points_W;
-      return centroidProcessor(&calls)(points_W, segment_W, box, yaw_rad);
+      return centroidProcessor(&calls)(points_W, normals_W, segment_W, box, yaw_rad);
     };
     database.fuseOrInsert(obs, processor);
   }
@@ -423,6 +425,65 @@ TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideThe
   obs.segment_W = obs.points_W;
   database.fuseOrInsert(obs, centroidProcessor(&calls));
   EXPECT_EQ(database.objects().begin()->second.evidence.size(), 400u);
+}
+
+// Evidence fusion keeps each voxel's normals (summed, as the views turned them to their cameras):
+// the fused box gets them without a neighbour search. A map saved without normals gives the
+// processor none, and it estimates them.
+TEST_F(ObjectDatabaseTest, EvidenceKeepsTheViewsNormalsPerVoxel) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  std::vector<std::vector<Eigen::Vector3f>> received;
+  const auto processor = [&](const PointCloud& points_W,
+                             const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                             OrientedBox* box, double* yaw_rad) {
+    received.push_back(normals_W);
+    int calls = 0;
+    return centroidProcessor(&calls)(points_W, normals_W, segment_W, box, yaw_rad);
+  };
+  // Two views of the patch at z = 0.7: normals tilted +x and -x about +z; their sum is +z. Half of
+  // the second view's points have no normal (NaN).
+  for (int k = 0; k < 2; ++k) {
+    ObjectObservation obs = observation("chair", {0.1, 0.1, 0.7}, 0.8, k);
+    const Eigen::Vector3f tilted = Eigen::Vector3f(k == 0 ? 0.6f : -0.6f, 0.f, 0.8f);
+    for (size_t i = 0; i < obs.segment_W.size(); ++i) {
+      obs.segment_normals_W.push_back(
+          k == 1 && i % 2 == 1 ? Eigen::Vector3f::Constant(std::nanf("")) : tilted);
+    }
+    database.fuseOrInsert(obs, processor);
+  }
+  ASSERT_EQ(database.size(), 1u);
+  ASSERT_EQ(received.size(), 1u);  // the second view fused
+  ASSERT_EQ(received[0].size(), 400u);
+  const MapObject& object = database.objects().begin()->second;
+  int summed = 0;
+  for (const auto& entry : object.evidence) {
+    const Eigen::Vector3f& n = entry.second.normal_sum;
+    if (std::abs(n.x()) < 1e-6f) {
+      EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0.f, 0.f, 1.6f), 1e-6f)) << n.transpose();
+      ++summed;
+    } else {
+      EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0.6f, 0.f, 0.8f), 1e-6f)) << n.transpose();
+    }
+  }
+  EXPECT_EQ(summed, 200);
+  std::vector<Eigen::Vector3f> normals;
+  database.supportedVoxels(object, &normals);
+  ASSERT_EQ(normals.size(), 400u);
+  int vertical = 0;
+  for (const Eigen::Vector3f& n : normals) {
+    EXPECT_NEAR(n.norm(), 1.f, 1e-5f);
+    vertical += n.isApprox(Eigen::Vector3f::UnitZ(), 1e-5f);
+  }
+  EXPECT_EQ(vertical, 200);
+
+  // The same evidence without normals (a map saved before they were kept): none handed on.
+  MapObject legacy = object;
+  for (auto& entry : legacy.evidence) entry.second.normal_sum.setZero();
+  database.setObjects({legacy});
+  ObjectObservation obs = observation("chair", {0.1, 0.1, 0.7}, 0.8, 5);
+  database.fuseOrInsert(obs, processor);
+  ASSERT_EQ(received.size(), 2u);
+  EXPECT_TRUE(received[1].empty());
 }
 
 }  // namespace

@@ -48,6 +48,13 @@ cv::Mat smoothDepthMm(int width, int height) {
   return depth;
 }
 
+// Eq. 1 alone: every valid depth pixel in the mask, without the depth-edge outlier test.
+ObjectCloudExtractor::Config rawConfig() {
+  ObjectCloudExtractor::Config config;
+  config.min_consistent_neighbours = 0;
+  return config;
+}
+
 bool samePoint(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float tol = 0.f) {
   return (a - b).cwiseAbs().maxCoeff() <= tol;
 }
@@ -82,7 +89,7 @@ TEST(ObjectCloudExtractorTest, BackProjectionMatchesHandComputedPoints) {
 
   // extract() with a full mask returns exactly the same points.
   const RgbdFrame frame = makeRegisteredFrame(depth, K);
-  ObjectCloudExtractor extractor;
+  ObjectCloudExtractor extractor(rawConfig());
   std::vector<PointCloud> clouds;
   const Status status =
       extractor.extract(frame, {maskDetection(cv::Mat(3, 4, CV_8UC1, cv::Scalar(255)))}, &clouds);
@@ -123,7 +130,7 @@ TEST(ObjectCloudExtractorTest, FloatDepthInvalidValuesAndSameCloudAsMillimetres)
   // extract() on both types selects the same points.
   cv::Mat mask = cv::Mat::zeros(24, 32, CV_8UC1);
   cv::circle(mask, cv::Point(12, 10), 7, cv::Scalar(255), cv::FILLED);
-  ObjectCloudExtractor extractor;
+  ObjectCloudExtractor extractor(rawConfig());
   std::vector<PointCloud> clouds_mm, clouds_m;
   ASSERT_TRUE(
       extractor.extract(makeRegisteredFrame(depth_mm, K), {maskDetection(mask)}, &clouds_mm).ok());
@@ -156,7 +163,7 @@ TEST(ObjectCloudExtractorTest, RegisteredOverlappingMasksAndStride) {
   cv::circle(mask_b, cv::Point(18, 14), 8, cv::Scalar(1), cv::FILLED);  // any non-zero value
 
   for (const int stride : {1, 2, 3}) {
-    ObjectCloudExtractor::Config config;
+    ObjectCloudExtractor::Config config = rawConfig();
     config.pixel_stride = stride;
     ObjectCloudExtractor extractor(config);
     std::vector<PointCloud> clouds;
@@ -218,7 +225,7 @@ TEST(ObjectCloudExtractorTest, UnregisteredFrameUsesColourProjection) {
   cv::Mat mask_edge = cv::Mat::zeros(96, 120, CV_8UC1);
   mask_edge.colRange(110, 120).setTo(255);
 
-  ObjectCloudExtractor extractor;
+  ObjectCloudExtractor extractor(rawConfig());
   std::vector<PointCloud> clouds;
   const Status status = extractor.extract(
       frame, {maskDetection(mask_a), maskDetection(mask_b, "tv"), maskDetection(mask_edge, "cup")},
@@ -289,7 +296,7 @@ TEST(ObjectCloudExtractorTest, BoxSizedMasksGiveTheSameCloudsAsImageSizedOnes) {
     ASSERT_EQ(detection.mask.size(), detection.box_px.size());
   }
   for (const int erosion_px : {0, 1, 2}) {
-    ObjectCloudExtractor::Config config;
+    ObjectCloudExtractor::Config config = rawConfig();
     config.mask_erosion_px = erosion_px;
     const ObjectCloudExtractor extractor(config);
     std::vector<PointCloud> from_full;
@@ -311,7 +318,7 @@ TEST(ObjectCloudExtractorTest, BoxSizedMasksGiveTheSameCloudsAsImageSizedOnes) {
 TEST(ObjectCloudExtractorTest, MasksOfTheWrongSizeOrTypeAreErrors) {
   const CameraIntrinsics K{30.0, 30.0, 7.5, 5.5, 16, 12};
   const RgbdFrame frame = makeRegisteredFrame(smoothDepthMm(16, 12), K);
-  ObjectCloudExtractor extractor;
+  ObjectCloudExtractor extractor(rawConfig());
   const cv::Mat good(12, 16, CV_8UC1, cv::Scalar(255));
 
   std::vector<PointCloud> clouds;
@@ -350,7 +357,7 @@ TEST(ObjectCloudExtractorTest, MaskErosionShrinksTheMask) {
   cv::Mat mask = cv::Mat::zeros(20, 20, CV_8UC1);
   cv::rectangle(mask, cv::Rect(5, 5, 9, 9), cv::Scalar(255), cv::FILLED);
   for (const int erosion : {0, 1, 2}) {
-    ObjectCloudExtractor::Config config;
+    ObjectCloudExtractor::Config config = rawConfig();
     config.mask_erosion_px = erosion;
     std::vector<PointCloud> clouds;
     ASSERT_TRUE(ObjectCloudExtractor(config).extract(frame, {maskDetection(mask)}, &clouds).ok());
@@ -359,13 +366,56 @@ TEST(ObjectCloudExtractorTest, MaskErosionShrinksTheMask) {
   }
 }
 
+// The depth-edge test: a box at 1 m before a wall at 2 m, a column of flying pixels between them
+// (1.5 m) along the box's left edge, and one speckle (3 m) in the wall. With the test on, the
+// flying pixels and the speckle go, and so do the box's and the image's four corners (two
+// agreeing neighbours each); every other pixel of the wall and the box stays, on their edges too.
+TEST(ObjectCloudExtractorTest, DepthEdgeOutliersAreRemovedSurfacesKept) {
+  const CameraIntrinsics K{100.0, 100.0, 19.5, 14.5, 40, 30};
+  cv::Mat depth(30, 40, CV_16UC1, cv::Scalar(2000));
+  depth(cv::Rect(15, 10, 10, 10)).setTo(1000);  // the box: 100 pixels
+  depth(cv::Rect(14, 10, 1, 10)).setTo(1500);   // flying pixels: 10
+  depth.at<uint16_t>(25, 5) = 3000;             // speckle
+  const RgbdFrame frame = makeRegisteredFrame(depth, K);
+  const Detection2D all = maskDetection(cv::Mat(30, 40, CV_8UC1, cv::Scalar(255)));
+
+  std::vector<PointCloud> raw;
+  ASSERT_TRUE(ObjectCloudExtractor(rawConfig()).extract(frame, {all}, &raw).ok());
+  ASSERT_EQ(raw[0].size(), 1200u);
+
+  ObjectCloudExtractor::Config config;
+  ASSERT_EQ(config.min_consistent_neighbours, 3);  // the default
+  std::vector<PointCloud> clouds;
+  ASSERT_TRUE(ObjectCloudExtractor(config).extract(frame, {all}, &clouds).ok());
+  int box = 0, wall = 0, other = 0;
+  for (const Eigen::Vector3f& p : clouds[0]) {
+    if (std::abs(p.z() - 1.0f) < 1e-3f) {
+      ++box;
+    } else if (std::abs(p.z() - 2.0f) < 1e-3f) {
+      ++wall;
+    } else {
+      ++other;
+    }
+  }
+  EXPECT_EQ(box, 100 - 4);
+  EXPECT_EQ(wall, 1200 - 100 - 10 - 1 - 4);
+  EXPECT_EQ(other, 0);
+
+  // 0 switches the test off.
+  config.min_consistent_neighbours = 0;
+  ASSERT_TRUE(ObjectCloudExtractor(config).extract(frame, {all}, &clouds).ok());
+  EXPECT_EQ(clouds[0].size(), 1200u);
+  config.min_consistent_neighbours = 5;
+  EXPECT_FALSE(config.isValid().ok());
+}
+
 TEST(ObjectCloudExtractorTest, InvalidFramesAreRejectedWithTheFrameName) {
   const CameraIntrinsics K{30.0, 30.0, 7.5, 5.5, 16, 12};
   const RgbdFrame good = makeRegisteredFrame(smoothDepthMm(16, 12), K);
   ASSERT_TRUE(good.validate().ok()) << good.validate().message();
   const std::vector<Detection2D> detections = {
       maskDetection(cv::Mat(12, 16, CV_8UC1, cv::Scalar(255)))};
-  ObjectCloudExtractor extractor;
+  ObjectCloudExtractor extractor(rawConfig());
 
   auto expectError = [&](const RgbdFrame& frame, const std::string& fragment) {
     const Status valid = frame.validate();

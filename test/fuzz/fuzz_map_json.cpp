@@ -81,6 +81,7 @@ void compareObjects(const MapObject& a, const MapObject& b, size_t index) {
     expect(it != b.evidence.end(), where + "an evidence voxel is lost");
     expect(it->second.inside == voxel.second.inside && it->second.outside == voxel.second.outside,
            where + "evidence counts differ");
+    expect(it->second.normal_sum == voxel.second.normal_sum, where + "evidence normals differ");
   }
   expect(same(a.evidence_voxel_size_m, b.evidence_voxel_size_m),
          where + "evidence voxel_size_m differs");

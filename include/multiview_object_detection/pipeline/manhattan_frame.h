@@ -60,6 +60,11 @@ class BoxEstimator {
     // Robust extents: this fraction of the points is left out at each end of every axis (noisy
     // Kinect points add 4-6 cm to min/max). 0 = Eq. 4's min/max.
     double extent_trim_fraction = 0.005;
+    // Depth resolution of the sensor, Δz = depth_step_per_m2 · z² (Kinect v1's disparity steps:
+    // 2.85e-3, 2.6 cm at 3 m). Points of one view then lie on depth layers, and normals over a
+    // radius smaller than the layer spacing point along the viewing ray: the normal radius grows to
+    // 2 Δz at the view's median depth. 0 = fixed radius (the paper's method).
+    double depth_step_per_m2 = 2.85e-3;
     Status isValid() const;
     std::string print() const;
   };
@@ -71,10 +76,30 @@ class BoxEstimator {
   // Eq. 4: Manhattan frame of the cloud (normals -> estimator), the frame put at the centroid, the
   // points expressed in it, min/max per axis. The returned box's third column is gravity.up; its
   // centre is the middle of the min/max extent (not the centroid).
+  // normals_W (optional): the normals it used, one per point of points_W, unit length and oriented
+  // arbitrarily; NaN where none was computed (beyond max_normals only a stride subsample has one).
+  // view_depth_m: the points' median depth in the camera that saw them (one view), for the
+  // depth-dependent normal radius; 0 = unknown or fused (the configured radius).
   Status estimate(const PointCloud& points_W, const GravityFrame& gravity, OrientedBox* box,
-                  ManhattanFrameEstimator::Result* frame = nullptr) const;
+                  ManhattanFrameEstimator::Result* frame = nullptr,
+                  std::vector<Eigen::Vector3f>* normals_W = nullptr,
+                  double view_depth_m = 0.0) const;
+  // The normal radius estimate() uses at that depth.
+  double normalRadius(double view_depth_m) const;
+  // The same box from normals the caller already has (any number, not tied to the points; NaN or
+  // zero ones are ignored), e.g. the per-voxel normals kept by evidence fusion: no neighbour
+  // search.
+  Status estimateFromNormals(const PointCloud& points_W,
+                             const std::vector<Eigen::Vector3f>& normals_W,
+                             const GravityFrame& gravity, OrientedBox* box,
+                             ManhattanFrameEstimator::Result* frame = nullptr) const;
 
  private:
+  // Eq. 3 on the normals, then Eq. 4 on the (finite) points.
+  Status boxFromNormals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
+                        const GravityFrame& gravity, OrientedBox* box,
+                        ManhattanFrameEstimator::Result* frame) const;
+
   Config config_;
   ManhattanFrameEstimator manhattan_;
 };

@@ -18,6 +18,12 @@ class ObjectCloudExtractor {
     int mask_erosion_px = 0;
     // Use every n-th depth pixel in u and v (1 = all).
     int pixel_stride = 1;
+    // Outliers at depth edges, in the image (the default's replacement for the filter's k-NN
+    // statistics): a pixel needs this many of its 4 neighbours (at pixel_stride) with a depth within
+    // consistency_tolerance_m + 3 depth_step_per_m2 z^2 of its own. 0 = off (the paper's method).
+    int min_consistent_neighbours = 3;
+    double consistency_tolerance_m = 0.01;
+    double depth_step_per_m2 = 2.85e-3;  // Kinect v1 disparity steps: Δz = 2.85e-3 z^2
     Status isValid() const;
     std::string print() const;
   };

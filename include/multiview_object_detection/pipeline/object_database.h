@@ -21,6 +21,9 @@ struct ObjectObservation {
   double probability = 0.0;  // ψ
   PointCloud points_W;       // filtered object cloud before LCCP (Eq. 7 fuses these)
   PointCloud segment_W;      // the cut: LCCP's largest segment (Eq. 2) or the selected segments
+  // Evidence fusion: surface normals of segment_W (one per point, unit, turned towards the camera
+  // that saw them; NaN where none was estimated). Empty: none; the fused box then estimates them.
+  std::vector<Eigen::Vector3f> segment_normals_W;
   // Evidence fusion: the view's surface points around the cut (in it or not). Voxels of these that
   // are not in the cut are votes against the object there.
   PointCloud seen_W;
@@ -32,9 +35,13 @@ struct ObjectObservation {
 
 // Evidence fusion: how often a voxel of the object's grid was inside a view's cut, and how often a
 // view saw surface there but left it out of its cut.
+// normal_sum adds the cut's normals in the voxel (each turned towards its camera), so that the
+// fused box's Manhattan yaw comes from the voxels' normals without a neighbour search over the
+// object.
 struct VoxelEvidence {
   std::uint16_t inside = 0;
   std::uint16_t outside = 0;
+  Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
 };
 using EvidenceMap = std::unordered_map<std::int64_t, VoxelEvidence>;
 
@@ -62,8 +69,11 @@ struct MapObject {
 
 // Re-runs filter + LCCP + box on a fused world-frame cloud (Eq. 7). Returns false when nothing
 // usable is left, in which case the object keeps its previous segment and box.
-using FusedCloudProcessor = std::function<bool(const PointCloud& points_W, PointCloud* segment_W,
-                                               OrientedBox* box, double* yaw_rad)>;
+// normals_W: evidence fusion's per-voxel normals of points_W (any number; empty: none kept, e.g.
+// the paper's fusion or a map saved before normals were kept).
+using FusedCloudProcessor =
+    std::function<bool(const PointCloud& points_W, const std::vector<Eigen::Vector3f>& normals_W,
+                       PointCloud* segment_W, OrientedBox* box, double* yaw_rad)>;
 
 // Object ids lie in [0, kMaxObjectId]: far more than any map holds, and far enough from INT_MAX
 // that the next id never overflows.
@@ -114,7 +124,9 @@ class ObjectDatabase {
                             const FusedCloudProcessor& process);
 
   // Evidence fusion's supported voxels (centres): inside >= outside and inside >= 1.
-  PointCloud supportedVoxels(const MapObject& object) const;
+  // normals_W (optional): the supported voxels' normals (normalised sums) where they have one.
+  PointCloud supportedVoxels(const MapObject& object,
+                             std::vector<Eigen::Vector3f>* normals_W = nullptr) const;
   // The fusion grid's key of a point (voxel_key.h), and a key's voxel centre.
   std::int64_t voxelKey(const Eigen::Vector3f& p_W) const;
   Eigen::Vector3f voxelCentre(std::int64_t key) const;

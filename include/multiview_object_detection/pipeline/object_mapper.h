@@ -116,8 +116,9 @@ class ObjectMapper {
   void reset();
 
  private:
-  bool processFused(const PointCloud& points_W, PointCloud* segment_W, OrientedBox* box,
-                    double* yaw_rad, StageTimes* times) const;
+  bool processFused(const PointCloud& points_W, const std::vector<Eigen::Vector3f>& normals_W,
+                    PointCloud* segment_W, OrientedBox* box, double* yaw_rad,
+                    StageTimes* times) const;
   // What the consistent segment selection needs to know about the view (all may be null).
   struct ViewContext {
     const RgbdFrame* frame = nullptr;
