@@ -73,6 +73,9 @@ void mapCorpus(const fs::path& dir) {
   chair.evidence_voxel_size_m = 0.02;
   chair.evidence[mvod::packVoxel(Eigen::Vector3i(50, -25, 3))] = mvod::VoxelEvidence{3, 1};
   chair.evidence[mvod::packVoxel(Eigen::Vector3i(-1, 0, 7))] = mvod::VoxelEvidence{1, 0};
+  // A voxel with the views' summed normals (an 8-element voxel in the file).
+  chair.evidence[mvod::packVoxel(Eigen::Vector3i(2, 2, 2))] =
+      mvod::VoxelEvidence{2, 0, Eigen::Vector3f(0.25f, -1.5f, 0.125f)};
   mvod::MapObject table = chair;
   table.id = 7;
   table.class_id = 60;
