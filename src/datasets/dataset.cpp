@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/io/image_io.h"
 
 namespace mvod {
@@ -132,15 +133,9 @@ std::vector<std::string> missingDepthWarnings(const fs::path& dir,
     }
   }
   if (without_depth.empty()) return {};
-  std::string names;
-  size_t named = 0;
-  for (const int index : without_depth) {
-    if (named == kMaxNamedFrames) break;
-    names += (named++ == 0 ? "" : ", ") + SevenScenesDataset::frameName(index) + ".depth.png";
-  }
-  if (without_depth.size() > named) {
-    names += " and " + std::to_string(without_depth.size() - named) + " more";
-  }
+  const std::string names = nameFirstFrames(
+      std::vector<int>(without_depth.begin(), without_depth.end()), kMaxNamedFrames,
+      [](int index) { return SevenScenesDataset::frameName(index) + ".depth.png"; });
   return {dir.string() + ": " + std::to_string(without_depth.size()) +
           " frame(s) have a colour image or pose but no depth image and are skipped: missing " +
           names};

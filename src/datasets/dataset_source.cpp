@@ -10,6 +10,18 @@
 
 namespace mvod {
 
+std::string nameFirstFrames(const std::vector<int>& indices, size_t max_named,
+                            const std::function<std::string(int)>& name) {
+  std::string names;
+  size_t named = 0;
+  for (const int index : indices) {
+    if (named == max_named) break;
+    names += (named++ == 0 ? "" : ", ") + name(index);
+  }
+  if (indices.size() > named) names += " and " + std::to_string(indices.size() - named) + " more";
+  return names;
+}
+
 Status openDatasetSource(const std::string& directory, const std::string& format,
                          DatasetSource* source) {
   namespace fs = std::filesystem;

@@ -556,28 +556,11 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
                               OrientedBox* box, ManhattanFrameEstimator::Result* frame,
                               std::vector<Eigen::Vector3f>* normals_W, double view_depth_m) const {
   if (normals_W != nullptr) normals_W->assign(points_W.size(), nanNormal());
-  if (box == nullptr) return Status::Error("BoxEstimator::estimate: box is null");
-  const Status config_status = config_.isValid();
-  if (!config_status.ok()) return config_status;
-  if (!gravity.up.allFinite() || !gravity.x_h.allFinite()) {
-    return Status::Error("BoxEstimator::estimate: gravity frame is not finite");
-  }
-
   // Non-finite points are dropped, not fatal; `source` maps the kept points back.
   PointCloud points;
   std::vector<int> source;
-  points.reserve(points_W.size());
-  source.reserve(points_W.size());
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    if (points_W[i].allFinite()) {
-      points.push_back(points_W[i]);
-      source.push_back(static_cast<int>(i));
-    }
-  }
-  if (points.empty() || static_cast<int>(points.size()) < config_.min_points) {
-    return Status::Error("BoxEstimator::estimate: " + std::to_string(points.size()) +
-                         " finite points, need at least " + std::to_string(config_.min_points));
-  }
+  const Status checked = checkedInput("estimate", points_W, gravity, box, &points, &source);
+  if (!checked) return checked;
 
   // Normals only at the (stride) subsample that Eq. 3 will use, with the full cloud as neighbours.
   const ManhattanFrameEstimator::Config& mf_config = config_.manhattan;
@@ -597,6 +580,34 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   return boxFromNormals(points, normals, gravity, box, frame);
 }
 
+Status BoxEstimator::checkedInput(const std::string& caller, const PointCloud& points_W,
+                                  const GravityFrame& gravity, const OrientedBox* box,
+                                  PointCloud* points, std::vector<int>* source) const {
+  const std::string where = "BoxEstimator::" + caller + ": ";
+  if (box == nullptr) return Status::Error(where + "box is null");
+  const Status config_status = config_.isValid();
+  if (!config_status.ok()) return config_status;
+  if (!gravity.up.allFinite() || !gravity.x_h.allFinite()) {
+    return Status::Error(where + "gravity frame is not finite");
+  }
+  points->clear();
+  points->reserve(points_W.size());
+  if (source != nullptr) {
+    source->clear();
+    source->reserve(points_W.size());
+  }
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    if (!points_W[i].allFinite()) continue;
+    points->push_back(points_W[i]);
+    if (source != nullptr) source->push_back(static_cast<int>(i));
+  }
+  if (points->empty() || static_cast<int>(points->size()) < config_.min_points) {
+    return Status::Error(where + std::to_string(points->size()) + " finite points, need at least " +
+                         std::to_string(config_.min_points));
+  }
+  return Status::Ok();
+}
+
 double BoxEstimator::normalRadius(double view_depth_m) const {
   const double radius_m = config_.manhattan.normal_radius_m;
   if (!(std::isfinite(view_depth_m) && view_depth_m > 0.0)) return radius_m;
@@ -609,21 +620,10 @@ Status BoxEstimator::estimateFromNormals(const PointCloud& points_W,
                                          const std::vector<Eigen::Vector3f>& normals_W,
                                          const GravityFrame& gravity, OrientedBox* box,
                                          ManhattanFrameEstimator::Result* frame) const {
-  if (box == nullptr) return Status::Error("BoxEstimator::estimateFromNormals: box is null");
-  const Status config_status = config_.isValid();
-  if (!config_status.ok()) return config_status;
-  if (!gravity.up.allFinite() || !gravity.x_h.allFinite()) {
-    return Status::Error("BoxEstimator::estimateFromNormals: gravity frame is not finite");
-  }
   PointCloud points;
-  points.reserve(points_W.size());
-  for (const Eigen::Vector3f& p : points_W) {
-    if (p.allFinite()) points.push_back(p);
-  }
-  if (points.empty() || static_cast<int>(points.size()) < config_.min_points) {
-    return Status::Error("BoxEstimator::estimateFromNormals: " + std::to_string(points.size()) +
-                         " finite points, need at least " + std::to_string(config_.min_points));
-  }
+  const Status checked =
+      checkedInput("estimateFromNormals", points_W, gravity, box, &points, nullptr);
+  if (!checked) return checked;
   return boxFromNormals(points, normals_W, gravity, box, frame);
 }
 

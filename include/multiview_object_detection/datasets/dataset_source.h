@@ -27,6 +27,11 @@ struct DatasetSource {
   std::vector<std::string> warnings;
 };
 
+// "a, b, c, d, e and K more": the first max_named of `indices` (ascending) by name, for warnings
+// about files a dataset folder lacks.
+std::string nameFirstFrames(const std::vector<int>& indices, size_t max_named,
+                            const std::function<std::string(int)>& name);
+
 // format: "auto" (trajectory.log or depth/ -> SceneNN, camera-intrinsics.txt -> 7-Scenes),
 // "7scenes" or "scenenn". Fails with a message naming the folder or file.
 Status openDatasetSource(const std::string& directory, const std::string& format,

@@ -95,6 +95,10 @@ class BoxEstimator {
                              ManhattanFrameEstimator::Result* frame = nullptr) const;
 
  private:
+  // The checks both estimates share; the finite points (and their indices in points_W, if asked).
+  Status checkedInput(const std::string& caller, const PointCloud& points_W,
+                      const GravityFrame& gravity, const OrientedBox* box, PointCloud* points,
+                      std::vector<int>* source) const;
   // Eq. 3 on the normals, then Eq. 4 on the (finite) points.
   Status boxFromNormals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
                         const GravityFrame& gravity, OrientedBox* box,
