@@ -72,6 +72,85 @@ std::string LccpSegmenter::Config::print() const {
   return out.str();
 }
 
+std::vector<int> LccpSegmenter::groupSupervoxels(int num_supervoxels,
+                                                 const std::vector<SupervoxelEdge>& edges,
+                                                 int min_segment_size) {
+  const int n = std::max(0, num_supervoxels);
+  // Segments are the components of the convex edges (union-find, order-free).
+  std::vector<int> parent(n);
+  for (int i = 0; i < n; ++i) parent[i] = i;
+  const auto find = [&parent](int i) {
+    while (parent[i] != i) {
+      parent[i] = parent[parent[i]];
+      i = parent[i];
+    }
+    return i;
+  };
+  for (const SupervoxelEdge& edge : edges) {
+    if (!edge.convex || edge.a < 0 || edge.b < 0 || edge.a >= n || edge.b >= n) continue;
+    const int ra = find(edge.a);
+    const int rb = find(edge.b);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);  // root = lowest supervoxel
+  }
+  std::vector<int> segment(n);
+  for (int i = 0; i < n; ++i) segment[i] = find(i);
+
+  // LCCP's small-segment merge: a segment of at most min_segment_size supervoxels joins its
+  // largest neighbouring segment (ties: the lower id); segments in ascending id, repeated until
+  // nothing merges. A segment merged away in a pass takes no others in that pass.
+  if (min_segment_size > 0) {
+    for (bool merged = true; merged;) {
+      merged = false;
+      std::vector<int> size(n, 0);
+      for (int i = 0; i < n; ++i) ++size[segment[i]];
+      std::vector<std::set<int>> neighbours(n);
+      for (const SupervoxelEdge& edge : edges) {
+        if (edge.a < 0 || edge.b < 0 || edge.a >= n || edge.b >= n) continue;
+        const int sa = segment[edge.a];
+        const int sb = segment[edge.b];
+        if (sa == sb) continue;
+        neighbours[sa].insert(sb);
+        neighbours[sb].insert(sa);
+      }
+      std::vector<int> merged_into(n, -1);
+      for (int s = 0; s < n; ++s) {
+        if (size[s] == 0 || size[s] > min_segment_size || neighbours[s].empty()) continue;
+        int best = -1;
+        for (const int t : neighbours[s]) {
+          int target = t;
+          while (merged_into[target] >= 0) target = merged_into[target];
+          if (target == s || size[target] < size[s]) continue;  // never into a smaller one
+          if (best < 0 || size[target] > size[best] ||
+              (size[target] == size[best] && target < best)) {
+            best = target;
+          }
+        }
+        if (best < 0) continue;
+        merged_into[s] = best;
+        size[best] += size[s];
+        size[s] = 0;
+        merged = true;
+      }
+      if (!merged) break;
+      for (int i = 0; i < n; ++i) {
+        int target = segment[i];
+        while (merged_into[target] >= 0) target = merged_into[target];
+        segment[i] = target;
+      }
+    }
+  }
+
+  // Ids 1, 2, ... in the order of each segment's lowest supervoxel; 0 is LCCP's "no segment".
+  std::vector<int> id(n, 0);
+  int next = 1;
+  std::vector<int> out(n);
+  for (int i = 0; i < n; ++i) {
+    if (id[segment[i]] == 0) id[segment[i]] = next++;
+    out[i] = id[segment[i]];
+  }
+  return out;
+}
+
 Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_frame,
                               Result* result) const {
   if (result == nullptr) return Status::Error("result must not be null");
@@ -164,15 +243,41 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
                             static_cast<float>(config_.seed_resolution_m),
                             static_cast<float>(config_.smoothness_threshold));
     lccp.setKFactor(config_.use_extended_convexity ? 1 : 0);
-    lccp.setMinSegmentSize(static_cast<std::uint32_t>(config_.min_segment_size));
+    // PCL groups and merges small segments in the order of its graph's vertices, which are heap
+    // addresses (boost::setS): the same input could give different segments in another thread or
+    // process. Only the convex/concave classification of each edge is taken from PCL; grouping and
+    // merging follow the supervoxel labels (groupSupervoxels).
+    lccp.setMinSegmentSize(0);
     lccp.setInputSupervoxels(clusters, adjacency);
     lccp.segment();
-
+    pcl::LCCPSegmentation<pcl::PointXYZ>::SupervoxelAdjacencyList graph;
+    lccp.getSVAdjacencyList(graph);
+    std::vector<std::uint32_t> labels;
+    labels.reserve(clusters.size());
+    for (const auto& entry : clusters) labels.push_back(entry.first);  // ascending (std::map)
+    std::vector<SupervoxelEdge> edges;
+    edges.reserve(boost::num_edges(graph));
+    const auto indexOf = [&labels](std::uint32_t label) {
+      return static_cast<int>(std::lower_bound(labels.begin(), labels.end(), label) -
+                              labels.begin());
+    };
+    const auto edge_range = boost::edges(graph);
+    for (auto it = edge_range.first; it != edge_range.second; ++it) {
+      SupervoxelEdge edge;
+      edge.a = indexOf(graph[boost::source(*it, graph)]);
+      edge.b = indexOf(graph[boost::target(*it, graph)]);
+      edge.convex = graph[*it].is_valid;
+      edges.push_back(edge);
+    }
+    const std::vector<int> supervoxel_segment =
+        groupSupervoxels(static_cast<int>(labels.size()), edges, config_.min_segment_size);
     std::map<std::uint32_t, std::uint32_t> supervoxel_to_segment;
-    lccp.getSupervoxelToSegmentMap(supervoxel_to_segment);
-    std::map<std::uint32_t, std::set<std::uint32_t>> segment_to_supervoxels;
-    lccp.getSegmentToSupervoxelMap(segment_to_supervoxels);
-    result->num_segments = static_cast<int>(segment_to_supervoxels.size());
+    std::set<int> segment_ids;
+    for (size_t i = 0; i < labels.size(); ++i) {
+      supervoxel_to_segment[labels[i]] = static_cast<std::uint32_t>(supervoxel_segment[i]);
+      segment_ids.insert(supervoxel_segment[i]);
+    }
+    result->num_segments = static_cast<int>(segment_ids.size());
 
     // Each input point takes its supervoxel's segment; label 0 = not in any supervoxel.
     const pcl::PointCloud<pcl::PointXYZL>::Ptr labeled = supervoxels.getLabeledCloud();

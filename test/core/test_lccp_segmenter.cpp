@@ -274,3 +274,78 @@ TEST(LccpSegmenterConfig, Validation) {
 }
 
 }  // namespace mvod
+
+namespace mvod {
+namespace {
+
+using Edge = LccpSegmenter::SupervoxelEdge;
+
+Edge edge(int a, int b, bool convex) {
+  Edge e;
+  e.a = a;
+  e.b = b;
+  e.convex = convex;
+  return e;
+}
+
+}  // namespace
+
+TEST(LccpGrouping, SegmentsAreTheComponentsOfConvexEdges) {
+  // 0-1-2 convex, 2-3 concave, 3-4 convex, 5 alone.
+  const std::vector<Edge> edges = {edge(0, 1, true), edge(1, 2, true), edge(2, 3, false),
+                                   edge(3, 4, true)};
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(6, edges, 0), (std::vector<int>{1, 1, 1, 2, 2, 3}));
+}
+
+TEST(LccpGrouping, SmallSegmentJoinsItsLargestNeighbour) {
+  // Supervoxel 5 touches {3, 4} (2 supervoxels) and {0, 1, 2} (3) by concave edges only: with
+  // min_segment_size 1 it joins the larger. Supervoxel 6 touches nothing and stays alone.
+  const std::vector<Edge> edges = {edge(0, 1, true), edge(1, 2, true),  edge(2, 3, false),
+                                   edge(3, 4, true), edge(5, 3, false), edge(5, 0, false)};
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(7, edges, 1), (std::vector<int>{1, 1, 1, 2, 2, 1, 3}));
+  // Without the merge it stays its own segment.
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(7, edges, 0), (std::vector<int>{1, 1, 1, 2, 2, 3, 4}));
+}
+
+TEST(LccpGrouping, TiesGoToTheLowerSegmentAndNeverIntoASmallerOne) {
+  // Supervoxel 2 alone between two segments of two: it joins the one of the lower supervoxels.
+  const std::vector<Edge> tie = {edge(0, 1, true), edge(3, 4, true), edge(2, 4, false),
+                                 edge(2, 0, false)};
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(5, tie, 1), (std::vector<int>{1, 1, 1, 2, 2}));
+  // min_segment_size 2: {0, 1} is small but its only neighbour {2} is smaller; {2} joins {0, 1}.
+  const std::vector<Edge> smaller = {edge(0, 1, true), edge(1, 2, false)};
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(3, smaller, 2), (std::vector<int>{1, 1, 1}));
+  // Bad indices are ignored.
+  EXPECT_EQ(LccpSegmenter::groupSupervoxels(2, {edge(0, 7, true), edge(-1, 1, true)}, 1),
+            (std::vector<int>{1, 2}));
+}
+
+TEST(LccpGrouping, EdgeOrderAndDirectionDoNotMatter) {
+  // PCL's own grouping follows its graph's vertex order (heap addresses); this one must give the
+  // same segments for any order of the same edges.
+  std::mt19937 rng(11);
+  const int n = 300;
+  std::vector<Edge> edges;
+  std::uniform_int_distribution<int> node(0, n - 1);
+  std::bernoulli_distribution convex(0.35);
+  for (int i = 0; i < 2 * n; ++i) {
+    const int a = node(rng), b = node(rng);
+    if (a != b) edges.push_back(edge(a, b, convex(rng)));
+  }
+  for (const int min_size : {0, 1, 3}) {
+    const std::vector<int> reference = LccpSegmenter::groupSupervoxels(n, edges, min_size);
+    ASSERT_EQ(reference.size(), static_cast<size_t>(n));
+    EXPECT_GT(*std::max_element(reference.begin(), reference.end()), 5);
+    for (int trial = 0; trial < 10; ++trial) {
+      std::vector<Edge> shuffled = edges;
+      std::shuffle(shuffled.begin(), shuffled.end(), rng);
+      for (Edge& e : shuffled) {
+        if (rng() % 2) std::swap(e.a, e.b);
+      }
+      EXPECT_EQ(LccpSegmenter::groupSupervoxels(n, shuffled, min_size), reference)
+          << "min_segment_size " << min_size << ", trial " << trial;
+    }
+  }
+}
+
+}  // namespace mvod

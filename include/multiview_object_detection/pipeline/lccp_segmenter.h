@@ -55,6 +55,21 @@ class LccpSegmenter {
   // below or inside the object.
   Status segment(const PointCloud& points, bool points_in_camera_frame, Result* result) const;
 
+  // An adjacency between supervoxels a and b (indices in ascending label order); convex = LCCP
+  // joins them (convexity, sanity and smoothness criteria passed).
+  struct SupervoxelEdge {
+    int a = -1;
+    int b = -1;
+    bool convex = false;
+  };
+  // LCCP's grouping: the components of the convex edges, then segments of at most
+  // min_segment_size supervoxels merged into their largest neighbour. Returns a segment id >= 1 per
+  // supervoxel, numbered in the order of each segment's lowest supervoxel. Depends only on the
+  // supervoxel order and the edges (not on the edges' order or on memory addresses).
+  static std::vector<int> groupSupervoxels(int num_supervoxels,
+                                           const std::vector<SupervoxelEdge>& edges,
+                                           int min_segment_size);
+
  private:
   Config config_;
 };
