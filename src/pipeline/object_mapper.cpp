@@ -294,7 +294,13 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     views[k].status =
         runSingleView(clouds_D[k], frame.T_W_D, context, &views[k].observation, &views[k].times);
   };
-  parallelFor(kept.size(), threadCount(), run_one);
+  // Largest clouds first: the pool then ends with small jobs instead of waiting on one big one.
+  std::vector<size_t> by_size(kept.size());
+  for (size_t k = 0; k < by_size.size(); ++k) by_size[k] = k;
+  std::stable_sort(by_size.begin(), by_size.end(), [&clouds_D](size_t a, size_t b) {
+    return clouds_D[a].size() > clouds_D[b].size();
+  });
+  parallelFor(kept.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
 
   // Eq. 5-8 in detection order: the same map whatever the thread count.
   for (size_t k = 0; k < kept.size(); ++k) {

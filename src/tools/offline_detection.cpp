@@ -61,7 +61,7 @@ const char* const kUsage =
     "  --backend NAME         cpu | cuda: where OpenCV DNN runs the detector (default: cpu)\n"
     "  --max-detections N     files: at most N detections per frame, the highest scores\n"
     "                         (default: 100)\n"
-    "  --threads N            threads for a keyframe's detections (0 = one per core) (default: 1)\n"
+    "  --threads N            threads for a keyframe's detections (0 = one per core) (default: 0)\n"
     "  --every N              every N-th frame is a keyframe (default: 10)\n"
     "  --first N, --last N    only frames with index in [first, last]\n"
     "  --output FILE          objects.json to write (default: objects.json)\n"
@@ -95,7 +95,7 @@ struct Options {
   double score_threshold = 0.5;
   std::string backend = "cpu";
   int max_detections = 100;
-  int threads = 1;
+  int threads = 0;
   int every = 10;
   int first = std::numeric_limits<int>::min();
   int last = std::numeric_limits<int>::max();

@@ -52,10 +52,9 @@ class ObjectMapper {
     Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
     int min_object_points = 50;  // fewer points after filtering: the detection is dropped
     // Threads for a keyframe's detections (floor cut, filter, LCCP, selection, box); 0 = one per
-    // core. The database is updated in detection order afterwards. Default 1: PCL's supervoxels
-    // visit voxels in heap-address order, so with more threads the same input can give slightly
-    // different segments (README, Bugs and limitations).
-    int num_threads = 1;
+    // core. The database is updated in detection order afterwards and every stage is independent
+    // of memory addresses (LccpSegmenter::groupSupervoxels), so the map is the same for any count.
+    int num_threads = 0;
     ObjectCloudExtractor::Config extractor;
     PointCloudFilter::Config filter;
     LccpSegmenter::Config lccp;
