@@ -243,7 +243,11 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
   // the k-d tree is cheaper.
   const std::int64_t budget = 400 * static_cast<std::int64_t>(n) + 1000000;
   std::int64_t visited = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  // Neighbouring points have similar k-th distances: the previous query's (queries in cell order)
+  // pre-selects the candidates, and the exact selection then runs on those few when they suffice.
+  float guess_kth = 0.f;
+  for (std::size_t ordered = 0; ordered < n; ++ordered) {
+    const std::size_t i = static_cast<std::size_t>(order[ordered]);
     const Eigen::Vector3f& q = finite[i];
     const Eigen::Array3i& qc = cell_of[i];
     candidates.clear();
@@ -275,8 +279,20 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
         }
       }
       if (s > 0 && candidates.size() >= want) {
-        // Keep only the `want` smallest so far.
-        std::nth_element(candidates.begin(), candidates.begin() + (want - 1), candidates.end());
+        // Keep only the `want` smallest so far (those under the guess, when there are enough).
+        std::size_t under = 0;
+        if (guess_kth > 0.f) {
+          // A branch-free partition (each step swaps positions `under` and k).
+          for (std::size_t k = 0; k < candidates.size(); ++k) {
+            const float d2 = candidates[k];
+            candidates[k] = candidates[under];
+            candidates[under] = d2;
+            under += d2 <= guess_kth ? 1 : 0;
+          }
+        }
+        if (under < want) under = candidates.size();
+        std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
+                         candidates.begin() + static_cast<std::ptrdiff_t>(under));
         candidates.resize(want);
         const float kth = *std::max_element(candidates.begin(), candidates.end());
         const double reach = s * cell_m;
@@ -285,6 +301,7 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
     }
     if (visited > budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
     std::sort(candidates.begin(), candidates.end());
+    guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
     double sum = 0.0;
     for (std::size_t k = 1; k < want && k < candidates.size(); ++k) sum += std::sqrt(candidates[k]);
     mean_distance[i] = static_cast<float>(sum / mean_k);
