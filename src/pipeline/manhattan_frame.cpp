@@ -29,6 +29,8 @@ constexpr int kPolishIterations = 10;
 // falls back to the minimum-area footprint.
 constexpr double kMinPeakToMeanRatio = 1.5;
 constexpr int kMinHorizontalInliers = 5;
+// The footprint's minimum-area yaw is trusted only for a footprint this elongated (long / short).
+constexpr double kMinFootprintAspect = 1.5;
 
 // ---------------------------------------------------------------------------------------------------
 // Neighbour search: a hash grid with cells of the search radius, so a radius query visits 27 cells.
@@ -409,6 +411,59 @@ double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
   return foldYaw(minimumAreaRectangle(footprint).yaw_rad);
 }
 
+// The footprint's outline, approximately and in O(n): of each 1 cm strip along either horizontal
+// axis, only the points at both ends (every hull vertex lies within a strip's width of these).
+// Rectangles around these are those around the whole footprint to about a centimetre.
+std::vector<Eigen::Vector2d> footprintStripEnds(const PointCloud& points_W,
+                                                const GravityFrame& gravity) {
+  std::vector<Eigen::Vector2d> footprint(points_W.size());
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    const Eigen::Vector3d q = points_W[i].cast<double>();
+    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
+    lo = lo.cwiseMin(footprint[i]);
+    hi = hi.cwiseMax(footprint[i]);
+  }
+  std::vector<Eigen::Vector2d> ends;
+  if (footprint.empty()) return ends;
+  const double strip_m = std::max(0.01, (hi - lo).maxCoeff() / 2000.0);
+  for (int axis = 0; axis < 2; ++axis) {
+    const int other = 1 - axis;
+    const size_t strips = static_cast<size_t>((hi[axis] - lo[axis]) / strip_m) + 1;
+    std::vector<int> low(strips, -1), high(strips, -1);
+    for (size_t i = 0; i < footprint.size(); ++i) {
+      const size_t k = static_cast<size_t>((footprint[i][axis] - lo[axis]) / strip_m);
+      if (k >= strips) continue;
+      if (low[k] < 0 || footprint[i][other] < footprint[low[k]][other])
+        low[k] = static_cast<int>(i);
+      if (high[k] < 0 || footprint[i][other] > footprint[high[k]][other]) {
+        high[k] = static_cast<int>(i);
+      }
+    }
+    for (size_t k = 0; k < strips; ++k) {
+      if (low[k] >= 0) ends.push_back(footprint[low[k]]);
+      if (high[k] >= 0 && high[k] != low[k]) ends.push_back(footprint[high[k]]);
+    }
+  }
+  return ends;
+}
+
+// Area of the rectangle at this yaw (footprint coordinates) around the points.
+double rectangleArea(const std::vector<Eigen::Vector2d>& points, double yaw_rad) {
+  const Eigen::Vector2d u(std::cos(yaw_rad), std::sin(yaw_rad));
+  const Eigen::Vector2d v(-u.y(), u.x());
+  double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
+  double min_v = min_u, max_v = -min_u;
+  for (const Eigen::Vector2d& q : points) {
+    min_u = std::min(min_u, q.dot(u));
+    max_u = std::max(max_u, q.dot(u));
+    min_v = std::min(min_v, q.dot(v));
+    max_v = std::max(max_v, q.dot(v));
+  }
+  return (max_u - min_u) * (max_v - min_v);
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3f> estimateNormals(const PointCloud& points, double radius_m,
@@ -533,6 +588,10 @@ Status BoxEstimator::Config::isValid() const {
     return Status::Error("box depth_step_per_m2 must be in [0, 0.1) (got " +
                          std::to_string(depth_step_per_m2) + ")");
   }
+  if (!(footprint_yaw_area_ratio >= 0.0 && footprint_yaw_area_ratio <= 1.0)) {
+    return Status::Error("box footprint_yaw_area_ratio must be in [0, 1] (got " +
+                         std::to_string(footprint_yaw_area_ratio) + ")");
+  }
   if (!(extent_trim_fraction >= 0.0 && extent_trim_fraction < 0.2)) {
     return Status::Error("box extent_trim_fraction must be in [0, 0.2) (got " +
                          std::to_string(extent_trim_fraction) + ")");
@@ -548,7 +607,8 @@ std::string BoxEstimator::Config::print() const {
   }
   out << "min_points: " << min_points << "\n"
       << "extent_trim_fraction: " << extent_trim_fraction << "\n"
-      << "depth_step_per_m2: " << depth_step_per_m2 << "\n";
+      << "depth_step_per_m2: " << depth_step_per_m2 << "\n"
+      << "footprint_yaw_area_ratio: " << footprint_yaw_area_ratio << "\n";
   return out.str();
 }
 
@@ -655,8 +715,23 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
   if (hasHorizontalStructure(unit_normals, gravity, yaw_rad, cos_delta)) {
     // Eq. 3's count is flat over a few degrees around its maximum: polish on the inliers.
     yaw_rad = polishYaw(unit_normals, gravity, yaw_rad, cos_delta);
+    if (config_.footprint_yaw_area_ratio > 0.0) {
+      // A yaw that rests on a few normals (cups on a table top, the edge of a chair back) can be
+      // far off; its box then covers much more floor than the points need. The footprint's
+      // minimum-area rectangle replaces it when that is clearly tighter.
+      const std::vector<Eigen::Vector2d> outline = footprintStripEnds(points, gravity);
+      const Rectangle2d tight = minimumAreaRectangle(outline);
+      // Only an elongated footprint fixes a yaw (a square seat's rectangle fits at any yaw). The
+      // yaws are in the footprint coordinates (x_h, y_h), as GravityFrame::rotationFromYaw's.
+      if (tight.size.maxCoeff() >= kMinFootprintAspect * tight.size.minCoeff() &&
+          tight.size.prod() < config_.footprint_yaw_area_ratio * rectangleArea(outline, yaw_rad)) {
+        const double footprint_yaw = foldYaw(tight.yaw_rad);
+        yaw_rad = footprint_yaw;
+      }
+    }
   } else {
-    // Degenerate normals (cylinders, flat slabs, tiny clouds): the minimum-area footprint instead.
+    // Degenerate normals (cylinders, flat slabs, tiny clouds, a table top seen from above): the
+    // minimum-area footprint instead.
     yaw_rad = minimumAreaYaw(points, gravity);
   }
   // The reported frame is the one the box uses (R' of Sec. 3.3), with its own Eq. 3 count.
