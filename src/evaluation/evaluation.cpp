@@ -426,7 +426,7 @@ OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector
   const GravityFrame frame(up_W.allFinite() && up_W.norm() > 1e-9 ? Eigen::Vector3d(-up_W)
                                                                   : Eigen::Vector3d(0, 0, -1));
   BoxEstimator::Config manhattan;
-  manhattan.extent_trim_fraction = 0.0;          // ground truth: the whole surface
+  manhattan.extent_trim_fraction = 0.0;      // ground truth: the whole surface
   manhattan.footprint_yaw_area_ratio = 0.0;  // (the ground truth of earlier releases)
   if (points_W.size() >= 200 && BoxEstimator(manhattan).estimate(points_W, frame, &box).ok()) {
     return box;

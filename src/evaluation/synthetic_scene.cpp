@@ -15,9 +15,9 @@
 #include <system_error>
 #include <unordered_map>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
+#include "multiview_object_detection/pipeline/class_priors.h"
 
 namespace mvod {
 namespace {

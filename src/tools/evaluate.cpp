@@ -10,8 +10,8 @@
 
 #include "cli_args.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
+#include "multiview_object_detection/io/json_io.h"
 
 namespace fs = std::filesystem;
 

@@ -3,7 +3,6 @@
 // keep answering, and good frames afterwards are still mapped. Two nodes run: /object_detection
 // takes its pose from a topic, /object_detection_tf from TF (for the missing-TF case).
 #include <gtest/gtest.h>
-
 #include <std_srvs/Trigger.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -373,8 +372,7 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
   ASSERT_TRUE(callMapFile(std::string(kPoseNode) + "/save_map", "/tmp/outside_" + tag + ".json",
                           &srv, &seconds));
   EXPECT_FALSE(srv.response.success);
-  EXPECT_NE(srv.response.message.find("map_directory"), std::string::npos)
-      << srv.response.message;
+  EXPECT_NE(srv.response.message.find("map_directory"), std::string::npos) << srv.response.message;
   EXPECT_FALSE(std::filesystem::exists("/tmp/outside_" + tag + ".json"));
   ASSERT_TRUE(callMapFile(service, "/etc/passwd", &srv, &seconds));
   EXPECT_FALSE(srv.response.success);

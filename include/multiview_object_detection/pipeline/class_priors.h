@@ -1,5 +1,6 @@
-// Per-class prior knowledge (config/class_priors.yaml): typical size for the atypical-object filter (Eq. 9)
-// and the centre distance under which two detections of the class are the same object (Eq. 6).
+// Per-class prior knowledge (config/class_priors.yaml): typical size for the atypical-object filter
+// (Eq. 9) and the centre distance under which two detections of the class are the same object
+// (Eq. 6).
 #pragma once
 
 #include <map>
@@ -10,8 +11,8 @@
 
 namespace mvod {
 
-// The 80 COCO class names in the usual contiguous order (FastestDet/YOLO order). Class ids used in this
-// package's outputs are indices into this list.
+// The 80 COCO class names in the usual contiguous order (FastestDet/YOLO order). Class ids used in
+// this package's outputs are indices into this list.
 const std::vector<std::string>& cocoClassNames();
 // Index of a COCO class name, or -1 if it is not one.
 int cocoClassId(const std::string& class_name);

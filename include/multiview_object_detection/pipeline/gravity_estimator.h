@@ -1,5 +1,5 @@
-// Gravity ("down" in the world frame) from the dominant horizontal plane, for when no gravity is configured
-// (ORB-SLAM2's map frame is its first camera's frame, not gravity-aligned).
+// Gravity ("down" in the world frame) from the dominant horizontal plane, for when no gravity is
+// configured (ORB-SLAM2's map frame is its first camera's frame, not gravity-aligned).
 #pragma once
 
 #include "multiview_object_detection/pipeline/common.h"
@@ -11,8 +11,8 @@ class GravityEstimator {
   struct Config {
     double plane_distance_threshold_m = 0.02;  // RANSAC inlier distance
     int ransac_iterations = 300;
-    // A plane counts as horizontal when its normal is within this angle of the camera's "up" (-y of the
-    // optical frame): robot cameras look roughly level, so floor and table tops face camera-up.
+    // A plane counts as horizontal when its normal is within this angle of the camera's "up" (-y of
+    // the optical frame): robot cameras look roughly level, so floor and table tops face camera-up.
     double max_tilt_from_camera_up_deg = 35.0;
     double min_plane_fraction = 0.1;  // fraction of the frame's points the plane must hold
     double voxel_size_m = 0.05;
@@ -23,8 +23,8 @@ class GravityEstimator {
   GravityEstimator() = default;
   explicit GravityEstimator(const Config& config) : config_(config) {}
 
-  // Adds one frame (whole depth cloud, depth-camera frame, and its pose). Returns true once an estimate
-  // is available.
+  // Adds one frame (whole depth cloud, depth-camera frame, and its pose). Returns true once an
+  // estimate is available.
   bool addFrame(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D);
   bool hasEstimate() const { return has_estimate_; }
   // Unit gravity (pointing down) in the world frame.

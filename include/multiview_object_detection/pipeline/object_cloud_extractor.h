@@ -19,8 +19,9 @@ class ObjectCloudExtractor {
     // Use every n-th depth pixel in u and v (1 = all).
     int pixel_stride = 1;
     // Outliers at depth edges, in the image (the default's replacement for the filter's k-NN
-    // statistics): a pixel needs this many of its 4 neighbours (at pixel_stride) with a depth within
-    // consistency_tolerance_m + 3 depth_step_per_m2 z^2 of its own. 0 = off (the paper's method).
+    // statistics): a pixel needs this many of its 4 neighbours (at pixel_stride) with a depth
+    // within consistency_tolerance_m + 3 depth_step_per_m2 z^2 of its own. 0 = off (the paper's
+    // method).
     int min_consistent_neighbours = 3;
     double consistency_tolerance_m = 0.01;
     double depth_step_per_m2 = 2.85e-3;  // Kinect v1 disparity steps: Δz = 2.85e-3 z^2
@@ -32,9 +33,10 @@ class ObjectCloudExtractor {
   explicit ObjectCloudExtractor(const Config& config) : config_(config) {}
   const Config& config() const { return config_; }
 
-  // One cloud per detection, in the DEPTH camera frame (points_D); the caller transforms with T_W_D.
-  // Each valid depth pixel is back-projected once; if the frame is not registered it is projected into the
-  // colour image (T_C_D, K_color) to look up the masks. An empty cloud means the mask held no valid depth.
+  // One cloud per detection, in the DEPTH camera frame (points_D); the caller transforms with
+  // T_W_D. Each valid depth pixel is back-projected once; if the frame is not registered it is
+  // projected into the colour image (T_C_D, K_color) to look up the masks. An empty cloud means the
+  // mask held no valid depth.
   Status extract(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
                  std::vector<PointCloud>* clouds_D) const;
 

@@ -8,15 +8,15 @@ namespace mvod {
 class PointCloudFilter {
  public:
   struct Config {
-    bool enable = true;                // false = Table 3's "-Filter" ablation (all three off)
-    double voxel_leaf_size_m = 0.01;   // the paper's 0.01 m point-cloud resolution
-    double min_depth_m = 0.3;          // pass-through on camera depth (z of the camera frame)
+    bool enable = true;               // false = Table 3's "-Filter" ablation (all three off)
+    double voxel_leaf_size_m = 0.01;  // the paper's 0.01 m point-cloud resolution
+    double min_depth_m = 0.3;         // pass-through on camera depth (z of the camera frame)
     double max_depth_m = 4.5;
     // Statistical outlier removal (k-NN distances, PCL's semantics). false leaves outliers to the
     // extractor's depth-edge test alone: faster, but on the benchmark rooms box mAP@0.5 fell by 6
     // points, so it stays on.
     bool statistical_outlier_removal = true;
-    int sor_mean_k = 20;               // statistical outlier removal: neighbours
+    int sor_mean_k = 20;  // statistical outlier removal: neighbours
     // ... and the std-dev multiplier: loose enough that surfaces seen at a grazing angle (sparser
     // than the rest of a single view, e.g. a box top) survive; isolated points still go.
     double sor_stddev_mul = 2.5;
