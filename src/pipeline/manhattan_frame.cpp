@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
 
@@ -414,6 +415,57 @@ double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
 // The footprint's outline, approximately and in O(n): of each 1 cm strip along either horizontal
 // axis, only the points at both ends (every hull vertex lies within a strip's width of these).
 // Rectangles around these are those around the whole footprint to about a centimetre.
+// The footprint outline's horizontal normals: the points' occupancy on a horizontal grid, closed
+// and smoothed, and the gradient direction wherever it is steep (a band along the boundary). The
+// grid is coarsened for very large footprints (at most 1000 cells a side).
+std::vector<Eigen::Vector3f> outlineNormals(const PointCloud& points_W, const GravityFrame& gravity,
+                                            double cell_m) {
+  std::vector<Eigen::Vector3f> normals;
+  if (points_W.size() < 3 || !(cell_m > 0.0)) return normals;
+  std::vector<Eigen::Vector2d> footprint(points_W.size());
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    const Eigen::Vector3d q = points_W[i].cast<double>();
+    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
+    lo = lo.cwiseMin(footprint[i]);
+    hi = hi.cwiseMax(footprint[i]);
+  }
+  const double span_m = (hi - lo).maxCoeff();
+  if (!std::isfinite(span_m)) return normals;
+  cell_m = std::max(cell_m, span_m / 1000.0);
+  const int pad = 3;
+  const int cols = static_cast<int>((hi.x() - lo.x()) / cell_m) + 1 + 2 * pad;
+  const int rows = static_cast<int>((hi.y() - lo.y()) / cell_m) + 1 + 2 * pad;
+  cv::Mat occupied(rows, cols, CV_8UC1, cv::Scalar(0));
+  for (const Eigen::Vector2d& f : footprint) {
+    const int c = static_cast<int>((f.x() - lo.x()) / cell_m) + pad;
+    const int r = static_cast<int>((f.y() - lo.y()) / cell_m) + pad;
+    occupied.ptr<uint8_t>(r)[c] = 255;
+  }
+  cv::morphologyEx(occupied, occupied, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  cv::Mat smooth, gx, gy;
+  occupied.convertTo(smooth, CV_32F, 1.0 / 255.0);
+  cv::GaussianBlur(smooth, smooth, cv::Size(5, 5), 1.0);
+  cv::Sobel(smooth, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(smooth, gy, CV_32F, 0, 1, 3);
+  const Eigen::Vector3f x_h = gravity.x_h.cast<float>();
+  const Eigen::Vector3f y_h = gravity.y_h.cast<float>();
+  // A straight edge's gradient peaks near 4 x 0.4 (Sobel's weights over the blurred step).
+  const float min_magnitude = 0.8f;
+  for (int r = 0; r < rows; ++r) {
+    const float* row_x = gx.ptr<float>(r);
+    const float* row_y = gy.ptr<float>(r);
+    for (int c = 0; c < cols; ++c) {
+      const float magnitude = std::hypot(row_x[c], row_y[c]);
+      if (magnitude < min_magnitude) continue;
+      normals.push_back(((row_x[c] * x_h + row_y[c] * y_h) / magnitude).normalized());
+    }
+  }
+  return normals;
+}
+
 std::vector<Eigen::Vector2d> footprintStripEnds(const PointCloud& points_W,
                                                 const GravityFrame& gravity) {
   std::vector<Eigen::Vector2d> footprint(points_W.size());
@@ -588,6 +640,10 @@ Status BoxEstimator::Config::isValid() const {
     return Status::Error("box depth_step_per_m2 must be in [0, 0.1) (got " +
                          std::to_string(depth_step_per_m2) + ")");
   }
+  if (!(std::isfinite(outline_cell_m) && outline_cell_m >= 0.0)) {
+    return Status::Error("box outline_cell_m must be >= 0 (got " + std::to_string(outline_cell_m) +
+                         ")");
+  }
   if (!(footprint_yaw_area_ratio >= 0.0 && footprint_yaw_area_ratio <= 1.0)) {
     return Status::Error("box footprint_yaw_area_ratio must be in [0, 1] (got " +
                          std::to_string(footprint_yaw_area_ratio) + ")");
@@ -608,7 +664,8 @@ std::string BoxEstimator::Config::print() const {
   out << "min_points: " << min_points << "\n"
       << "extent_trim_fraction: " << extent_trim_fraction << "\n"
       << "depth_step_per_m2: " << depth_step_per_m2 << "\n"
-      << "footprint_yaw_area_ratio: " << footprint_yaw_area_ratio << "\n";
+      << "footprint_yaw_area_ratio: " << footprint_yaw_area_ratio << "\n"
+      << "outline_cell_m: " << outline_cell_m << "\n";
   return out.str();
 }
 
@@ -693,11 +750,21 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
                                     ManhattanFrameEstimator::Result* frame) const {
   const ManhattanFrameEstimator::Config& mf_config = config_.manhattan;
   const double cos_delta = std::cos(mf_config.inlier_angle_deg * kPi / 180.0);
-  const std::vector<Eigen::Vector3d> unit_normals = prepareNormals(normals, mf_config.max_normals);
+  // The surface normals, and in the gravity-constrained search those of the footprint's outline.
+  std::vector<Eigen::Vector3f> with_outline;
+  if (mf_config.gravity_constrained && config_.outline_cell_m > 0.0) {
+    with_outline = normals;
+    const std::vector<Eigen::Vector3f> outline =
+        outlineNormals(points, gravity, config_.outline_cell_m);
+    with_outline.insert(with_outline.end(), outline.begin(), outline.end());
+  }
+  const std::vector<Eigen::Vector3f>& eq3_normals = with_outline.empty() ? normals : with_outline;
+  const std::vector<Eigen::Vector3d> unit_normals =
+      prepareNormals(eq3_normals, mf_config.max_normals);
   ManhattanFrameEstimator::Result mf;
   double yaw_rad = 0.0;
   if (mf_config.gravity_constrained) {
-    mf = manhattan_.estimateYaw(normals, gravity);
+    mf = manhattan_.estimateYaw(eq3_normals, gravity);
     yaw_rad = mf.yaw_rad;
   } else {
     // Sec. 3.3 "R converted to R'": the unconstrained frame's most horizontal axis, projected on

@@ -100,6 +100,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.extent_trim_fraction = 0.0;
   box.depth_step_per_m2 = 0.0;
   box.footprint_yaw_area_ratio = 0.0;
+  box.outline_cell_m = 0.0;
   extractor.min_consistent_neighbours = 0;
   filter.statistical_outlier_removal = true;
   intersection_filter.duplicate_ratio = 0.0;

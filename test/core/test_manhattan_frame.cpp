@@ -501,9 +501,43 @@ TEST(ManhattanBox, TableTopWithClutterTakesTheFootprintsYaw) {
 
   BoxEstimator::Config paper;
   paper.footprint_yaw_area_ratio = 0.0;  // Eq. 3 whenever its peak stands out
+  paper.outline_cell_m = 0.0;            // on the surface normals only
   ASSERT_TRUE(BoxEstimator(paper).estimateFromNormals(points, normals, gravity, &box, &frame).ok());
   EXPECT_LT(yawErrorDeg(frame.yaw_rad, 0.0), 1.0) << "the clutter's yaw";
   EXPECT_GT(yawErrorDeg(frame.yaw_rad, yaw_true), 25.0);
+}
+
+TEST(ManhattanBox, TableTopOutlineOutvotesAFewSkewedNormals) {
+  // A 2.0 x 0.9 m table top seen from above: all its normals vertical, except those of a chair's
+  // backrest beside it, 4 degrees off the table. Its footprint's minimum-area rectangle is not
+  // clearly tighter at 4 degrees (area ratio 0.84), so only the top's outline can give the yaw.
+  const GravityFrame gravity;
+  const double yaw_true = 20.0 * kDeg;
+  const Eigen::Matrix3d R_table = gravity.rotationFromYaw(yaw_true);
+  PointCloud points;
+  std::vector<Eigen::Vector3f> normals;
+  for (double x = -1.0; x <= 1.0; x += 0.01) {
+    for (double y = -0.45; y <= 0.45; y += 0.01) {
+      points.push_back((R_table * Eigen::Vector3d(x, y, 0.74)).cast<float>());
+      normals.push_back(Eigen::Vector3f::UnitZ());
+    }
+  }
+  const Eigen::Matrix3d R_chair = gravity.rotationFromYaw(yaw_true + 4.0 * kDeg);
+  for (int i = 0; i < 300; ++i) {
+    points.push_back((R_chair * Eigen::Vector3d(-0.2 + 0.0015 * i, 0.46, 0.6)).cast<float>());
+    normals.push_back(R_chair.col(1).cast<float>());
+  }
+
+  OrientedBox box;
+  ManhattanFrameEstimator::Result frame;
+  ASSERT_TRUE(BoxEstimator().estimateFromNormals(points, normals, gravity, &box, &frame).ok());
+  EXPECT_LT(yawErrorDeg(frame.yaw_rad, yaw_true), 1.0);
+
+  BoxEstimator::Config surface_only;
+  surface_only.outline_cell_m = 0.0;
+  ASSERT_TRUE(
+      BoxEstimator(surface_only).estimateFromNormals(points, normals, gravity, &box, &frame).ok());
+  EXPECT_GT(yawErrorDeg(frame.yaw_rad, yaw_true), 3.0) << "the scene does not test the outline";
 }
 
 TEST(ManhattanBox, CylinderGetsTightFootprint) {

@@ -71,6 +71,11 @@ class BoxEstimator {
     // off and a footprint 1.4 times too large. 0 = Eq. 3's yaw whenever its peak stands out (the
     // paper's).
     double footprint_yaw_area_ratio = 0.8;
+    // Eq. 3 also counts the horizontal normals of the footprint's outline (the points' occupancy
+    // on a horizontal grid of this cell size, its boundary's gradient directions): the edges of a
+    // table top seen from above carry its yaw where its own normals, all vertical, carry none.
+    // 0 = the surface normals only (the paper's).
+    double outline_cell_m = 0.02;
     Status isValid() const;
     std::string print() const;
   };
