@@ -173,9 +173,19 @@ Status parseClass(const YAML::Node& value, const std::string& where, double defa
       const Status status =
           readDistance(field.second, where + ".fusion_distance_m", &prior->fusion_distance_m);
       if (!status) return status;
+    } else if (key == "on_floor" || key == "flat_top") {
+      bool flag = false;
+      try {
+        if (!field.second.IsScalar()) throw YAML::Exception(YAML::Mark(), "not a scalar");
+        flag = field.second.as<bool>();
+      } catch (const YAML::Exception&) {
+        return Status::Error(where + "." + key + " must be true or false (got " +
+                             describe(field.second) + ")");
+      }
+      (key == "on_floor" ? prior->on_floor : prior->flat_top) = flag;
     } else {
       return Status::Error(where + ": unknown key '" + key +
-                           "' (expected size_m and/or fusion_distance_m)");
+                           "' (expected size_m, fusion_distance_m, on_floor, flat_top)");
     }
   }
   return Status::Ok();

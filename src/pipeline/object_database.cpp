@@ -225,7 +225,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     PointCloud segment_W;
     OrientedBox box;
     double yaw_rad = object.yaw_rad;
-    if (process && process(*to_process, supported_normals, &segment_W, &box, &yaw_rad)) {
+    if (process &&
+        process(object.class_name, *to_process, supported_normals, &segment_W, &box, &yaw_rad)) {
       object.segment_W = std::move(segment_W);
       object.box = box;
       object.yaw_rad = yaw_rad;

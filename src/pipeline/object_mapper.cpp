@@ -328,10 +328,11 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     t = Clock::now();
     StageTimes fused_times;
     const FusedCloudProcessor process =
-        [this, &fused_times](const PointCloud& points_W,
+        [this, &fused_times](const std::string& class_name, const PointCloud& points_W,
                              const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
                              OrientedBox* box, double* yaw_rad) {
-          return processFused(points_W, normals_W, segment_W, box, yaw_rad, &fused_times);
+          return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad,
+                              &fused_times);
         };
     const ObjectDatabase::FusionResult result = database_.fuseOrInsert(observation, process);
     out.times.fusion_ms += msSince(t);
@@ -388,15 +389,22 @@ Status ObjectMapper::processSingleView(const RgbdFrame& frame, const Detection2D
   return runSingleView(points_D, frame.T_W_D, context, observation, times);
 }
 
-void ObjectMapper::groundBox(OrientedBox* box) const {
+void ObjectMapper::groundBox(const std::string& class_name, OrientedBox* box) const {
   if (!floorCutActive()) return;
+  const ClassPrior* prior = database_.priors().find(class_name);
+  // A flat top stands on supports down to the floor, whatever of them a view shows.
+  const bool to_floor = prior != nullptr && prior->flat_top;
   const Eigen::Vector3d up = box->rotation.col(2);
   if (up.dot(gravity().up) < 0.999) return;  // not gravity-aligned
   const double centre = up.dot(box->center_m);
   const double bottom = centre - 0.5 * box->size_m.z();
   const double top = centre + 0.5 * box->size_m.z();
   const double floor_m = floor_.floorHeight_m();
-  if (bottom - floor_m > config_.floor.grounding_distance_m || top <= floor_m + 0.05) return;
+  // Near the floor, or (a flat-topped class) anywhere above it: a table's legs hidden behind
+  // chairs still reach the floor. (Not every on_floor class: grounding the fragments of a chair
+  // would give them a chair's height and centre, and Eq. 6 would fuse them into their neighbours.)
+  if (top <= floor_m + 0.05) return;
+  if (!to_floor && bottom - floor_m > config_.floor.grounding_distance_m) return;
   box->size_m.z() = top - floor_m;
   box->center_m += up * (0.5 * (top + floor_m) - centre);
 }
@@ -487,7 +495,9 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   const double median_depth_m = depths_m[depths_m.size() / 2];
   const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box, nullptr,
                                                keep_normals ? &normals_W : nullptr, median_depth_m);
-  if (boxed) groundBox(&box);
+  if (boxed) {
+    groundBox(context.detection != nullptr ? context.detection->class_name : std::string(), &box);
+  }
   if (keep_normals) {
     // Turned towards the camera: every view of a surface then adds the same sign in a voxel.
     const Eigen::Vector3f camera_W = T_W_D.translation().cast<float>();
@@ -520,7 +530,7 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   return Status::Ok();
 }
 
-bool ObjectMapper::processFused(const PointCloud& points_W,
+bool ObjectMapper::processFused(const std::string& class_name, const PointCloud& points_W,
                                 const std::vector<Eigen::Vector3f>& normals_W,
                                 PointCloud* segment_W, OrientedBox* box, double* yaw_rad,
                                 StageTimes* times) const {
@@ -538,7 +548,7 @@ bool ObjectMapper::processFused(const PointCloud& points_W,
             ? box_estimator_.estimateFromNormals(points_W, normals_W, gravity_frame, &fused_box)
             : box_estimator_.estimate(points_W, gravity_frame, &fused_box);
     if (!boxed) return false;
-    groundBox(&fused_box);
+    groundBox(class_name, &fused_box);
     times->manhattan_ms += msSince(t);
     *segment_W = points_W;
     *box = fused_box;

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
@@ -15,6 +16,7 @@ namespace mvod {
 namespace {
 
 constexpr double kPiOver18 = 3.14159265358979323846 / 18.0;
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // The cells of one cloud: cell -> the segments with points in it (few per cell).
 using CellSegments = std::unordered_map<std::int64_t, std::vector<int>>;
@@ -74,11 +76,29 @@ Status SegmentSelector::Config::isValid() const {
         "plane_max_thickness_m >= 0, plane_distance_m > 0, min_continuation in (0, 1] and "
         "min_continuation_points >= 1 are required");
   }
+  if (!(min_ring_share >= 0.0 && min_ring_share <= 1.0)) {
+    return Status::Error("min_ring_share must be in [0, 1]");
+  }
   if (!(std::isfinite(prior_size_slack) && prior_size_slack >= 1.0)) {
     return Status::Error("prior_size_slack must be >= 1");
   }
   if (!(max_box_image_fraction > 0.0 && max_box_image_fraction <= 1.0)) {
     return Status::Error("max_box_image_fraction must be in (0, 1]");
+  }
+  if (!(std::isfinite(resting_distance_m) && resting_distance_m >= 0.0 && resting_min_share > 0.0 &&
+        resting_min_share <= 1.0)) {
+    return Status::Error("resting_distance_m must be >= 0 and resting_min_share in (0, 1]");
+  }
+  if (!(std::isfinite(top_clearance_m) && top_clearance_m >= 0.0 && top_min_share > 0.0 &&
+        top_min_share <= 1.0 && top_crossing_share > 0.0 && top_crossing_share <= 1.0)) {
+    return Status::Error(
+        "top_clearance_m must be >= 0, top_min_share and top_crossing_share in (0, 1]");
+  }
+  if (!(fallback_min_share > 0.0 && fallback_min_share <= 1.0)) {
+    return Status::Error("fallback_min_share must be in (0, 1]");
+  }
+  if (!(support_max_tilt_deg > 0.0 && support_max_tilt_deg < 90.0)) {
+    return Status::Error("support_max_tilt_deg must be in (0, 90)");
   }
   return Status::Ok();
 }
@@ -94,8 +114,16 @@ std::string SegmentSelector::Config::print() const {
       << "plane_distance_m: " << plane_distance_m << "\n"
       << "min_continuation: " << min_continuation << "\n"
       << "min_continuation_points: " << min_continuation_points << "\n"
+      << "min_ring_share: " << min_ring_share << "\n"
       << "prior_size_slack: " << prior_size_slack << "\n"
-      << "max_box_image_fraction: " << max_box_image_fraction << "\n";
+      << "max_box_image_fraction: " << max_box_image_fraction << "\n"
+      << "resting_distance_m: " << resting_distance_m << "\n"
+      << "resting_min_share: " << resting_min_share << "\n"
+      << "top_clearance_m: " << top_clearance_m << "\n"
+      << "top_min_share: " << top_min_share << "\n"
+      << "top_crossing_share: " << top_crossing_share << "\n"
+      << "fallback_min_share: " << fallback_min_share << "\n"
+      << "support_max_tilt_deg: " << support_max_tilt_deg << "\n";
   return out.str();
 }
 
@@ -203,13 +231,34 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
 
   // ---- Bounding surfaces: planar segments that continue in the ring outside the detection.
   std::vector<char> bounding(num_segments, 0);
+  std::vector<Plane> planes(num_segments);  // rms_m infinite: under 20 points, no plane
+  for (int s = 0; s < num_segments; ++s) {
+    planes[s].rms_m = std::numeric_limits<double>::infinity();
+    if (segments[s].size() >= 20) planes[s] = fitPlane(points, segments[s]);
+  }
+  // The gravity frame; a horizontal planar segment's plane in the world frame, normal up.
+  const Eigen::Isometry3f T_W_D = frame.T_W_D.cast<float>();
+  const Eigen::Matrix3f R_W_D = T_W_D.linear();
+  const Eigen::Vector3f up = input.gravity.up.cast<float>();
+  const Eigen::Vector3f x_h = input.gravity.x_h.cast<float>();
+  const Eigen::Vector3f y_h = input.gravity.y_h.cast<float>();
+  const double cos_tilt = std::cos(config_.support_max_tilt_deg * kDegToRad);
+  auto horizontal = [&](int s, double max_rms_m, Eigen::Vector3f* normal_W,
+                        Eigen::Vector3f* point_W) {
+    if (!(planes[s].rms_m <= max_rms_m)) return false;
+    Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
+    if (n.dot(up) < 0.f) n = -n;
+    if (n.dot(up) < cos_tilt) return false;
+    *normal_W = n;
+    *point_W = T_W_D * planes[s].point.cast<float>();
+    return true;
+  };
+
+  const bool on_floor = input.prior != nullptr && input.prior->on_floor;
   if (input.view != nullptr) {
-    std::vector<Plane> planes(num_segments);
     const float near_cell_m = 0.05f;  // "near a segment": within one 5 cm cell of its points
     CellSegments near_cells;
     for (int s = 0; s < num_segments; ++s) {
-      if (segments[s].size() < 20) continue;
-      planes[s] = fitPlane(points, segments[s]);
       if (planes[s].rms_m > config_.plane_max_thickness_m) continue;
       for (const int i : segments[s]) addToCell(&near_cells, voxelKeyOf(points[i], near_cell_m), s);
     }
@@ -217,11 +266,13 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       std::vector<int> near(num_segments, 0);
       std::vector<int> on_plane(num_segments, 0);
       std::vector<int> touched;
+      int ring_points = 0;  // the view's points in the ring
       const FrameView& view = *input.view;
       for (size_t k = 0; k < view.points_D.size(); ++k) {
         const cv::Point& pixel = view.pixels_color[k];
         if (!crop.contains(pixel)) continue;
         if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
+        ++ring_points;
         const Eigen::Vector3f& p = view.points_D[k];
         const std::int64_t key = voxelKeyOf(p, near_cell_m);
         touched.clear();
@@ -246,53 +297,22 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
           }
         }
       }
+      const double ring_points_needed = config_.min_ring_share * ring_points;
       for (int s = 0; s < num_segments; ++s) {
+        // What does not stand on the floor (a tv, a cup) stands on whatever horizontal surface
+        // runs past its box; a floor-standing object's box holds no support of its own, so a
+        // horizontal plane that crosses its ring narrowly is a part of it (a clipped seat).
+        Eigen::Vector3f n, p;
+        const bool support = !on_floor && horizontal(s, config_.plane_max_thickness_m, &n, &p);
         bounding[s] = on_plane[s] >= config_.min_continuation_points &&
+                      (support || on_plane[s] >= ring_points_needed) &&
                       on_plane[s] >= config_.min_continuation * near[s];
         result->bounding_segments += bounding[s];
       }
     }
   }
 
-  // ---- The seed: the most points in the core.
-  int seed = -1;
-  for (int s = 0; s < num_segments; ++s) {
-    if (bounding[s] || core_count[s] == 0) continue;
-    if (seed < 0 || core_count[s] > core_count[seed]) seed = s;
-  }
-  if (seed < 0) {
-    return Status::Error(
-        result->bounding_segments > 0
-            ? "only surfaces running past the detection (wall, floor, table top) in its core"
-            : "no segment in the detection's core");
-  }
-
-  // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
-  CellSegments cells;
-  for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s])
-      addToCell(&cells, voxelKeyOf(points[i], config_.adjacency_distance_m), s);
-  }
-  std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
-  for (const auto& cell : cells) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells.find(offsetVoxelKey(cell.first, dx, dy, dz));
-          if (it == cells.end()) continue;
-          for (const int a : cell.second) {
-            for (const int b : it->second) adjacent[a][b] = 1;
-          }
-        }
-      }
-    }
-  }
-
-  // ---- Grow from the seed: touching segments join while the union stays plausible in size.
-  const Eigen::Isometry3f T_W_D = frame.T_W_D.cast<float>();
-  const Eigen::Vector3f up = input.gravity.up.cast<float>();
-  const Eigen::Vector3f x_h = input.gravity.x_h.cast<float>();
-  const Eigen::Vector3f y_h = input.gravity.y_h.cast<float>();
+  // ---- Segments in the gravity frame: extents and support surfaces.
   // Extents along 18 horizontal directions (every 10 degrees) and up: unions are min/max per
   // direction, and the narrowest direction with its perpendicular approximates the footprint
   // rectangle whatever the object's yaw.
@@ -323,6 +343,101 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       }
     }
   }
+
+  // ---- Support surfaces.
+  // on_floor classes: what rests on a horizontal bounding surface (a table top running past the
+  // detection) is something on that surface, not part of the object.
+  std::vector<char> resting(num_segments, 0);
+  if (on_floor && config_.resting_distance_m > 0.0) {
+    const float rest_m = static_cast<float>(config_.resting_distance_m);
+    for (int b = 0; b < num_segments; ++b) {
+      Eigen::Vector3f n_b, p_b;
+      if (!bounding[b] || !horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) continue;
+      // The surface's footprint: the convex hull of its points on the horizontal plane, so that
+      // what hides part of it (papers on a table) stands inside it.
+      std::vector<cv::Point2f> surface;
+      surface.reserve(segments[b].size());
+      for (const int i : segments[b]) {
+        const Eigen::Vector3f p_W = T_W_D * points[i];
+        surface.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
+      }
+      std::vector<cv::Point2f> hull;
+      cv::convexHull(surface, hull);
+      if (hull.size() < 3) continue;
+      for (int s = 0; s < num_segments; ++s) {
+        if (s == b || bounding[s] || resting[s]) continue;
+        // Its lowest point on the surface (heights along the surface's normal).
+        float bottom = std::numeric_limits<float>::infinity();
+        for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(T_W_D * points[i] - p_b));
+        if (std::abs(bottom) > rest_m) continue;
+        size_t over = 0;
+        for (const int i : segments[s]) {
+          const Eigen::Vector3f p_W = T_W_D * points[i];
+          over += cv::pointPolygonTest(hull, cv::Point2f(x_h.dot(p_W), y_h.dot(p_W)), false) >= 0;
+        }
+        if (over >= config_.resting_min_share * segments[s].size()) {
+          resting[s] = 1;
+          ++result->resting_segments;
+        }
+      }
+    }
+  }
+
+  // ---- The seed: the most points in the core.
+  int seed = -1;
+  for (int s = 0; s < num_segments; ++s) {
+    if (bounding[s] || resting[s] || core_count[s] == 0) continue;
+    if (seed < 0 || core_count[s] > core_count[seed]) seed = s;
+  }
+  if (seed < 0 && (result->bounding_segments > 0 || result->resting_segments > 0)) {
+    // The core holds only bounding surfaces and what rests on them (a chair pushed under a table
+    // shows its backrest above the top, at the edge of its box): the nearest other segment of some
+    // size.
+    const size_t min_points = static_cast<size_t>(config_.fallback_min_share * points.size());
+    float seed_depth_m = std::numeric_limits<float>::infinity();
+    std::vector<float> depths_m;
+    for (int s = 0; s < num_segments; ++s) {
+      if (bounding[s] || resting[s] || segments[s].size() < std::max<size_t>(min_points, 1)) {
+        continue;
+      }
+      depths_m.clear();
+      for (const int i : segments[s]) depths_m.push_back(points[i].z());
+      std::nth_element(depths_m.begin(), depths_m.begin() + depths_m.size() / 2, depths_m.end());
+      if (depths_m[depths_m.size() / 2] < seed_depth_m) {
+        seed_depth_m = depths_m[depths_m.size() / 2];
+        seed = s;
+      }
+    }
+  }
+  if (seed < 0) {
+    return Status::Error(
+        result->bounding_segments > 0
+            ? "only surfaces running past the detection (wall, floor, table top) in its core"
+            : "no segment in the detection's core");
+  }
+
+  // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
+  CellSegments cells;
+  for (int s = 0; s < num_segments; ++s) {
+    for (const int i : segments[s])
+      addToCell(&cells, voxelKeyOf(points[i], config_.adjacency_distance_m), s);
+  }
+  std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
+  for (const auto& cell : cells) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells.find(offsetVoxelKey(cell.first, dx, dy, dz));
+          if (it == cells.end()) continue;
+          for (const int a : cell.second) {
+            for (const int b : it->second) adjacent[a][b] = 1;
+          }
+        }
+      }
+    }
+  }
+
+  // ---- Grow from the seed: touching segments join while the union stays plausible in size.
   double max_height_m = std::numeric_limits<double>::infinity();
   double max_short_m = std::numeric_limits<double>::infinity();
   double max_long_m = std::numeric_limits<double>::infinity();
@@ -352,7 +467,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     // Best candidate first: the most core points, then the largest.
     int best = -1;
     for (int s = 0; s < num_segments; ++s) {
-      if (kept[s] || bounding[s]) continue;
+      if (kept[s] || bounding[s] || resting[s]) continue;
       bool touches = false;
       for (int t = 0; t < num_segments && !touches; ++t) touches = kept[t] && adjacent[s][t];
       if (!touches) continue;
@@ -373,11 +488,69 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       grew = true;
     }
   }
+  // flat_top classes: nothing above the main horizontal surface of the kept set (its largest
+  // horizontal planar segment, if large enough; up to twice plane_max_thickness_m thick, as a top
+  // with papers on it is) belongs to the object.
+  Eigen::Vector3f top_normal_W, top_point_W;
+  std::vector<cv::Point2f> top_hull;  // the top's footprint
+  bool has_top = false;
+  if (input.prior != nullptr && input.prior->flat_top && config_.top_clearance_m > 0.0) {
+    int top = -1;
+    for (int s = 0; s < num_segments; ++s) {
+      Eigen::Vector3f n, p;
+      if (!kept[s] || segments[s].size() < config_.top_min_share * kept_points) continue;
+      if (!horizontal(s, 2.0 * config_.plane_max_thickness_m, &n, &p)) continue;
+      if (top < 0 || segments[s].size() > segments[top].size()) {
+        top = s;
+        top_normal_W = n;
+        top_point_W = p;
+      }
+    }
+    has_top = top >= 0;
+    if (has_top) {
+      std::vector<cv::Point2f> surface;
+      surface.reserve(segments[top].size());
+      for (const int i : segments[top]) {
+        const Eigen::Vector3f p_W = T_W_D * points[i];
+        surface.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
+      }
+      cv::convexHull(surface, top_hull);
+    }
+  }
+  // ... nor anything beyond the top's footprint (more than top_clearance_m outside its hull).
+  const auto outside_top = [&](const Eigen::Vector3f& p_W) {
+    return top_hull.size() >= 3 &&
+           cv::pointPolygonTest(top_hull, cv::Point2f(x_h.dot(p_W), y_h.dot(p_W)), true) <
+               -config_.top_clearance_m;
+  };
+  const float top_clearance_m = static_cast<float>(config_.top_clearance_m);
+  std::vector<char> dropped;  // above the top, or beside it
   for (int s = 0; s < num_segments; ++s) {
     if (!kept[s]) continue;
+    dropped.assign(segments[s].size(), 0);
+    size_t num_above = 0;
+    if (has_top) {
+      for (size_t k = 0; k < segments[s].size(); ++k) {
+        const Eigen::Vector3f p_W = T_W_D * points[segments[s][k]];
+        const bool above = top_normal_W.dot(p_W - top_point_W) > top_clearance_m;
+        num_above += above;
+        dropped[k] = above || outside_top(p_W);
+      }
+    }
+    if (num_above > 0 && num_above >= config_.top_crossing_share * segments[s].size()) {
+      result->above_top_points += static_cast<int>(segments[s].size());  // rises through the top
+      continue;
+    }
     ++result->kept_segments;
-    result->indices.insert(result->indices.end(), segments[s].begin(), segments[s].end());
+    for (size_t k = 0; k < segments[s].size(); ++k) {
+      if (dropped[k]) {
+        ++result->above_top_points;
+        continue;
+      }
+      result->indices.push_back(segments[s][k]);
+    }
   }
+  if (result->indices.empty()) return Status::Error("nothing left below the object's top surface");
   std::sort(result->indices.begin(), result->indices.end());
   return Status::Ok();
 }

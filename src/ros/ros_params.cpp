@@ -151,6 +151,14 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readNumber(nh, "selection/adjacency_distance_m", &m.selection.adjacency_distance_m, e);
   readParam(nh, "selection/ring_px", &m.selection.ring_px, e);
   readNumber(nh, "selection/prior_size_slack", &m.selection.prior_size_slack, e);
+  readNumber(nh, "selection/min_ring_share", &m.selection.min_ring_share, e);
+  readNumber(nh, "selection/resting_distance_m", &m.selection.resting_distance_m, e);
+  readNumber(nh, "selection/resting_min_share", &m.selection.resting_min_share, e);
+  readNumber(nh, "selection/fallback_min_share", &m.selection.fallback_min_share, e);
+  readNumber(nh, "selection/top_clearance_m", &m.selection.top_clearance_m, e);
+  readNumber(nh, "selection/top_min_share", &m.selection.top_min_share, e);
+  readNumber(nh, "selection/top_crossing_share", &m.selection.top_crossing_share, e);
+  readNumber(nh, "selection/support_max_tilt_deg", &m.selection.support_max_tilt_deg, e);
   readParam(nh, "floor/enable", &m.floor.enable, e);
   readNumber(nh, "floor/clearance_m", &m.floor.clearance_m, e);
   readNumber(nh, "floor/clearance_per_m2", &m.floor.clearance_per_m2, e);

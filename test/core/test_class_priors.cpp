@@ -186,6 +186,8 @@ TEST(ClassPriorsTest, EachErrorNamesTheEntryAndLeavesThePriorsUnchanged) {
       {"infinite default", "default_fusion_distance_m: .inf\n", {"default_fusion_distance_m"}},
       {"entry not a map", "classes: {chair: [0.5, 0.5, 0.9]}", {"chair", "map"}},
       {"unknown entry key", "classes: {chair: {size: [0.5, 0.5, 0.9]}}", {"chair", "'size'"}},
+      {"on_floor not a bool", "classes: {chair: {on_floor: maybe}}", {"chair.on_floor", "maybe"}},
+      {"flat_top a list", "classes: {chair: {flat_top: [true]}}", {"chair.flat_top"}},
       {"not COCO", "classes: {table: {size_m: [1, 1, 1]}}", {"'table'", "not a COCO class"}},
       {"listed twice",
        "classes: {sofa: {fusion_distance_m: 1}, couch: {fusion_distance_m: 1}}",
@@ -295,6 +297,41 @@ TEST(ClassPriorsConfigFileTest, PackageConfigHasEveryRequiredClass) {
   // Sizes a table and a chair can have.
   EXPECT_GT(priors.find("dining table")->size_m.prod(), priors.find("chair")->size_m.prod());
   EXPECT_GT(priors.find("chair")->size_m.prod(), priors.find("cup")->size_m.prod());
+}
+
+TEST(ClassPriorsTest, ParsesHowAClassStands) {
+  ClassPriors priors;
+  ASSERT_TRUE(ClassPriors::parseYaml("classes:\n"
+                                     "  dining table: {on_floor: true, flat_top: true}\n"
+                                     "  chair: {size_m: [0.55, 0.55, 0.9], on_floor: true}\n"
+                                     "  cup: {fusion_distance_m: 0.1, on_floor: false}\n"
+                                     "  tv:\n",
+                                     &priors)
+                  .ok());
+  EXPECT_TRUE(priors.find("dining table")->on_floor);
+  EXPECT_TRUE(priors.find("dining table")->flat_top);
+  EXPECT_TRUE(priors.find("chair")->on_floor);
+  EXPECT_FALSE(priors.find("chair")->flat_top);
+  EXPECT_FALSE(priors.find("cup")->on_floor);
+  EXPECT_FALSE(priors.find("tv")->on_floor);  // not given: false
+  EXPECT_FALSE(priors.find("tv")->flat_top);
+}
+
+// The package's file: furniture stands on the floor, the dining table has a flat top, and small
+// things that stand on tables do neither.
+TEST(ClassPriorsConfigFileTest, PackageConfigSaysHowFurnitureStands) {
+  ClassPriors priors;
+  ASSERT_TRUE(ClassPriors::loadYaml(configPath(), &priors).ok());
+  for (const char* name : {"chair", "couch", "bed", "dining table", "refrigerator"}) {
+    ASSERT_NE(priors.find(name), nullptr) << name;
+    EXPECT_TRUE(priors.find(name)->on_floor) << name;
+  }
+  EXPECT_TRUE(priors.find("dining table")->flat_top);
+  for (const char* name : {"cup", "book", "tv", "laptop", "bottle"}) {
+    ASSERT_NE(priors.find(name), nullptr) << name;
+    EXPECT_FALSE(priors.find(name)->on_floor) << name;
+    EXPECT_FALSE(priors.find(name)->flat_top) << name;
+  }
 }
 
 // The objects of the synthetic scene and 7-Scenes' table pass Eq. 9 with the default thresholds,

@@ -51,17 +51,18 @@ class ObjectDatabaseTest : public ::testing::Test {
 
   // A processor that accepts the fused cloud: box centre = centroid, segment = the cloud.
   static FusedCloudProcessor centroidProcessor(int* calls) {
-    return [calls](const PointCloud& points_W, const std::vector<Eigen::Vector3f>&,
-                   PointCloud* segment_W, OrientedBox* box, double* yaw_rad) {
-      ++*calls;
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (const auto& p : points_W) sum += p.cast<double>();
-      box->center_m = sum / static_cast<double>(points_W.size());
-      box->size_m = Eigen::Vector3d(0.3, 0.3, 0.3);
-      *segment_W = points_W;
-      *yaw_rad = 0.2;
-      return true;
-    };
+    return
+        [calls](const std::string&, const PointCloud& points_W, const std::vector<Eigen::Vector3f>&,
+                PointCloud* segment_W, OrientedBox* box, double* yaw_rad) {
+          ++*calls;
+          Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+          for (const auto& p : points_W) sum += p.cast<double>();
+          box->center_m = sum / static_cast<double>(points_W.size());
+          box->size_m = Eigen::Vector3d(0.3, 0.3, 0.3);
+          *segment_W = points_W;
+          *yaw_rad = 0.2;
+          return true;
+        };
   }
 
   ClassPriors priors_;
@@ -284,7 +285,7 @@ TEST_F(ObjectDatabaseTest, FailedReprocessingKeepsThePreviousBox) {
   const ObjectObservation first_obs = observation("chair", {1.0, 2.0, 0.5}, 0.8, 0);
   const auto first = database.fuseOrInsert(first_obs, centroidProcessor(&calls));
   int failed_calls = 0;
-  const FusedCloudProcessor failing = [&failed_calls](const PointCloud&,
+  const FusedCloudProcessor failing = [&failed_calls](const std::string&, const PointCloud&,
                                                       const std::vector<Eigen::Vector3f>&,
                                                       PointCloud*, OrientedBox* box, double*) {
     ++failed_calls;
@@ -396,11 +397,11 @@ TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideThe
     obs.seen_W = obs.points_W;
     obs.seen_W.insert(obs.seen_W.end(), floor_strip.begin(), floor_strip.end());
     if (k == 0) obs.segment_W.insert(obs.segment_W.end(), floor_strip.begin(), floor_strip.end());
-    const auto processor = [&](const PointCloud& points_W,
+    const auto processor = [&](const std::string& class_name, const PointCloud& points_W,
                                const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
                                OrientedBox* box, double* yaw_rad) {
       last_supported = points_W;
-      return centroidProcessor(&calls)(points_W, normals_W, segment_W, box, yaw_rad);
+      return centroidProcessor(&calls)(class_name, points_W, normals_W, segment_W, box, yaw_rad);
     };
     database.fuseOrInsert(obs, processor);
   }
@@ -433,12 +434,12 @@ TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideThe
 TEST_F(ObjectDatabaseTest, EvidenceKeepsTheViewsNormalsPerVoxel) {
   ObjectDatabase database(ObjectDatabase::Config(), priors_);
   std::vector<std::vector<Eigen::Vector3f>> received;
-  const auto processor = [&](const PointCloud& points_W,
+  const auto processor = [&](const std::string& class_name, const PointCloud& points_W,
                              const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
                              OrientedBox* box, double* yaw_rad) {
     received.push_back(normals_W);
     int calls = 0;
-    return centroidProcessor(&calls)(points_W, normals_W, segment_W, box, yaw_rad);
+    return centroidProcessor(&calls)(class_name, points_W, normals_W, segment_W, box, yaw_rad);
   };
   // Two views of the patch at z = 0.7: normals tilted +x and -x about +z; their sum is +z. Half of
   // the second view's points have no normal (NaN).

@@ -24,6 +24,13 @@ struct ClassPrior {
   Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
   // Eq. 6 threshold Γ_C for this class (m).
   double fusion_distance_m = 0.0;
+  // The cut's knowledge of how the class stands (SegmentSelector, "consistent" only):
+  // on_floor: it stands on the floor, so what rests on another horizontal surface in its detection
+  // (cups on a table in a chair's box) is not part of it.
+  bool on_floor = false;
+  // flat_top: its top is a support surface (a table), so nothing above or beside that surface is
+  // part of it, and its box reaches the floor however little of its legs is seen.
+  bool flat_top = false;
 };
 
 class ClassPriors {

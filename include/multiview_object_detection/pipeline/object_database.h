@@ -70,10 +70,12 @@ struct MapObject {
 // Re-runs filter + LCCP + box on a fused world-frame cloud (Eq. 7). Returns false when nothing
 // usable is left, in which case the object keeps its previous segment and box.
 // normals_W: evidence fusion's per-voxel normals of points_W (any number; empty: none kept, e.g.
-// the paper's fusion or a map saved before normals were kept).
+// the paper's fusion or a map saved before normals were kept). class_name: the object's class
+// after this fusion (class priors such as on_floor apply to the box).
 using FusedCloudProcessor =
-    std::function<bool(const PointCloud& points_W, const std::vector<Eigen::Vector3f>& normals_W,
-                       PointCloud* segment_W, OrientedBox* box, double* yaw_rad)>;
+    std::function<bool(const std::string& class_name, const PointCloud& points_W,
+                       const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                       OrientedBox* box, double* yaw_rad)>;
 
 // Object ids lie in [0, kMaxObjectId]: far more than any map holds, and far enough from INT_MAX
 // that the next id never overflows.

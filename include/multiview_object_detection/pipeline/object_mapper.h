@@ -115,9 +115,9 @@ class ObjectMapper {
   void reset();
 
  private:
-  bool processFused(const PointCloud& points_W, const std::vector<Eigen::Vector3f>& normals_W,
-                    PointCloud* segment_W, OrientedBox* box, double* yaw_rad,
-                    StageTimes* times) const;
+  bool processFused(const std::string& class_name, const PointCloud& points_W,
+                    const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                    OrientedBox* box, double* yaw_rad, StageTimes* times) const;
   // What the consistent segment selection needs to know about the view (all may be null).
   struct ViewContext {
     const RgbdFrame* frame = nullptr;
@@ -132,8 +132,9 @@ class ObjectMapper {
   Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                        const ViewContext& context, ObjectObservation* observation,
                        StageTimes* times) const;
-  // Extends a box whose bottom is near the floor down to it.
-  void groundBox(OrientedBox* box) const;
+  // Extends a box down to the floor when its bottom is near the floor, or wherever it is when its
+  // class has a flat top on supports (ClassPrior::flat_top: a table whose legs are hidden).
+  void groundBox(const std::string& class_name, OrientedBox* box) const;
   bool floorCutActive() const { return config_.floor.enable && floor_.hasFloor(); }
   // Updates the gravity estimate from the frame's depth when none is configured; false while
   // unknown.

@@ -45,8 +45,35 @@ class SegmentSelector {
     double plane_distance_m = 0.02;
     double min_continuation = 0.4;
     int min_continuation_points = 10;
+    // A vertical plane also needs min_ring_share of all the ring's points on it: a wall runs past
+    // the detection along much of the ring, while a part of the object that an imprecise box
+    // clips (a backrest's end) crosses it in a narrow band. So does a horizontal plane in the box
+    // of an on_floor class (a clipped seat); for other classes a horizontal surface is their
+    // support (a tv's stand, a cup's table) wherever it runs past. 0 = any count from
+    // min_continuation_points.
+    double min_ring_share = 0.1;
     // The kept segments stay within prior_size_slack x the class's prior size (+ 0.1 m).
     double prior_size_slack = 1.5;
+    // Support surfaces (class priors on_floor / flat_top; 0 switches each off). A horizontal
+    // segment is one whose plane normal lies within support_max_tilt_deg of up.
+    // on_floor classes: a segment resting on a horizontal bounding surface (its lowest point within
+    // resting_distance_m of the surface, and at least resting_min_share of its points over the
+    // surface's footprint) is something on that surface, not part of the object: cups on the
+    // table in a chair's box.
+    double resting_distance_m = 0.04;
+    double resting_min_share = 0.6;
+    // When the core then holds only surfaces and what rests on them, the seed is the nearest
+    // other segment with at least this share of the cloud's points.
+    double fallback_min_share = 0.05;
+    // flat_top classes: points more than top_clearance_m above the kept set's main horizontal
+    // surface (the largest, holding at least top_min_share of the kept points) or more than
+    // top_clearance_m outside its footprint are dropped, and so are whole segments with at least
+    // top_crossing_share of their points above it: what stands on a table, and the backrests of
+    // chairs pushed under it.
+    double top_clearance_m = 0.03;
+    double top_min_share = 0.15;
+    double top_crossing_share = 0.1;
+    double support_max_tilt_deg = 12.0;
     // A box covering more than this share of the image holds no object to cut from its
     // surroundings: the detection is skipped.
     double max_box_image_fraction = 0.9;
@@ -78,6 +105,8 @@ class SegmentSelector {
     std::vector<int> indices;  // into points_D, ascending
     int kept_segments = 0;
     int bounding_segments = 0;  // dropped as walls / surfaces running past the detection
+    int resting_segments = 0;   // dropped as standing on another surface (on_floor classes)
+    int above_top_points = 0;   // dropped above or beside a flat top (flat_top classes)
   };
 
   SegmentSelector() = default;
