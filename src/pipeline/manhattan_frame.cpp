@@ -415,6 +415,22 @@ double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
 // The footprint's outline, approximately and in O(n): of each 1 cm strip along either horizontal
 // axis, only the points at both ends (every hull vertex lies within a strip's width of these).
 // Rectangles around these are those around the whole footprint to about a centimetre.
+// The points on the horizontal plane (x_h, y_h) and their bounds.
+std::vector<Eigen::Vector2d> projectFootprint(const PointCloud& points_W,
+                                              const GravityFrame& gravity, Eigen::Vector2d* lo,
+                                              Eigen::Vector2d* hi) {
+  std::vector<Eigen::Vector2d> footprint(points_W.size());
+  *lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  *hi = -*lo;
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    const Eigen::Vector3d q = points_W[i].cast<double>();
+    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
+    *lo = lo->cwiseMin(footprint[i]);
+    *hi = hi->cwiseMax(footprint[i]);
+  }
+  return footprint;
+}
+
 // The footprint outline's horizontal normals: the points' occupancy on a horizontal grid, closed
 // and smoothed, and the gradient direction wherever it is steep (a band along the boundary). The
 // grid is coarsened for very large footprints (at most 1000 cells a side).
@@ -422,15 +438,8 @@ std::vector<Eigen::Vector3f> outlineNormals(const PointCloud& points_W, const Gr
                                             double cell_m) {
   std::vector<Eigen::Vector3f> normals;
   if (points_W.size() < 3 || !(cell_m > 0.0)) return normals;
-  std::vector<Eigen::Vector2d> footprint(points_W.size());
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector2d hi = -lo;
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    const Eigen::Vector3d q = points_W[i].cast<double>();
-    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
-    lo = lo.cwiseMin(footprint[i]);
-    hi = hi.cwiseMax(footprint[i]);
-  }
+  Eigen::Vector2d lo, hi;
+  const std::vector<Eigen::Vector2d> footprint = projectFootprint(points_W, gravity, &lo, &hi);
   const double span_m = (hi - lo).maxCoeff();
   if (!std::isfinite(span_m)) return normals;
   cell_m = std::max(cell_m, span_m / 1000.0);
@@ -468,15 +477,8 @@ std::vector<Eigen::Vector3f> outlineNormals(const PointCloud& points_W, const Gr
 
 std::vector<Eigen::Vector2d> footprintStripEnds(const PointCloud& points_W,
                                                 const GravityFrame& gravity) {
-  std::vector<Eigen::Vector2d> footprint(points_W.size());
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector2d hi = -lo;
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    const Eigen::Vector3d q = points_W[i].cast<double>();
-    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
-    lo = lo.cwiseMin(footprint[i]);
-    hi = hi.cwiseMax(footprint[i]);
-  }
+  Eigen::Vector2d lo, hi;
+  const std::vector<Eigen::Vector2d> footprint = projectFootprint(points_W, gravity, &lo, &hi);
   std::vector<Eigen::Vector2d> ends;
   if (footprint.empty()) return ends;
   const double strip_m = std::max(0.01, (hi - lo).maxCoeff() / 2000.0);

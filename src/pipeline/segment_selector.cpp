@@ -345,6 +345,18 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
 
   // ---- Support surfaces.
+  // A segment's footprint: the convex hull of its points on the horizontal plane.
+  const auto footprintHull = [&](int s) {
+    std::vector<cv::Point2f> footprint;
+    footprint.reserve(segments[s].size());
+    for (const int i : segments[s]) {
+      const Eigen::Vector3f p_W = T_W_D * points[i];
+      footprint.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
+    }
+    std::vector<cv::Point2f> hull;
+    if (!footprint.empty()) cv::convexHull(footprint, hull);
+    return hull;
+  };
   // on_floor classes: what rests on a horizontal bounding surface (a table top running past the
   // detection) is something on that surface, not part of the object.
   std::vector<char> resting(num_segments, 0);
@@ -353,16 +365,8 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     for (int b = 0; b < num_segments; ++b) {
       Eigen::Vector3f n_b, p_b;
       if (!bounding[b] || !horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) continue;
-      // The surface's footprint: the convex hull of its points on the horizontal plane, so that
-      // what hides part of it (papers on a table) stands inside it.
-      std::vector<cv::Point2f> surface;
-      surface.reserve(segments[b].size());
-      for (const int i : segments[b]) {
-        const Eigen::Vector3f p_W = T_W_D * points[i];
-        surface.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
-      }
-      std::vector<cv::Point2f> hull;
-      cv::convexHull(surface, hull);
+      // The surface's footprint, so that what hides part of it (papers on a table) stands inside.
+      const std::vector<cv::Point2f> hull = footprintHull(b);
       if (hull.size() < 3) continue;
       for (int s = 0; s < num_segments; ++s) {
         if (s == b || bounding[s] || resting[s]) continue;
@@ -507,15 +511,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       }
     }
     has_top = top >= 0;
-    if (has_top) {
-      std::vector<cv::Point2f> surface;
-      surface.reserve(segments[top].size());
-      for (const int i : segments[top]) {
-        const Eigen::Vector3f p_W = T_W_D * points[i];
-        surface.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
-      }
-      cv::convexHull(surface, top_hull);
-    }
+    if (has_top) top_hull = footprintHull(top);
   }
   // ... nor anything beyond the top's footprint (more than top_clearance_m outside its hull).
   const auto outside_top = [&](const Eigen::Vector3f& p_W) {
