@@ -312,7 +312,11 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     }
   }
 
-  // ---- Segments in the gravity frame: extents and support surfaces.
+  // ---- Segments in the gravity frame: extents and support surfaces. The points in the world
+  // frame, once.
+  PointCloud points_W;
+  points_W.reserve(points.size());
+  for (const Eigen::Vector3f& p : points) points_W.push_back(T_W_D * p);
   // Extents along 18 horizontal directions (every 10 degrees) and up: unions are min/max per
   // direction, and the narrowest direction with its perpendicular approximates the footprint
   // rectangle whatever the object's yaw.
@@ -335,7 +339,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   std::vector<Extent> extents(num_segments);
   for (int s = 0; s < num_segments; ++s) {
     for (const int i : segments[s]) {
-      const Eigen::Vector3f p_W = T_W_D * points[i];
+      const Eigen::Vector3f& p_W = points_W[i];
       for (int k = 0; k <= kDirections; ++k) {
         const float q = directions[k].dot(p_W);
         extents[s].lower[k] = std::min(extents[s].lower[k], q);
@@ -350,7 +354,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     std::vector<cv::Point2f> footprint;
     footprint.reserve(segments[s].size());
     for (const int i : segments[s]) {
-      const Eigen::Vector3f p_W = T_W_D * points[i];
+      const Eigen::Vector3f& p_W = points_W[i];
       footprint.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
     }
     std::vector<cv::Point2f> hull;
@@ -372,11 +376,11 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
         if (s == b || bounding[s] || resting[s]) continue;
         // Its lowest point on the surface (heights along the surface's normal).
         float bottom = std::numeric_limits<float>::infinity();
-        for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(T_W_D * points[i] - p_b));
+        for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(points_W[i] - p_b));
         if (std::abs(bottom) > rest_m) continue;
         size_t over = 0;
         for (const int i : segments[s]) {
-          const Eigen::Vector3f p_W = T_W_D * points[i];
+          const Eigen::Vector3f& p_W = points_W[i];
           over += cv::pointPolygonTest(hull, cv::Point2f(x_h.dot(p_W), y_h.dot(p_W)), false) >= 0;
         }
         if (over >= config_.resting_min_share * segments[s].size()) {
@@ -527,7 +531,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     size_t num_above = 0;
     if (has_top) {
       for (size_t k = 0; k < segments[s].size(); ++k) {
-        const Eigen::Vector3f p_W = T_W_D * points[segments[s][k]];
+        const Eigen::Vector3f& p_W = points_W[segments[s][k]];
         const bool above = top_normal_W.dot(p_W - top_point_W) > top_clearance_m;
         num_above += above;
         dropped[k] = above || outside_top(p_W);
