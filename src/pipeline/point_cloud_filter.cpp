@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -93,12 +94,15 @@ PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_g
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
   if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
 
-  // 64-bit integer voxel index per point; sorting by it gives a deterministic output order and
-  // groups each voxel's points, without PCL's 32-bit index limit for large extents.
+  // 64-bit integer voxel index per point, without PCL's 32-bit index limit for large extents.
   using Key = std::array<std::int64_t, 3>;
-  std::vector<std::pair<Key, std::size_t>> keyed;
-  keyed.reserve(points.size());
+  std::vector<Key> keys;
+  std::vector<std::uint32_t> source;
+  keys.reserve(points.size());
+  source.reserve(points.size());
   const double inv_leaf = 1.0 / leaf_size_m;
+  Key lo = {0, 0, 0};
+  Key hi = {0, 0, 0};
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3f& p = points[i];
     if (!p.allFinite()) continue;
@@ -112,17 +116,81 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
       }
       key[d] = static_cast<std::int64_t>(index);
     }
-    if (representable) keyed.emplace_back(key, i);
+    if (!representable) continue;
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = keys.empty() ? key[d] : std::min(lo[d], key[d]);
+      hi[d] = keys.empty() ? key[d] : std::max(hi[d], key[d]);
+    }
+    keys.push_back(key);
+    source.push_back(static_cast<std::uint32_t>(i));
   }
-  std::sort(keyed.begin(), keyed.end());
-
+  const std::size_t n = keys.size();
   PointCloud out;
+  if (n == 0) return out;
+
+  // Output in ascending (x, y, z) voxel order, each voxel's points summed in input order: a
+  // deterministic order that does not depend on a hash. The voxels' positions in the cloud's
+  // bounding grid are sortable integers; a stable LSD radix sort on them costs O(n) instead of a
+  // comparison sort's O(n log n).
+  std::array<std::uint64_t, 3> dims;
+  double cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    dims[d] = static_cast<std::uint64_t>(hi[d] - lo[d]) + 1;
+    cells *= static_cast<double>(dims[d]);
+  }
+  std::vector<std::uint64_t> order_key(n);
+  std::vector<std::uint32_t> order(n);
+  if (cells < 9.0e18 && points.size() < std::numeric_limits<std::uint32_t>::max()) {
+    std::uint64_t max_key = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint64_t x = static_cast<std::uint64_t>(keys[k][0] - lo[0]);
+      const std::uint64_t y = static_cast<std::uint64_t>(keys[k][1] - lo[1]);
+      const std::uint64_t z = static_cast<std::uint64_t>(keys[k][2] - lo[2]);
+      order_key[k] = (x * dims[1] + y) * dims[2] + z;
+      order[k] = static_cast<std::uint32_t>(k);
+      max_key = std::max(max_key, order_key[k]);
+    }
+    constexpr int kDigitBits = 11;
+    constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+    std::vector<std::uint64_t> next_key(n);
+    std::vector<std::uint32_t> next(n);
+    std::vector<std::uint32_t> count(kBuckets);
+    for (int shift = 0; shift < 64 && (max_key >> shift) != 0; shift += kDigitBits) {
+      std::fill(count.begin(), count.end(), 0u);
+      for (std::size_t k = 0; k < n; ++k) ++count[(order_key[k] >> shift) & (kBuckets - 1)];
+      std::uint32_t total = 0;
+      for (std::uint32_t& c : count) {
+        const std::uint32_t here = c;
+        c = total;
+        total += here;
+      }
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t slot = count[(order_key[k] >> shift) & (kBuckets - 1)]++;
+        next_key[slot] = order_key[k];
+        next[slot] = order[k];
+      }
+      order_key.swap(next_key);
+      order.swap(next);
+    }
+  } else {
+    // Extents beyond 64-bit grid positions: a comparison sort on the keys themselves.
+    std::vector<std::pair<Key, std::uint32_t>> keyed(n);
+    for (std::size_t k = 0; k < n; ++k) keyed[k] = {keys[k], static_cast<std::uint32_t>(k)};
+    std::sort(keyed.begin(), keyed.end());
+    std::uint64_t rank = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k > 0 && keyed[k].first != keyed[k - 1].first) ++rank;
+      order_key[k] = rank;
+      order[k] = keyed[k].second;
+    }
+  }
+
   std::size_t begin = 0;
-  while (begin < keyed.size()) {
+  while (begin < n) {
     std::size_t end = begin;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    while (end < keyed.size() && keyed[end].first == keyed[begin].first) {
-      sum += points[keyed[end].second].cast<double>();
+    while (end < n && order_key[end] == order_key[begin]) {
+      sum += points[source[order[end]]].cast<double>();
       ++end;
     }
     out.emplace_back((sum / static_cast<double>(end - begin)).cast<float>());

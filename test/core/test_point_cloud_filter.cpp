@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <limits>
+#include <map>
 #include <random>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
@@ -57,6 +61,54 @@ TEST(PointCloudFilterVoxelize, OneCentroidPerOccupiedVoxel) {
   const PointCloud out_reversed = PointCloudFilter::voxelize(reversed, 0.1);
   ASSERT_EQ(out_reversed.size(), out.size());
   for (std::size_t i = 0; i < out.size(); ++i) EXPECT_LT((out[i] - out_reversed[i]).norm(), 1e-6f);
+}
+
+// The reference voxel grid: voxels in ascending (x, y, z) index order, each voxel's points summed
+// in input order (what voxelize promised before its radix sort, bit for bit).
+PointCloud referenceVoxelize(const PointCloud& points, double leaf_m) {
+  std::map<std::array<std::int64_t, 3>, std::vector<std::size_t>> voxels;
+  const double inv_leaf = 1.0 / leaf_m;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    std::array<std::int64_t, 3> key;
+    for (int d = 0; d < 3; ++d) {
+      key[d] = static_cast<std::int64_t>(std::floor(static_cast<double>(points[i][d]) * inv_leaf));
+    }
+    voxels[key].push_back(i);
+  }
+  PointCloud out;
+  for (const auto& voxel : voxels) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const std::size_t i : voxel.second) sum += points[i].cast<double>();
+    out.emplace_back((sum / static_cast<double>(voxel.second.size())).cast<float>());
+  }
+  return out;
+}
+
+TEST(PointCloudFilterVoxelize, SameOrderAndCentroidsAsASortedGrid) {
+  // Many points per voxel, negative and positive coordinates, an extent that needs several radix
+  // digits (2 m at 1 mm: 8e9 grid positions), and a cloud so far apart that the grid positions
+  // overflow 64 bits (the comparison-sort fallback).
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> coordinate(-1.f, 1.f);
+  PointCloud points;
+  for (int i = 0; i < 20000; ++i) {
+    points.emplace_back(coordinate(rng), coordinate(rng), 0.5f * coordinate(rng) + 2.f);
+  }
+  for (const double leaf_m : {0.1, 0.01, 0.001}) {
+    const PointCloud expected = referenceVoxelize(points, leaf_m);
+    const PointCloud out = PointCloudFilter::voxelize(points, leaf_m);
+    ASSERT_EQ(out.size(), expected.size()) << "leaf " << leaf_m;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      ASSERT_EQ(out[i], expected[i]) << "voxel " << i << ", leaf " << leaf_m;
+    }
+  }
+  PointCloud spread = points;
+  spread.emplace_back(1e15f, -1e15f, 1e15f);
+  spread.emplace_back(-1e15f, 1e15f, -1e15f);
+  const PointCloud expected = referenceVoxelize(spread, 1e-3);
+  const PointCloud out = PointCloudFilter::voxelize(spread, 1e-3);
+  ASSERT_EQ(out.size(), expected.size());
+  for (std::size_t i = 0; i < out.size(); ++i) ASSERT_EQ(out[i], expected[i]) << "voxel " << i;
 }
 
 TEST(PointCloudFilterVoxelize, NegativeCoordinatesSplitAtZero) {
