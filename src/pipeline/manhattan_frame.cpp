@@ -127,8 +127,9 @@ Eigen::Vector3f nanNormal() {
 
 // PCA normals of points[queries[i]] (the eigenvector of the smallest eigenvalue of the neighbour
 // covariance). Shared by estimateNormals and BoxEstimator, which only needs normals at a subsample.
+// threads: the queries split over this many threads (each query is independent: same result).
 std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vector<int>& queries,
-                                       double radius_m, int max_neighbours) {
+                                       double radius_m, int max_neighbours, int threads = 1) {
   std::vector<Eigen::Vector3f> normals(queries.size(), nanNormal());
   if (!(std::isfinite(radius_m) && radius_m > 0.0) || max_neighbours < 3) return normals;
   const VoxelNeighbourSearch search(points, radius_m);
@@ -141,38 +142,42 @@ std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vect
     }
   }
   std::sort(order.begin(), order.end());
-  std::vector<std::pair<int, int>> ranges;
-  std::vector<std::pair<float, int>> neighbours;
-  for (size_t o = 0; o < order.size(); ++o) {
-    if (o == 0 || order[o].first != order[o - 1].first)
-      search.neighbourRanges(order[o].first, &ranges);
-    const int i = order[o].second;
-    const Eigen::Vector3f& q = points[queries[i]];
-    search.radiusSearch(q, ranges, &neighbours);
-    if (neighbours.size() < 3) continue;
-    if (static_cast<int>(neighbours.size()) > max_neighbours) {
-      std::nth_element(neighbours.begin(), neighbours.begin() + max_neighbours, neighbours.end());
-      neighbours.resize(max_neighbours);
+  const auto estimate = [&](size_t first, size_t last) {
+    std::vector<std::pair<int, int>> ranges;
+    std::vector<std::pair<float, int>> neighbours;
+    for (size_t o = first; o < last; ++o) {
+      if (o == first || order[o].first != order[o - 1].first)
+        search.neighbourRanges(order[o].first, &ranges);
+      const int i = order[o].second;
+      const Eigen::Vector3f& q = points[queries[i]];
+      search.radiusSearch(q, ranges, &neighbours);
+      if (neighbours.size() < 3) continue;
+      if (static_cast<int>(neighbours.size()) > max_neighbours) {
+        std::nth_element(neighbours.begin(), neighbours.begin() + max_neighbours, neighbours.end());
+        neighbours.resize(max_neighbours);
+      }
+      // Moments relative to the query point keep double precision far from the origin.
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+      for (const auto& n : neighbours) {
+        const Eigen::Vector3d d = (points[n.second] - q).cast<double>();
+        sum += d;
+        sum_sq += d * d.transpose();
+      }
+      const double count = static_cast<double>(neighbours.size());
+      const Eigen::Vector3d mean = sum / count;
+      const Eigen::Matrix3d covariance = sum_sq / count - mean * mean.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+      solver.computeDirect(covariance);
+      const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
+      // Coincident or collinear neighbours do not define a plane.
+      if (!(eigenvalues[2] > 0.0) || !(eigenvalues[1] > 1e-6 * eigenvalues[2])) continue;
+      const Eigen::Vector3d normal = solver.eigenvectors().col(0);
+      if (normal.allFinite() && normal.norm() > 0.5) normals[i] = normal.normalized().cast<float>();
     }
-    // Moments relative to the query point keep double precision far from the origin.
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
-    for (const auto& n : neighbours) {
-      const Eigen::Vector3d d = (points[n.second] - q).cast<double>();
-      sum += d;
-      sum_sq += d * d.transpose();
-    }
-    const double count = static_cast<double>(neighbours.size());
-    const Eigen::Vector3d mean = sum / count;
-    const Eigen::Matrix3d covariance = sum_sq / count - mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-    solver.computeDirect(covariance);
-    const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
-    // Coincident or collinear neighbours do not define a plane.
-    if (!(eigenvalues[2] > 0.0) || !(eigenvalues[1] > 1e-6 * eigenvalues[2])) continue;
-    const Eigen::Vector3d normal = solver.eigenvectors().col(0);
-    if (normal.allFinite() && normal.norm() > 0.5) normals[i] = normal.normalized().cast<float>();
-  }
+  };
+  // Below a few hundred queries a thread costs more than it saves.
+  parallelRanges(order.size(), threads, 512, estimate);
   return normals;
 }
 
@@ -638,6 +643,10 @@ Status BoxEstimator::Config::isValid() const {
   if (min_points < 1) {
     return Status::Error("box min_points must be >= 1 (got " + std::to_string(min_points) + ")");
   }
+  if (num_threads < 1 || num_threads > 256) {
+    return Status::Error("box num_threads must be in [1, 256] (got " + std::to_string(num_threads) +
+                         ")");
+  }
   if (!(std::isfinite(depth_step_per_m2) && depth_step_per_m2 >= 0.0 && depth_step_per_m2 < 0.1)) {
     return Status::Error("box depth_step_per_m2 must be in [0, 0.1) (got " +
                          std::to_string(depth_step_per_m2) + ")");
@@ -692,7 +701,8 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   const double radius_m = normalRadius(view_depth_m);
   const double area_ratio = std::pow(radius_m / mf_config.normal_radius_m, 2.0);
   const int max_neighbours = static_cast<int>(std::min(400.0, std::ceil(30.0 * area_ratio)));
-  const std::vector<Eigen::Vector3f> normals = normalsAt(points, queries, radius_m, max_neighbours);
+  const std::vector<Eigen::Vector3f> normals =
+      normalsAt(points, queries, radius_m, max_neighbours, config_.num_threads);
   if (normals_W != nullptr) {
     for (size_t q = 0; q < queries.size(); ++q) (*normals_W)[source[queries[q]]] = normals[q];
   }

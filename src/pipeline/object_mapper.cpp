@@ -115,16 +115,36 @@ ObjectCloudExtractor::Config extractorConfig(const ObjectMapper::Config& config)
   return extractor;
 }
 
+int poolSize(const ObjectMapper::Config& config) {
+  return config.num_threads > 0
+             ? config.num_threads
+             : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+// One cloud's outlier removal and normals may use the mapper's threads too (the pool's size): a
+// large detection then does not leave a core idle once the keyframe's other detections are done.
+PointCloudFilter::Config filterConfig(const ObjectMapper::Config& config) {
+  PointCloudFilter::Config filter = config.filter;
+  filter.num_threads = poolSize(config);
+  return filter;
+}
+
+BoxEstimator::Config boxConfig(const ObjectMapper::Config& config) {
+  BoxEstimator::Config box = config.box;
+  box.num_threads = poolSize(config);
+  return box;
+}
+
 }  // namespace
 
 ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
     : config_(config),
       extractor_(extractorConfig(config)),
-      filter_(config.filter),
+      filter_(filterConfig(config)),
       lccp_(config.lccp),
       selector_(config.selection),
       floor_(config.floor),
-      box_estimator_(config.box),
+      box_estimator_(boxConfig(config)),
       database_(config.database, priors),
       prior_filter_(config.prior_filter),
       intersection_filter_(config.intersection_filter),
@@ -135,13 +155,13 @@ Status ObjectMapper::updateConfig(const Config& config) {
   if (!valid) return valid;
   config_ = config;
   extractor_ = ObjectCloudExtractor(extractorConfig(config));
-  filter_ = PointCloudFilter(config.filter);
+  filter_ = PointCloudFilter(filterConfig(config));
   lccp_ = LccpSegmenter(config.lccp);
   selector_ = SegmentSelector(config.selection);
   const FloorEstimator previous_floor = floor_;
   floor_ = FloorEstimator(config.floor);
   if (previous_floor.hasFloor()) floor_.setFloor(previous_floor.floorHeight_m(), gravity().up);
-  box_estimator_ = BoxEstimator(config.box);
+  box_estimator_ = BoxEstimator(boxConfig(config));
   database_.setConfig(config.database);
   prior_filter_ = PriorSizeFilter(config.prior_filter);
   intersection_filter_ = IntersectionFilter(config.intersection_filter);
@@ -349,10 +369,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   return Status::Ok();
 }
 
-int ObjectMapper::threadCount() const {
-  if (config_.num_threads > 0) return config_.num_threads;
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
+int ObjectMapper::threadCount() const { return poolSize(config_); }
 
 void ObjectMapper::parallelFor(size_t count, int threads, const std::function<void(size_t)>& job) {
   const size_t workers = std::min(count, static_cast<size_t>(std::max(1, threads)));

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -42,6 +43,10 @@ Status PointCloudFilter::Config::isValid() const {
     return Status::Error("max_depth_m must be finite and > min_depth_m (got " +
                          std::to_string(max_depth_m) + ")");
   }
+  if (num_threads < 1 || num_threads > 256) {
+    return Status::Error("num_threads must be in [1, 256] (got " + std::to_string(num_threads) +
+                         ")");
+  }
   if (sor_mean_k < 1) {
     return Status::Error("sor_mean_k must be >= 1 (got " + std::to_string(sor_mean_k) + ")");
   }
@@ -72,7 +77,7 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   const PointCloud voxelized = voxelize(in_range, config_.voxel_leaf_size_m);
   if (!config_.statistical_outlier_removal) return voxelized;
   return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
-                                         config_.voxel_leaf_size_m);
+                                         config_.voxel_leaf_size_m, config_.num_threads);
 }
 
 PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
@@ -84,11 +89,11 @@ PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_g
   }
   if (on_grid_m == config_.voxel_leaf_size_m) {
     return removeStatisticalOutliersOnGrid(points_W, config_.sor_mean_k, config_.sor_stddev_mul,
-                                           config_.voxel_leaf_size_m);
+                                           config_.voxel_leaf_size_m, config_.num_threads);
   }
   const PointCloud voxelized = voxelize(points_W, config_.voxel_leaf_size_m);
   return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
-                                         config_.voxel_leaf_size_m);
+                                         config_.voxel_leaf_size_m, config_.num_threads);
 }
 
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
@@ -238,7 +243,8 @@ PointCloud PointCloudFilter::removeStatisticalOutliers(const PointCloud& points,
 }
 
 PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
-                                                             double stddev_mul, double cell_m) {
+                                                             double stddev_mul, double cell_m,
+                                                             int threads) {
   PointCloud finite = finitePoints(points);
   if (mean_k < 1 || !std::isfinite(stddev_mul) ||
       finite.size() < static_cast<std::size_t>(mean_k) + 1) {
@@ -305,75 +311,89 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
   // order as PCL does, so the result is PCL's.
   const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
   std::vector<float> mean_distance(n);
-  std::vector<float> candidates;
   const int max_shell = std::max({dims[0], dims[1], dims[2]});
   // Sparse clouds (many isolated points far apart) would visit many empty cells: past this budget
-  // the k-d tree is cheaper.
-  const std::int64_t budget = 400 * static_cast<std::int64_t>(n) + 1000000;
-  std::int64_t visited = 0;
-  // Neighbouring points have similar k-th distances: the previous query's (queries in cell order)
-  // pre-selects the candidates, and the exact selection then runs on those few when they suffice.
-  float guess_kth = 0.f;
-  for (std::size_t ordered = 0; ordered < n; ++ordered) {
-    const std::size_t i = static_cast<std::size_t>(order[ordered]);
-    const Eigen::Vector3f& q = finite[i];
-    const Eigen::Array3i& qc = cell_of[i];
-    candidates.clear();
-    auto visit = [&](int x, int y, int z) {
-      ++visited;
-      if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
-      const std::size_t c = static_cast<std::size_t>(index_of(Eigen::Array3i(x, y, z)));
-      const std::int32_t end = start[c + 1];
-      for (std::int32_t k = start[c]; k < end; ++k) {
-        const Eigen::Vector3f& p = sorted[static_cast<std::size_t>(k)];
-        float d2 = 0.f;
-        const float dx = q.x() - p.x();
-        d2 += dx * dx;
-        const float dy = q.y() - p.y();
-        d2 += dy * dy;
-        const float dz = q.z() - p.z();
-        d2 += dz * dz;
-        candidates.push_back(d2);
-      }
-    };
-    for (int s = 0; s <= max_shell; ++s) {
-      for (int dz = -s; dz <= s; ++dz) {
-        for (int dy = -s; dy <= s; ++dy) {
-          const bool inner = std::abs(dz) < s && std::abs(dy) < s;
-          for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
-            visit(qc[0] + dx, qc[1] + dy, qc[2] + dz);
-            if (s == 0) break;
+  // (shared pro rata by the threads) the k-d tree is cheaper.
+  std::atomic<bool> over_budget{false};
+  // Each query is independent: the queries (in cell order) are split into contiguous ranges.
+  const auto search = [&](std::size_t first, std::size_t last) {
+    const std::int64_t budget =
+        400 * static_cast<std::int64_t>(last - first) +
+        static_cast<std::int64_t>(1000000.0 * static_cast<double>(last - first) / n) + 1;
+    std::int64_t visited = 0;
+    std::vector<float> candidates;
+    // Neighbouring points have similar k-th distances: the previous query's pre-selects the
+    // candidates, and the exact selection then runs on those few when they suffice.
+    float guess_kth = 0.f;
+    for (std::size_t ordered = first; ordered < last; ++ordered) {
+      const std::size_t i = static_cast<std::size_t>(order[ordered]);
+      const Eigen::Vector3f& q = finite[i];
+      const Eigen::Array3i& qc = cell_of[i];
+      candidates.clear();
+      auto visit = [&](int x, int y, int z) {
+        ++visited;
+        if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
+        const std::size_t c = static_cast<std::size_t>(index_of(Eigen::Array3i(x, y, z)));
+        const std::int32_t end = start[c + 1];
+        for (std::int32_t k = start[c]; k < end; ++k) {
+          const Eigen::Vector3f& p = sorted[static_cast<std::size_t>(k)];
+          float d2 = 0.f;
+          const float dx = q.x() - p.x();
+          d2 += dx * dx;
+          const float dy = q.y() - p.y();
+          d2 += dy * dy;
+          const float dz = q.z() - p.z();
+          d2 += dz * dz;
+          candidates.push_back(d2);
+        }
+      };
+      for (int s = 0; s <= max_shell; ++s) {
+        for (int dz = -s; dz <= s; ++dz) {
+          for (int dy = -s; dy <= s; ++dy) {
+            const bool inner = std::abs(dz) < s && std::abs(dy) < s;
+            for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
+              visit(qc[0] + dx, qc[1] + dy, qc[2] + dz);
+              if (s == 0) break;
+            }
           }
         }
-      }
-      if (s > 0 && candidates.size() >= want) {
-        // Keep only the `want` smallest so far (those under the guess, when there are enough).
-        std::size_t under = 0;
-        if (guess_kth > 0.f) {
-          // A branch-free partition (each step swaps positions `under` and k).
-          for (std::size_t k = 0; k < candidates.size(); ++k) {
-            const float d2 = candidates[k];
-            candidates[k] = candidates[under];
-            candidates[under] = d2;
-            under += d2 <= guess_kth ? 1 : 0;
+        if (s > 0 && candidates.size() >= want) {
+          // Keep only the `want` smallest so far (those under the guess, when there are enough).
+          std::size_t under = 0;
+          if (guess_kth > 0.f) {
+            // A branch-free partition (each step swaps positions `under` and k).
+            for (std::size_t k = 0; k < candidates.size(); ++k) {
+              const float d2 = candidates[k];
+              candidates[k] = candidates[under];
+              candidates[under] = d2;
+              under += d2 <= guess_kth ? 1 : 0;
+            }
           }
+          if (under < want) under = candidates.size();
+          std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
+                           candidates.begin() + static_cast<std::ptrdiff_t>(under));
+          candidates.resize(want);
+          const float kth = *std::max_element(candidates.begin(), candidates.end());
+          const double reach = s * cell_m;
+          if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
         }
-        if (under < want) under = candidates.size();
-        std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
-                         candidates.begin() + static_cast<std::ptrdiff_t>(under));
-        candidates.resize(want);
-        const float kth = *std::max_element(candidates.begin(), candidates.end());
-        const double reach = s * cell_m;
-        if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
       }
+      if (visited > budget || over_budget.load(std::memory_order_relaxed)) {
+        over_budget = true;
+        return;
+      }
+      std::sort(candidates.begin(), candidates.end());
+      guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
+      double sum = 0.0;
+      for (std::size_t k = 1; k < want && k < candidates.size(); ++k) {
+        sum += std::sqrt(candidates[k]);
+      }
+      mean_distance[i] = static_cast<float>(sum / mean_k);
     }
-    if (visited > budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
-    std::sort(candidates.begin(), candidates.end());
-    guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
-    double sum = 0.0;
-    for (std::size_t k = 1; k < want && k < candidates.size(); ++k) sum += std::sqrt(candidates[k]);
-    mean_distance[i] = static_cast<float>(sum / mean_k);
-  }
+  };
+  // Below a few thousand points a thread costs more than it saves.
+  parallelRanges(n, threads, 4096, search);
+  if (over_budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
   // PCL's threshold: mean + stddev_mul * standard deviation of the mean distances.
   double sum = 0.0;
   double sq_sum = 0.0;

@@ -203,6 +203,13 @@ TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
         ASSERT_EQ(pcl.size(), grid.size()) << "leaf " << leaf << " k " << k << " mul " << mul;
         EXPECT_LT(pcl.size(), voxelized.size());
         for (size_t i = 0; i < pcl.size(); ++i) ASSERT_EQ(pcl[i], grid[i]);
+        // The neighbour searches split over threads: the same result.
+        for (const int threads : {2, 3}) {
+          const PointCloud split =
+              PointCloudFilter::removeStatisticalOutliersOnGrid(voxelized, k, mul, leaf, threads);
+          ASSERT_EQ(split.size(), grid.size()) << "leaf " << leaf << " threads " << threads;
+          for (size_t i = 0; i < split.size(); ++i) ASSERT_EQ(split[i], grid[i]);
+        }
       }
     }
     // Not voxelised (several points per cell) and a cell size unlike the leaf: still exact.

@@ -5,6 +5,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,6 +58,12 @@ PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T
 // The rotation nearest to M (SVD, determinant +1): for matrices read from text files, which are
 // only nearly orthonormal.
 Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& M);
+
+// Runs job(begin, end) over [0, count) split into contiguous ranges, on up to `threads` threads
+// (the caller's included), never with fewer than min_per_thread items per thread. For loops whose
+// iterations are independent: the result must not depend on how the range is split.
+void parallelRanges(std::size_t count, int threads, std::size_t min_per_thread,
+                    const std::function<void(std::size_t, std::size_t)>& job);
 
 // True if every element of the matrix is finite and its rotation part is orthonormal within tol.
 bool isValidPose(const Eigen::Isometry3d& T, double tol = 1e-3);

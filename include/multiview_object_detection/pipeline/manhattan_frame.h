@@ -76,6 +76,9 @@ class BoxEstimator {
     // table top seen from above carry its yaw where its own normals, all vertical, carry none.
     // 0 = the surface normals only (the paper's).
     double outline_cell_m = 0.02;
+    // Threads for one cloud's normals (independent queries): the mapper sets its own num_threads
+    // here, as for the outlier removal. The result does not depend on it.
+    int num_threads = 1;
     Status isValid() const;
     std::string print() const;
   };

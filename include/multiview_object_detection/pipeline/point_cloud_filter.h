@@ -20,6 +20,10 @@ class PointCloudFilter {
     // ... and the std-dev multiplier: loose enough that surfaces seen at a grazing angle (sparser
     // than the rest of a single view, e.g. a box top) survive; isolated points still go.
     double sor_stddev_mul = 2.5;
+    // Threads for one cloud's outlier removal (its neighbour searches are independent): the
+    // mapper sets its own num_threads here, so a large detection does not leave a core idle while
+    // the other detections of its keyframe are done. The result does not depend on it.
+    int num_threads = 1;
     Status isValid() const;
     std::string print() const;
   };
@@ -46,8 +50,10 @@ class PointCloudFilter {
   // The same result, with the k nearest neighbours found on a grid of cell_m cells (exact, shell
   // by shell) instead of a k-d tree: several times faster on voxelised clouds, which have at most
   // one point per cell. Falls back to the k-d tree for clouds spanning too many cells.
+  // threads: the neighbour searches split over this many threads (same result).
   static PointCloud removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
-                                                    double stddev_mul, double cell_m);
+                                                    double stddev_mul, double cell_m,
+                                                    int threads = 1);
 
  private:
   Config config_;
