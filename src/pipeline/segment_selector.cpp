@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "multiview_object_detection/pipeline/morphology.h"
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
 
@@ -202,11 +203,8 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   } else {
     const int radius =
         static_cast<int>(config_.core_mask_erosion * std::min(box.width, box.height));
-    if (radius > 0) {
-      const cv::Mat kernel =
-          cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1));
-      cv::erode(mask, core, kernel);
-    }
+    // An elliptic kernel of up to ~50 px: OpenCV's erode costs O(pixels x radius²) there.
+    if (radius > 0) erodeWithEllipse(mask, radius, &core);
     if (cv::countNonZero(core) == 0) core = mask.clone();
   }
   cv::Mat ring_mask;
