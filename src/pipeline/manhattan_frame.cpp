@@ -10,6 +10,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "multiview_object_detection/pipeline/radix_sort.h"
+
 namespace mvod {
 
 namespace {
@@ -47,7 +49,7 @@ class VoxelNeighbourSearch {
       if (!points[i].allFinite()) continue;
       keyed.emplace_back(key(cellOf(points[i])), static_cast<int>(i));
     }
-    std::sort(keyed.begin(), keyed.end());
+    radixSortByKey(&keyed);  // std::sort's order: keys, then indices (pushed ascending)
     sorted_points_.reserve(keyed.size());
     sorted_indices_.reserve(keyed.size());
     cells_.reserve(keyed.size());
@@ -141,7 +143,7 @@ std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vect
       order.emplace_back(search.keyOf(points[queries[i]]), static_cast<int>(i));
     }
   }
-  std::sort(order.begin(), order.end());
+  radixSortByKey(&order);  // std::sort's order: keys, then query indices (pushed ascending)
   const auto estimate = [&](size_t first, size_t last) {
     std::vector<std::pair<int, int>> ranges;
     std::vector<std::pair<float, int>> neighbours;

@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/radix_sort.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
 
 namespace mvod {
@@ -75,15 +76,17 @@ Eigen::Vector3f ObjectDatabase::voxelCentre(std::int64_t key) const {
 
 PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
                                            std::vector<Eigen::Vector3f>* normals_W) const {
-  std::vector<std::pair<std::int64_t, const VoxelEvidence*>> supported;
+  // Packed voxel keys are non-negative (63 bits): their order as unsigned is their order.
+  std::vector<std::pair<std::uint64_t, const VoxelEvidence*>> supported;
   supported.reserve(object.evidence.size());
   for (const auto& entry : object.evidence) {
     const VoxelEvidence& e = entry.second;
-    if (e.inside >= 1 && e.inside >= e.outside) supported.emplace_back(entry.first, &e);
+    if (e.inside >= 1 && e.inside >= e.outside) {
+      supported.emplace_back(static_cast<std::uint64_t>(entry.first), &e);
+    }
   }
   // Hash order is not stable across library versions: key order for reproducible boxes.
-  std::sort(supported.begin(), supported.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+  radixSortByKey(&supported);
   PointCloud centres;
   centres.reserve(supported.size());
   if (normals_W != nullptr) {
@@ -91,7 +94,7 @@ PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
     normals_W->reserve(supported.size());
   }
   for (const auto& voxel : supported) {
-    centres.push_back(voxelCentre(voxel.first));
+    centres.push_back(voxelCentre(static_cast<std::int64_t>(voxel.first)));
     if (normals_W == nullptr) continue;
     const float norm = voxel.second->normal_sum.norm();
     if (norm > 1e-6f && std::isfinite(norm)) normals_W->push_back(voxel.second->normal_sum / norm);

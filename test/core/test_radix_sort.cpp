@@ -1,0 +1,44 @@
+// radixSortByKey against std::stable_sort.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/radix_sort.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
+
+namespace mvod {
+
+TEST(RadixSort, StableAndInStdSortsOrder) {
+  std::mt19937_64 rng(5);
+  // Packed voxel keys around the origin (negative fields fill the high bits), many duplicates;
+  // full 64-bit keys; and keys that share all but their lowest bits.
+  std::uniform_int_distribution<int> cell(-300, 300);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<std::pair<std::uint64_t, int>> items;
+    for (int i = 0; i < 50000; ++i) {
+      std::uint64_t key = 0;
+      if (trial == 0) {
+        key = static_cast<std::uint64_t>(
+            packVoxel(Eigen::Vector3i(cell(rng) / 10, cell(rng), cell(rng))));
+      } else if (trial == 1) {
+        key = rng();
+      } else {
+        key = (std::uint64_t{0xABCDEF} << 40) | (rng() & 0x3FF);
+      }
+      items.emplace_back(key, i);
+    }
+    std::vector<std::pair<std::uint64_t, int>> expected = items;
+    std::sort(expected.begin(), expected.end());  // by key, then index: stable for these
+    radixSortByKey(&items);
+    ASSERT_EQ(items, expected) << "trial " << trial;
+  }
+  std::vector<std::pair<std::uint64_t, int>> empty;
+  radixSortByKey(&empty);
+  EXPECT_TRUE(empty.empty());
+}
+
+}  // namespace mvod
