@@ -103,7 +103,8 @@ PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
 }
 
 ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservation& observation,
-                                                          const FusedCloudProcessor& process) {
+                                                          const FusedCloudProcessor& process,
+                                                          bool defer_rebox) {
   if (observation.keyframe != current_keyframe_) {
     current_keyframe_ = observation.keyframe;
     inserted_this_keyframe_.clear();
@@ -211,10 +212,18 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
       }
-      supported = supportedVoxels(object, &supported_normals);
-      object.points_W.clear();
-      for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
-      to_process = &supported;
+      if (defer_rebox) {
+        const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
+        if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
+        to_process = nullptr;
+      } else {
+        supported = supportedVoxels(object, &supported_normals);
+        object.points_W.clear();
+        for (const auto& entry : object.evidence) {
+          object.points_W.push_back(voxelCentre(entry.first));
+        }
+        to_process = &supported;
+      }
     } else {
       // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface
       // bounded.
@@ -228,7 +237,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     PointCloud segment_W;
     OrientedBox box;
     double yaw_rad = object.yaw_rad;
-    if (process &&
+    if (process && to_process != nullptr &&
         process(object.class_name, *to_process, supported_normals, &segment_W, &box, &yaw_rad)) {
       object.segment_W = std::move(segment_W);
       object.box = box;
@@ -278,6 +287,38 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   return result;
 }
 
+int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads) {
+  std::vector<MapObject*> pending;
+  pending.reserve(pending_rebox_.size());
+  for (const int id : pending_rebox_) {
+    const auto it = objects_.find(id);
+    if (it != objects_.end() && !it->second.evidence.empty()) pending.push_back(&it->second);
+  }
+  pending_rebox_.clear();
+  // Each job reads and writes its own object only (the map itself does not change meanwhile).
+  parallelRanges(pending.size(), threads, 1, [&](std::size_t first, std::size_t last) {
+    for (std::size_t k = first; k < last; ++k) {
+      MapObject& object = *pending[k];
+      std::vector<Eigen::Vector3f> normals;
+      const PointCloud supported = supportedVoxels(object, &normals);
+      object.points_W.clear();
+      object.points_W.reserve(object.evidence.size());
+      for (const auto& entry : object.evidence) {
+        object.points_W.push_back(voxelCentre(entry.first));
+      }
+      PointCloud segment_W;
+      OrientedBox box;
+      double yaw_rad = object.yaw_rad;
+      if (process && process(object.class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
+        object.segment_W = std::move(segment_W);
+        object.box = box;
+        object.yaw_rad = yaw_rad;
+      }
+    }
+  });
+  return static_cast<int>(pending.size());
+}
+
 const MapObject* ObjectDatabase::find(int id) const {
   const auto it = objects_.find(id);
   return it == objects_.end() ? nullptr : &it->second;
@@ -292,6 +333,8 @@ std::vector<const MapObject*> ObjectDatabase::findByClass(const std::string& cla
 }
 
 bool ObjectDatabase::remove(int id) {
+  pending_rebox_.erase(std::remove(pending_rebox_.begin(), pending_rebox_.end(), id),
+                       pending_rebox_.end());
   inserted_this_keyframe_.erase(
       std::remove(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), id),
       inserted_this_keyframe_.end());
@@ -300,6 +343,7 @@ bool ObjectDatabase::remove(int id) {
 
 void ObjectDatabase::clear() {
   objects_.clear();
+  pending_rebox_.clear();
   inserted_this_keyframe_.clear();
   current_keyframe_ = -1;
 }

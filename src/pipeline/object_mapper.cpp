@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <mutex>
 #include <sstream>
 #include <thread>
 
@@ -324,7 +325,10 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   });
   parallelFor(kept.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
 
-  // Eq. 5-8 in detection order: the same map whatever the thread count.
+  // Eq. 5-8 in detection order: the same map whatever the thread count. Evidence fusion counts
+  // each detection's votes in that order and boxes the objects that changed once, at the end of
+  // the keyframe, in parallel.
+  const bool defer_rebox = config_.database.fusion == "evidence";
   for (size_t k = 0; k < kept.size(); ++k) {
     const Detection2D& detection = kept[k];
     const std::string what = label + ": " + detectionLabel(kept_index[k], detection);
@@ -354,7 +358,8 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
           return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad,
                               &fused_times);
         };
-    const ObjectDatabase::FusionResult result = database_.fuseOrInsert(observation, process);
+    const ObjectDatabase::FusionResult result =
+        database_.fuseOrInsert(observation, process, defer_rebox);
     out.times.fusion_ms += msSince(t);
     out.times.filter_ms += fused_times.filter_ms;
     out.times.lccp_ms += fused_times.lccp_ms;
@@ -364,6 +369,30 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     } else {
       ++out.inserted;
     }
+  }
+  if (!database_.pendingRebox().empty()) {
+    t = Clock::now();
+    std::mutex times_mutex;
+    StageTimes rebox_times;
+    const FusedCloudProcessor rebox = [this, &rebox_times, &times_mutex](
+                                          const std::string& class_name, const PointCloud& points_W,
+                                          const std::vector<Eigen::Vector3f>& normals_W,
+                                          PointCloud* segment_W, OrientedBox* box,
+                                          double* yaw_rad) {
+      StageTimes times;
+      const bool ok =
+          processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &times);
+      const std::lock_guard<std::mutex> lock(times_mutex);
+      rebox_times.filter_ms += times.filter_ms;
+      rebox_times.lccp_ms += times.lccp_ms;
+      rebox_times.manhattan_ms += times.manhattan_ms;
+      return ok;
+    };
+    database_.reboxPending(rebox, threadCount());
+    out.times.fusion_ms += msSince(t);
+    out.times.filter_ms += rebox_times.filter_ms;
+    out.times.lccp_ms += rebox_times.lccp_ms;
+    out.times.manhattan_ms += rebox_times.manhattan_ms;
   }
   out.times.total_ms = msSince(start);
   return Status::Ok();

@@ -487,5 +487,71 @@ TEST_F(ObjectDatabaseTest, EvidenceKeepsTheViewsNormalsPerVoxel) {
   EXPECT_TRUE(received[1].empty());
 }
 
+TEST_F(ObjectDatabaseTest, DeferredReboxingBoxesEachObjectOnceWithTheSameResult) {
+  // Two chairs seen in keyframe 0, then each twice in keyframe 1 (the second time shifted) and a
+  // cup once: the same objects, votes and boxes as fusing immediately, one box per object.
+  ObjectDatabase::Config config;
+  config.no_fusion_within_keyframe = false;
+  const auto run = [&](bool defer, int threads, int* calls) {
+    ObjectDatabase database(config, priors_);
+    database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(calls));
+    database.fuseOrInsert(observation("chair", {3.0, 2.0, 0.5}, 0.7, 0), centroidProcessor(calls));
+    database.fuseOrInsert(observation("cup", {5.0, 2.0, 0.8}, 0.6, 0), centroidProcessor(calls));
+    for (const double shift : {0.0, 0.02}) {
+      database.fuseOrInsert(observation("chair", {3.0 + shift, 2.0, 0.5}, 0.9, 1),
+                            centroidProcessor(calls), defer);
+      database.fuseOrInsert(observation("chair", {1.0 + shift, 2.0, 0.5}, 0.6, 1),
+                            centroidProcessor(calls), defer);
+    }
+    database.fuseOrInsert(observation("cup", {5.0, 2.0, 0.8}, 0.9, 1), centroidProcessor(calls),
+                          defer);
+    if (defer) {
+      EXPECT_EQ(database.pendingRebox().size(), 3u);
+      EXPECT_EQ(database.reboxPending(centroidProcessor(calls), threads), 3);
+      EXPECT_TRUE(database.pendingRebox().empty());
+    }
+    return database;
+  };
+  int immediate_calls = 0;
+  const ObjectDatabase immediate = run(false, 1, &immediate_calls);
+  EXPECT_EQ(immediate_calls, 5);  // one per fusion
+  for (const int threads : {1, 3}) {
+    int deferred_calls = 0;
+    const ObjectDatabase deferred = run(true, threads, &deferred_calls);
+    EXPECT_EQ(deferred_calls, 3);  // one per fused object
+    ASSERT_EQ(deferred.size(), immediate.size());
+    for (const auto& entry : immediate.objects()) {
+      const MapObject* other = deferred.find(entry.first);
+      ASSERT_NE(other, nullptr);
+      EXPECT_EQ(other->observations, entry.second.observations);
+      EXPECT_DOUBLE_EQ(other->probability, entry.second.probability);
+      EXPECT_EQ(other->box.center_m, entry.second.box.center_m) << "object " << entry.first;
+      EXPECT_EQ(other->segment_W, entry.second.segment_W);
+      EXPECT_EQ(other->points_W.size(), entry.second.points_W.size());
+      EXPECT_DOUBLE_EQ(other->yaw_rad, entry.second.yaw_rad);
+    }
+  }
+  // A removed object is no longer pending; the paper's fusion never defers.
+  ObjectDatabase database(config, priors_);
+  int calls = 0;
+  const auto first = database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0),
+                                           centroidProcessor(&calls));
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 1), centroidProcessor(&calls),
+                        true);
+  ASSERT_EQ(database.pendingRebox().size(), 1u);
+  database.remove(first.object_id);
+  EXPECT_TRUE(database.pendingRebox().empty());
+  EXPECT_EQ(database.reboxPending(centroidProcessor(&calls), 2), 0);
+  ObjectDatabase::Config paper = config;
+  paper.fusion = "paper";
+  ObjectDatabase literal(paper, priors_);
+  literal.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(&calls));
+  calls = 0;
+  literal.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 1), centroidProcessor(&calls),
+                       true);
+  EXPECT_EQ(calls, 1);
+  EXPECT_TRUE(literal.pendingRebox().empty());
+}
+
 }  // namespace
 }  // namespace mvod

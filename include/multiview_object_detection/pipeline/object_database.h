@@ -122,8 +122,19 @@ class ObjectDatabase {
   // Eq. 6: nearest same-class object by box-centre distance; fuse if within the class threshold
   // Γ_C, else insert. On fusion the clouds are merged (Eq. 7), voxelised, re-processed by
   // `process`, and the probability becomes mean(ψ_new, ψ_j) (Eq. 8).
+  // defer_rebox (evidence fusion only): the votes are counted now, but the supported voxels are
+  // boxed (`process`) later, by reboxPending(), once per object however many detections of the
+  // keyframe fused into it, and the objects in parallel. Until then the object keeps its previous
+  // segment and box (a later detection of the same keyframe is matched against those).
   FusionResult fuseOrInsert(const ObjectObservation& observation,
-                            const FusedCloudProcessor& process);
+                            const FusedCloudProcessor& process, bool defer_rebox = false);
+  // Boxes the supported voxels of every object fused with defer_rebox since the last call, on up
+  // to `threads` threads (each object is independent: the same result for any thread count). A
+  // processor that returns false leaves that object's previous segment and box. Returns how many
+  // objects were re-boxed.
+  int reboxPending(const FusedCloudProcessor& process, int threads);
+  // Objects waiting for reboxPending().
+  const std::vector<int>& pendingRebox() const { return pending_rebox_; }
 
   // Evidence fusion's supported voxels (centres): inside >= outside and inside >= 1.
   // normals_W (optional): the supported voxels' normals (normalised sums) where they have one.
@@ -154,6 +165,7 @@ class ObjectDatabase {
   int next_id_ = 1;
   int current_keyframe_ = -1;
   std::vector<int> inserted_this_keyframe_;
+  std::vector<int> pending_rebox_;  // ascending ids
 };
 
 }  // namespace mvod
