@@ -159,13 +159,28 @@ std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vect
         neighbours.resize(max_neighbours);
       }
       // Moments relative to the query point keep double precision far from the origin.
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+      // The six distinct second moments in scalars: the same sums, in the same order, as the outer
+      // products (d d^T) added as 3x3 matrices, which the compiler spilled to the stack.
+      double sx = 0.0, sy = 0.0, sz = 0.0;
+      double sxx = 0.0, sxy = 0.0, sxz = 0.0, syy = 0.0, syz = 0.0, szz = 0.0;
       for (const auto& n : neighbours) {
-        const Eigen::Vector3d d = (points[n.second] - q).cast<double>();
-        sum += d;
-        sum_sq += d * d.transpose();
+        const Eigen::Vector3f& p = points[n.second];
+        const double dx = static_cast<double>(p.x() - q.x());
+        const double dy = static_cast<double>(p.y() - q.y());
+        const double dz = static_cast<double>(p.z() - q.z());
+        sx += dx;
+        sy += dy;
+        sz += dz;
+        sxx += dx * dx;
+        sxy += dx * dy;
+        sxz += dx * dz;
+        syy += dy * dy;
+        syz += dy * dz;
+        szz += dz * dz;
       }
+      const Eigen::Vector3d sum(sx, sy, sz);
+      Eigen::Matrix3d sum_sq;
+      sum_sq << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
       const double count = static_cast<double>(neighbours.size());
       const Eigen::Vector3d mean = sum / count;
       const Eigen::Matrix3d covariance = sum_sq / count - mean * mean.transpose();

@@ -42,11 +42,19 @@ Plane fitPlane(const PointCloud& points, const std::vector<int>& indices) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const int i : indices) mean += points[i].cast<double>();
   mean /= static_cast<double>(indices.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // The six distinct moments in scalars: the same sums, in the same order, as adding d d^T.
+  double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
   for (const int i : indices) {
     const Eigen::Vector3d d = points[i].cast<double>() - mean;
-    covariance += d * d.transpose();
+    xx += d.x() * d.x();
+    xy += d.x() * d.y();
+    xz += d.x() * d.z();
+    yy += d.y() * d.y();
+    yz += d.y() * d.z();
+    zz += d.z() * d.z();
   }
+  Eigen::Matrix3d covariance;
+  covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   covariance /= static_cast<double>(indices.size());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
   plane.normal = solver.eigenvectors().col(0);
