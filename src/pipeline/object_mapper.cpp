@@ -103,7 +103,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.footprint_yaw_area_ratio = 0.0;
   box.outline_cell_m = 0.0;
   extractor.min_consistent_neighbours = 0;
-  filter.statistical_outlier_removal = true;
+  filter.outlier_removal = "statistical";
   intersection_filter.duplicate_ratio = 0.0;
 }
 

@@ -12,6 +12,7 @@
 #include <limits>
 #include <numeric>
 #include <sstream>
+#include <unordered_set>
 
 namespace mvod {
 namespace {
@@ -47,6 +48,15 @@ Status PointCloudFilter::Config::isValid() const {
     return Status::Error("num_threads must be in [1, 256] (got " + std::to_string(num_threads) +
                          ")");
   }
+  if (outlier_removal != "voxel_neighbours" && outlier_removal != "statistical" &&
+      outlier_removal != "none") {
+    return Status::Error("outlier_removal must be voxel_neighbours, statistical or none (got '" +
+                         outlier_removal + "')");
+  }
+  if (min_voxel_neighbours < 0 || min_voxel_neighbours > 26) {
+    return Status::Error("min_voxel_neighbours must be in [0, 26] (got " +
+                         std::to_string(min_voxel_neighbours) + ")");
+  }
   if (sor_mean_k < 1) {
     return Status::Error("sor_mean_k must be >= 1 (got " + std::to_string(sor_mean_k) + ")");
   }
@@ -63,7 +73,8 @@ std::string PointCloudFilter::Config::print() const {
       << "voxel_leaf_size_m: " << voxel_leaf_size_m << "\n"
       << "min_depth_m: " << min_depth_m << "\n"
       << "max_depth_m: " << max_depth_m << "\n"
-      << "statistical_outlier_removal: " << (statistical_outlier_removal ? "true" : "false") << "\n"
+      << "outlier_removal: " << outlier_removal << "\n"
+      << "min_voxel_neighbours: " << min_voxel_neighbours << "\n"
       << "sor_mean_k: " << sor_mean_k << "\n"
       << "sor_stddev_mul: " << sor_stddev_mul << "\n";
   return out.str();
@@ -75,25 +86,26 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   // then outliers on the uniform-density cloud.
   const PointCloud in_range = passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m);
   const PointCloud voxelized = voxelize(in_range, config_.voxel_leaf_size_m);
-  if (!config_.statistical_outlier_removal) return voxelized;
-  return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
-                                         config_.voxel_leaf_size_m, config_.num_threads);
+  return removeOutliers(voxelized);
+}
+
+PointCloud PointCloudFilter::removeOutliers(const PointCloud& voxelized) const {
+  if (config_.outlier_removal == "voxel_neighbours") {
+    return removeSparseVoxels(voxelized, config_.voxel_leaf_size_m, config_.min_voxel_neighbours);
+  }
+  if (config_.outlier_removal == "statistical") {
+    return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
+                                           config_.voxel_leaf_size_m, config_.num_threads);
+  }
+  return voxelized;
 }
 
 PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
   if (!config_.enable) return points_W;
   // No pass-through: the fused cloud (Eq. 7) is in the world frame, depth means nothing there.
-  if (!config_.statistical_outlier_removal) {
-    return on_grid_m == config_.voxel_leaf_size_m ? points_W
-                                                  : voxelize(points_W, config_.voxel_leaf_size_m);
-  }
-  if (on_grid_m == config_.voxel_leaf_size_m) {
-    return removeStatisticalOutliersOnGrid(points_W, config_.sor_mean_k, config_.sor_stddev_mul,
-                                           config_.voxel_leaf_size_m, config_.num_threads);
-  }
-  const PointCloud voxelized = voxelize(points_W, config_.voxel_leaf_size_m);
-  return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
-                                         config_.voxel_leaf_size_m, config_.num_threads);
+  // A cloud already on this grid is not voxelised again.
+  if (on_grid_m == config_.voxel_leaf_size_m) return removeOutliers(points_W);
+  return removeOutliers(voxelize(points_W, config_.voxel_leaf_size_m));
 }
 
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
@@ -200,6 +212,96 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
     }
     out.emplace_back((sum / static_cast<double>(end - begin)).cast<float>());
     begin = end;
+  }
+  return out;
+}
+
+namespace {
+
+// keep[i] |= the cell of finite[i] (grid of cell_m, anchored at the origin) has at least
+// min_neighbours occupied cells among its 26 neighbours.
+void markDenseCells(const PointCloud& finite, double cell_m, int min_neighbours,
+                    std::vector<char>* keep) {
+  // The cells; a dense occupancy grid over the cloud's bounding box (one bit per cell, with a
+  // margin of one) when it is small, else a hash set.
+  const double inv_cell = 1.0 / cell_m;
+  std::vector<Eigen::Array3i> cells;
+  cells.reserve(finite.size());
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  for (const Eigen::Vector3f& p : finite) {
+    Eigen::Array3i c;
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(p[d]) * inv_cell);
+      // Beyond +-1e9 cells (10 000 km at 1 cm) every point is its own speck.
+      c[d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
+    }
+    lo = lo.min(c);
+    hi = hi.max(c);
+    cells.push_back(c);
+  }
+  const Eigen::Array3i dims = hi - lo + 3;  // one cell of margin on either side
+  const double num_cells = static_cast<double>(dims[0]) * dims[1] * static_cast<double>(dims[2]);
+  const auto mark = [&](const auto& occupied) {
+    for (std::size_t i = 0; i < finite.size(); ++i) {
+      if ((*keep)[i]) continue;
+      int count = -1;  // its own cell is counted below
+      for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            count += occupied(cells[i] + Eigen::Array3i(dx, dy, dz)) ? 1 : 0;
+          }
+        }
+      }
+      if (count >= min_neighbours) (*keep)[i] = 1;
+    }
+  };
+  if (num_cells <= 64.0 * 1024 * 1024) {
+    std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
+    const auto bit_of = [&](const Eigen::Array3i& c) {
+      const Eigen::Array3i r = c - lo + 1;
+      return (static_cast<std::size_t>(r[2]) * dims[1] + r[1]) * dims[0] + r[0];
+    };
+    for (const Eigen::Array3i& c : cells) {
+      const std::size_t b = bit_of(c);
+      bits[b / 64] |= std::uint64_t{1} << (b % 64);
+    }
+    mark([&](const Eigen::Array3i& c) {
+      const std::size_t b = bit_of(c);
+      return ((bits[b / 64] >> (b % 64)) & 1u) != 0;
+    });
+  } else {
+    struct CellHash {
+      std::size_t operator()(const std::array<int, 3>& c) const {
+        return static_cast<std::size_t>(c[0]) * 73856093u ^
+               static_cast<std::size_t>(c[1]) * 19349663u ^
+               static_cast<std::size_t>(c[2]) * 83492791u;
+      }
+    };
+    const auto key_of = [](const Eigen::Array3i& c) {
+      return std::array<int, 3>{c[0], c[1], c[2]};
+    };
+    std::unordered_set<std::array<int, 3>, CellHash> occupied;
+    occupied.reserve(2 * cells.size());
+    for (const Eigen::Array3i& c : cells) occupied.insert(key_of(c));
+    mark([&](const Eigen::Array3i& c) { return occupied.count(key_of(c)) != 0; });
+  }
+}
+
+}  // namespace
+
+PointCloud PointCloudFilter::removeSparseVoxels(const PointCloud& points, double leaf_size_m,
+                                                int min_neighbours) {
+  PointCloud finite = finitePoints(points);
+  if (min_neighbours <= 0 || finite.empty() || !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) {
+    return finite;
+  }
+  std::vector<char> keep(finite.size(), 0);
+  markDenseCells(finite, leaf_size_m, min_neighbours, &keep);
+  PointCloud out;
+  out.reserve(finite.size());
+  for (std::size_t i = 0; i < finite.size(); ++i) {
+    if (keep[i]) out.push_back(finite[i]);
   }
   return out;
 }

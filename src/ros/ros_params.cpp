@@ -124,7 +124,12 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "filter/voxel_leaf_size_m", &m.filter.voxel_leaf_size_m, e);
   readParam(nh, "filter/min_depth_m", &m.filter.min_depth_m, e);
   readParam(nh, "filter/max_depth_m", &m.filter.max_depth_m, e);
-  readParam(nh, "filter/statistical_outlier_removal", &m.filter.statistical_outlier_removal, e);
+  // Before outlier_removal: statistical_outlier_removal true / false (older configs).
+  if (nh.hasParam("filter/statistical_outlier_removal")) {
+    bool statistical = m.filter.outlier_removal == "statistical";
+    readParam(nh, "filter/statistical_outlier_removal", &statistical, e);
+    m.filter.outlier_removal = statistical ? "statistical" : "none";
+  }
   readParam(nh, "filter/sor_mean_k", &m.filter.sor_mean_k, e);
   readParam(nh, "filter/sor_stddev_mul", &m.filter.sor_stddev_mul, e);
 
@@ -145,6 +150,8 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   bool paper_method = false;
   readParam(nh, "paper_method", &paper_method, e);
   if (paper_method) m.usePaperMethod();
+  readParam(nh, "filter/outlier_removal", &m.filter.outlier_removal, e);
+  readParam(nh, "filter/min_voxel_neighbours", &m.filter.min_voxel_neighbours, e);
   readParam(nh, "lccp/selection", &m.selection.selection, e);
   readNumber(nh, "selection/core_box_fraction", &m.selection.core_box_fraction, e);
   readNumber(nh, "selection/core_mask_erosion", &m.selection.core_mask_erosion, e);

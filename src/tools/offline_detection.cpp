@@ -78,6 +78,7 @@ const char* const kUsage =
     "                         literal fusion (Eq. 7), min/max box extents, no floor cut\n"
     "  --selection S          largest (Eq. 2) | consistent (default)\n"
     "  --fusion F             paper (Eq. 7) | evidence (default)\n"
+    "  --outlier-removal M    statistical (default, the paper's) | voxel_neighbours | none\n"
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
@@ -112,6 +113,7 @@ struct Options {
   bool no_floor = false;
   std::string selection;
   std::string fusion;
+  std::string outlier_removal;
   bool estimate_gravity = false;
   bool simulated_perfect = false;
   long simulated_seed = 1;
@@ -150,6 +152,12 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (!value(&options->fusion) ||
           (options->fusion != "paper" && options->fusion != "evidence")) {
         return "--fusion needs paper or evidence";
+      }
+    } else if (arg == "--outlier-removal") {
+      if (!value(&options->outlier_removal) ||
+          (options->outlier_removal != "statistical" &&
+           options->outlier_removal != "voxel_neighbours" && options->outlier_removal != "none")) {
+        return "--outlier-removal needs statistical, voxel_neighbours or none";
       }
     } else if (arg == "--simulated-perfect") {
       options->simulated_perfect = true;
@@ -431,6 +439,7 @@ int run(int argc, char** argv) {
   if (options.paper) config.usePaperMethod();
   if (!options.selection.empty()) config.selection.selection = options.selection;
   if (!options.fusion.empty()) config.database.fusion = options.fusion;
+  if (!options.outlier_removal.empty()) config.filter.outlier_removal = options.outlier_removal;
   if (options.no_floor) config.floor.enable = false;
   config.min_probability = options.min_probability;
   config.num_threads = options.threads;

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <string>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
 
@@ -218,6 +219,71 @@ TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
     ASSERT_EQ(pcl.size(), grid.size()) << "raw, cell " << leaf;
     for (size_t i = 0; i < pcl.size(); ++i) ASSERT_EQ(pcl[i], grid[i]);
   }
+}
+
+TEST(PointCloudFilterOutliers, SparseVoxelsGoSurfacesStay) {
+  // On a 1 cm grid: a flat 20 x 20 patch (8 neighbours inside, 5 on its border, 3 at its four
+  // corners), a line of voxels (2 neighbours), a pair (1) and isolated specks (0).
+  const float leaf = 0.01f;
+  const auto at = [leaf](int x, int y, int z) {
+    return Eigen::Vector3f((x + 0.5f) * leaf, (y + 0.5f) * leaf, (z + 0.5f) * leaf);
+  };
+  PointCloud patch;
+  for (int x = 0; x < 20; ++x) {
+    for (int y = 0; y < 20; ++y) patch.push_back(at(x, y, 100));
+  }
+  PointCloud noise;
+  for (int k = 0; k < 15; ++k) noise.push_back(at(40 + k, 0, 90));  // a line
+  noise.push_back(at(-30, -30, 120));                               // a pair
+  noise.push_back(at(-29, -30, 121));
+  for (int k = 0; k < 5; ++k) noise.push_back(at(-50 + 7 * k, 60, 80 - 9 * k));  // specks
+  PointCloud cloud = patch;
+  cloud.insert(cloud.end(), noise.begin(), noise.end());
+  const PointCloud kept = PointCloudFilter::removeSparseVoxels(cloud, leaf, 4);
+  // The patch without its 4 corners, in input order; none of the noise.
+  ASSERT_EQ(kept.size(), patch.size() - 4);
+  EXPECT_EQ(kept.front(), patch[1]);
+  for (const Eigen::Vector3f& p : noise) EXPECT_FALSE(containsPoint(kept, p, 1e-6f));
+  EXPECT_FALSE(containsPoint(kept, at(0, 0, 100), 1e-6f));
+  EXPECT_TRUE(containsPoint(kept, at(0, 7, 100), 1e-6f));  // border: 5 neighbours
+  // 3 keeps the corners too; 0 keeps everything; 9 keeps nothing of a flat patch.
+  EXPECT_EQ(PointCloudFilter::removeSparseVoxels(cloud, leaf, 3).size(), patch.size());
+  EXPECT_EQ(PointCloudFilter::removeSparseVoxels(cloud, leaf, 0).size(), cloud.size());
+  EXPECT_TRUE(PointCloudFilter::removeSparseVoxels(cloud, leaf, 9).empty());
+  // Far-apart points (the hash set instead of the dense grid) and non-finite ones.
+  PointCloud spread = cloud;
+  spread.emplace_back(5e4f, -5e4f, 5e4f);
+  spread.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.f, 1.f);
+  const PointCloud kept_spread = PointCloudFilter::removeSparseVoxels(spread, leaf, 4);
+  ASSERT_EQ(kept_spread.size(), kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept_spread[i], kept[i]);
+}
+
+TEST(PointCloudFilterOutliers, ConfiguredRemovalInBothChains) {
+  // A voxelised patch with specks: voxel_neighbours and statistical both drop the specks, none
+  // keeps them; the fused chain applies the same choice.
+  PointCloud points = planePatch(1.0f, 0.4f, 0.005f, 0.0005f);
+  const std::vector<Eigen::Vector3f> specks = {Eigen::Vector3f(0.2f, 0.2f, 1.3f),
+                                               Eigen::Vector3f(0.6f, 0.1f, 0.8f)};
+  points.insert(points.end(), specks.begin(), specks.end());
+  for (const std::string mode : {"voxel_neighbours", "statistical", "none"}) {
+    PointCloudFilter::Config config;
+    config.outlier_removal = mode;
+    ASSERT_TRUE(config.isValid().ok());
+    const PointCloudFilter filter(config);
+    for (const PointCloud& out : {filter.filterCameraFrame(points), filter.filterFused(points)}) {
+      for (const Eigen::Vector3f& speck : specks) {
+        EXPECT_EQ(containsPoint(out, speck, 0.006f), mode == "none") << mode;
+      }
+      EXPECT_GT(out.size(), 1000u) << mode;
+    }
+  }
+  PointCloudFilter::Config bad;
+  bad.outlier_removal = "median";
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = PointCloudFilter::Config();
+  bad.min_voxel_neighbours = 27;
+  EXPECT_FALSE(bad.isValid().ok());
 }
 
 TEST(PointCloudFilterOutliers, TooFewPointsPassThrough) {

@@ -12,10 +12,19 @@ class PointCloudFilter {
     double voxel_leaf_size_m = 0.01;  // the paper's 0.01 m point-cloud resolution
     double min_depth_m = 0.3;         // pass-through on camera depth (z of the camera frame)
     double max_depth_m = 4.5;
-    // Statistical outlier removal (k-NN distances, PCL's semantics). false leaves outliers to the
-    // extractor's depth-edge test alone: faster, but on the benchmark rooms box mAP@0.5 fell by 6
-    // points, so it stays on.
-    bool statistical_outlier_removal = true;
+    // Outlier removal after the voxel grid:
+    //   statistical: PCL's k-NN statistics (sor_mean_k, sor_stddev_mul), the paper's and the
+    //     default.
+    //   voxel_neighbours: a voxel needs min_voxel_neighbours occupied voxels among its 26
+    //     neighbours. A densely sampled surface gives each of its voxels 4 or more (8 inside a flat
+    //     patch, 5 on its border, 3 at a corner); the specks and lines that depth noise leaves give
+    //     0-2. O(points): on the 9 benchmark rooms the filter stage takes a fifth of the time and
+    //     segmentation mAP rose from 51.8 to 57.9, box mAP@0.5 from 77.8 to 83.7. Not the default:
+    //     a surface seen at a grazing angle is sampled more sparsely than the grid, its voxels have
+    //     2-3 neighbours and it goes (a 1.6 m table seen along its length came out 1.33 m long).
+    //   none: the extractor's depth-edge test alone.
+    std::string outlier_removal = "statistical";
+    int min_voxel_neighbours = 4;
     int sor_mean_k = 20;  // statistical outlier removal: neighbours
     // ... and the std-dev multiplier: loose enough that surfaces seen at a grazing angle (sparser
     // than the rest of a single view, e.g. a box top) survive; isolated points still go.
@@ -44,6 +53,11 @@ class PointCloudFilter {
   static PointCloud voxelize(const PointCloud& points, double leaf_size_m);
   static PointCloud passThroughDepth(const PointCloud& points_C, double min_depth_m,
                                      double max_depth_m);
+  // Drops the points whose voxel (leaf_size_m grid, anchored at the origin) has fewer than
+  // min_neighbours occupied voxels among its 26 neighbours. For voxelised clouds (one point per
+  // voxel); order kept.
+  static PointCloud removeSparseVoxels(const PointCloud& points, double leaf_size_m,
+                                       int min_neighbours);
   // PCL's StatisticalOutlierRemoval (k-d tree).
   static PointCloud removeStatisticalOutliers(const PointCloud& points, int mean_k,
                                               double stddev_mul);
@@ -56,6 +70,9 @@ class PointCloudFilter {
                                                     int threads = 1);
 
  private:
+  // The configured outlier removal of a voxelised cloud.
+  PointCloud removeOutliers(const PointCloud& voxelized) const;
+
   Config config_;
 };
 
