@@ -105,6 +105,7 @@ void ObjectMapper::Config::usePaperMethod() {
   extractor.min_consistent_neighbours = 0;
   filter.outlier_removal = "statistical";
   intersection_filter.duplicate_ratio = 0.0;
+  intersection_filter.container_support_ratio = 0.0;
 }
 
 namespace {

@@ -116,6 +116,11 @@ Status IntersectionFilter::Config::isValid() const {
     return Status::Error("duplicate_ratio must be in [0, 1] (got " +
                          std::to_string(duplicate_ratio) + ")");
   }
+  if (!(container_support_ratio == 0.0 ||
+        (std::isfinite(container_support_ratio) && container_support_ratio >= 1.0))) {
+    return Status::Error("container_support_ratio must be 0 (off) or a finite value >= 1 (got " +
+                         number(container_support_ratio) + ")");
+  }
   return Status::Ok();
 }
 
@@ -123,8 +128,13 @@ std::string IntersectionFilter::Config::print() const {
   std::ostringstream out;
   out << "enable: " << (enable ? "true" : "false") << "\n"
       << "volume_ratio_threshold: " << volume_ratio_threshold << "\n"
-      << "duplicate_ratio: " << duplicate_ratio << "\n";
+      << "duplicate_ratio: " << duplicate_ratio << "\n"
+      << "container_support_ratio: " << container_support_ratio << "\n";
   return out.str();
+}
+
+double IntersectionFilter::support(const MapObject& object) {
+  return object.observations * object.probability;
 }
 
 // Eq. 11 is written with B as the box that lies inside A. For an ordered pair in which A is the
@@ -204,14 +214,26 @@ std::vector<int> IntersectionFilter::intersectingObjects(const ObjectDatabase& d
       if (xi == nullptr) break;
       if (config_.duplicate_ratio > 0.0 &&
           std::min(xi->eta_sigma, xi->eta_tau) > config_.duplicate_ratio) {
-        const MapObject& a = *objects[sigma];
-        const MapObject& b = *objects[xi->tau];
-        if (a.observations * a.probability < b.observations * b.probability) {
+        if (support(*objects[sigma]) < support(*objects[xi->tau])) {
           deleted[sigma] = true;
           break;
         }
         deleted[xi->tau] = true;
         continue;
+      }
+      const bool sigma_inner = xi->eta_sigma > xi->eta_tau;
+      if (config_.container_support_ratio > 0.0 &&
+          (sigma_inner ? xi->eta_sigma : xi->eta_tau) > threshold) {
+        const double inner = support(sigma_inner ? *objects[sigma] : *objects[xi->tau]);
+        const double outer = support(sigma_inner ? *objects[xi->tau] : *objects[sigma]);
+        if (inner >= config_.container_support_ratio * outer) {  // the container goes
+          if (sigma_inner) {
+            deleted[xi->tau] = true;
+            continue;
+          }
+          deleted[sigma] = true;
+          break;
+        }
       }
       if (xi->eta_sigma > xi->eta_tau && xi->eta_sigma > threshold) {  // line 9
         deleted[sigma] = true;

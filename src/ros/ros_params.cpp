@@ -198,6 +198,8 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "intersection_filter/volume_ratio_threshold",
             &m.intersection_filter.volume_ratio_threshold, e);
   readNumber(nh, "intersection_filter/duplicate_ratio", &m.intersection_filter.duplicate_ratio, e);
+  readNumber(nh, "intersection_filter/container_support_ratio",
+             &m.intersection_filter.container_support_ratio, e);
 
   readParam(nh, "gravity/plane_distance_threshold_m", &m.gravity.plane_distance_threshold_m, e);
   readParam(nh, "gravity/ransac_iterations", &m.gravity.ransac_iterations, e);

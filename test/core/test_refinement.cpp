@@ -229,7 +229,55 @@ TEST_F(IntersectionFilterTest, OfTwoDuplicatesUnderTwoLabelsTheLessSupportedIsDe
   // Algorithm 1 as published: ids and containment decide, not support.
   IntersectionFilter::Config paper;
   paper.duplicate_ratio = 0.0;
+  paper.container_support_ratio = 0.0;
   EXPECT_EQ(IntersectionFilter(paper).intersectingObjects(database, kUp), std::vector<int>{5});
+}
+
+TEST_F(IntersectionFilterTest, WeakContainerAroundBetterSupportedObjectsGoes) {
+  // Two chairs side by side, seen in 8 and 19 keyframes; a box detection spanning both, called a
+  // couch in 3 keyframes, holds each of them entirely.
+  MapObject couch = makeObject(
+      1, "couch", makeBox(Eigen::Vector3d(0.0, 0.0, 0.45), Eigen::Vector3d(1.2, 0.55, 0.9)));
+  couch.observations = 3;
+  couch.probability = 0.6;
+  MapObject left = makeObject(
+      2, "chair", makeBox(Eigen::Vector3d(-0.3, 0.0, 0.44), Eigen::Vector3d(0.48, 0.49, 0.88)));
+  left.observations = 8;
+  MapObject right = makeObject(
+      3, "chair", makeBox(Eigen::Vector3d(0.32, 0.0, 0.43), Eigen::Vector3d(0.5, 0.5, 0.86)));
+  right.observations = 19;
+  const ObjectDatabase database = makeDatabase({couch, left, right});
+  EXPECT_EQ(filter_.classify(couch.box, left.box, kUp), Case::kFull);
+  EXPECT_EQ(filter_.intersectingObjects(database, kUp), std::vector<int>{1});
+  // Algorithm 1 as published keeps the container and deletes both chairs.
+  IntersectionFilter::Config paper;
+  paper.duplicate_ratio = 0.0;
+  paper.container_support_ratio = 0.0;
+  EXPECT_EQ(IntersectionFilter(paper).intersectingObjects(database, kUp), (std::vector<int>{2, 3}));
+  // Whatever the ids: the container last.
+  couch.id = 9;
+  EXPECT_EQ(filter_.intersectingObjects(makeDatabase({couch, left, right}), kUp),
+            std::vector<int>{9});
+}
+
+TEST_F(IntersectionFilterTest, WellSupportedContainerStillDeletesWhatLiesInside) {
+  // A table seen in 20 keyframes; a part of it called a chair in 9 (less than twice the table's
+  // support): the part goes, as in Algorithm 1.
+  MapObject table = makeObject(
+      1, "dining table", makeBox(Eigen::Vector3d(0.0, 0.0, 0.37), Eigen::Vector3d(1.5, 0.9, 0.74)));
+  table.observations = 20;
+  MapObject part = makeObject(
+      2, "chair", makeBox(Eigen::Vector3d(0.5, 0.2, 0.3), Eigen::Vector3d(0.4, 0.4, 0.6)));
+  part.observations = 9;
+  EXPECT_EQ(filter_.intersectingObjects(makeDatabase({table, part}), kUp), std::vector<int>{2});
+  // Seen twice as often as the table, the part stays and the table goes.
+  part.observations = 40;
+  EXPECT_EQ(filter_.intersectingObjects(makeDatabase({table, part}), kUp), std::vector<int>{1});
+  // A ratio of 5 keeps the table.
+  IntersectionFilter::Config config;
+  config.container_support_ratio = 5.0;
+  EXPECT_EQ(IntersectionFilter(config).intersectingObjects(makeDatabase({table, part}), kUp),
+            std::vector<int>{2});
 }
 
 TEST_F(IntersectionFilterTest, DeletedObjectCausesNoFurtherDeletion) {
@@ -272,6 +320,16 @@ TEST(IntersectionFilterConfigTest, Validation) {
     EXPECT_NE(status.message().find("volume_ratio_threshold"), std::string::npos);
   }
   config.volume_ratio_threshold = 0.3;
+  for (const double bad : {-1.0, 0.5, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    config.container_support_ratio = bad;
+    const Status status = config.isValid();
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("container_support_ratio"), std::string::npos);
+  }
+  for (const double good : {0.0, 1.0, 2.0}) {
+    config.container_support_ratio = good;
+    EXPECT_TRUE(config.isValid().ok()) << good;
+  }
   EXPECT_NE(config.print().find("volume_ratio_threshold: 0.3\n"), std::string::npos)
       << config.print();
   EXPECT_NE(config.print().find("enable: true\n"), std::string::npos) << config.print();
