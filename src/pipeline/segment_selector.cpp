@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
@@ -98,6 +100,10 @@ Status SegmentSelector::Config::isValid() const {
         resting_min_share <= 1.0)) {
     return Status::Error("resting_distance_m must be >= 0 and resting_min_share in (0, 1]");
   }
+  if (!(std::isfinite(resting_edge_margin_m) && resting_edge_margin_m >= 0.0)) {
+    return Status::Error("resting_edge_margin_m must be a finite value >= 0 (got " +
+                         std::to_string(resting_edge_margin_m) + ")");
+  }
   if (!(std::isfinite(top_clearance_m) && top_clearance_m >= 0.0 && top_min_share > 0.0 &&
         top_min_share <= 1.0 && top_crossing_share > 0.0 && top_crossing_share <= 1.0)) {
     return Status::Error(
@@ -128,6 +134,7 @@ std::string SegmentSelector::Config::print() const {
       << "max_box_image_fraction: " << max_box_image_fraction << "\n"
       << "resting_distance_m: " << resting_distance_m << "\n"
       << "resting_min_share: " << resting_min_share << "\n"
+      << "resting_edge_margin_m: " << resting_edge_margin_m << "\n"
       << "top_clearance_m: " << top_clearance_m << "\n"
       << "top_min_share: " << top_min_share << "\n"
       << "top_crossing_share: " << top_crossing_share << "\n"
@@ -372,6 +379,7 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   std::vector<char> resting(num_segments, 0);
   if (on_floor && config_.resting_distance_m > 0.0) {
     const float rest_m = static_cast<float>(config_.resting_distance_m);
+    const float edge_m = static_cast<float>(config_.resting_edge_margin_m);
     for (int b = 0; b < num_segments; ++b) {
       Eigen::Vector3f n_b, p_b;
       if (!bounding[b] || !horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) continue;
@@ -387,7 +395,9 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
         size_t over = 0;
         for (const int i : segments[s]) {
           const Eigen::Vector3f& p_W = points_W[i];
-          over += cv::pointPolygonTest(hull, cv::Point2f(x_h.dot(p_W), y_h.dot(p_W)), false) >= 0;
+          const cv::Point2f q(x_h.dot(p_W), y_h.dot(p_W));
+          over += edge_m > 0.f ? cv::pointPolygonTest(hull, q, true) >= edge_m
+                               : cv::pointPolygonTest(hull, q, false) >= 0;
         }
         if (over >= config_.resting_min_share * segments[s].size()) {
           resting[s] = 1;
@@ -405,22 +415,14 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
   if (seed < 0 && (result->bounding_segments > 0 || result->resting_segments > 0)) {
     // The core holds only bounding surfaces and what rests on them (a chair pushed under a table
-    // shows its backrest above the top, at the edge of its box): the nearest other segment of some
-    // size.
+    // shows its backrest above the top, at the edge of its box): the largest other segment of
+    // some size.
     const size_t min_points = static_cast<size_t>(config_.fallback_min_share * points.size());
-    float seed_depth_m = std::numeric_limits<float>::infinity();
-    std::vector<float> depths_m;
     for (int s = 0; s < num_segments; ++s) {
       if (bounding[s] || resting[s] || segments[s].size() < std::max<size_t>(min_points, 1)) {
         continue;
       }
-      depths_m.clear();
-      for (const int i : segments[s]) depths_m.push_back(points[i].z());
-      std::nth_element(depths_m.begin(), depths_m.begin() + depths_m.size() / 2, depths_m.end());
-      if (depths_m[depths_m.size() / 2] < seed_depth_m) {
-        seed_depth_m = depths_m[depths_m.size() / 2];
-        seed = s;
-      }
+      if (seed < 0 || segments[s].size() > segments[seed].size()) seed = s;
     }
   }
   if (seed < 0) {

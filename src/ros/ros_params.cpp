@@ -161,6 +161,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readNumber(nh, "selection/min_ring_share", &m.selection.min_ring_share, e);
   readNumber(nh, "selection/resting_distance_m", &m.selection.resting_distance_m, e);
   readNumber(nh, "selection/resting_min_share", &m.selection.resting_min_share, e);
+  readNumber(nh, "selection/resting_edge_margin_m", &m.selection.resting_edge_margin_m, e);
   readNumber(nh, "selection/fallback_min_share", &m.selection.fallback_min_share, e);
   readNumber(nh, "selection/top_clearance_m", &m.selection.top_clearance_m, e);
   readNumber(nh, "selection/top_min_share", &m.selection.top_min_share, e);

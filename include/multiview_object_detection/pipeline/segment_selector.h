@@ -62,8 +62,13 @@ class SegmentSelector {
     // table in a chair's box.
     double resting_distance_m = 0.04;
     double resting_min_share = 0.6;
-    // When the core then holds only surfaces and what rests on them, the seed is the nearest
-    // other segment with at least this share of the cloud's points.
+    // ... over the surface's footprint shrunk by this margin: what rests on a table stands on its
+    // top, while a backrest behind the table's edge rises beside it (and the top's segment may
+    // hold a few of the backrest's lowest points, which widen the footprint up to it).
+    double resting_edge_margin_m = 0.03;
+    // When the core then holds only surfaces and what rests on them, the seed is the largest
+    // other segment with at least this share of the cloud's points (the nearest would be the
+    // legs of a chair pushed under a table, seen below its top, rather than its backrest).
     double fallback_min_share = 0.05;
     // flat_top classes: points more than top_clearance_m above the kept set's main horizontal
     // surface (the largest, holding at least top_min_share of the kept points) or more than
