@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <sstream>
 #include <unordered_set>
@@ -49,7 +50,7 @@ Status PointCloudFilter::Config::isValid() const {
                          ")");
   }
   if (outlier_removal != "voxel_neighbours" && outlier_removal != "statistical" &&
-      outlier_removal != "none") {
+      outlier_removal != "statistical_centres" && outlier_removal != "none") {
     return Status::Error("outlier_removal must be voxel_neighbours, statistical or none (got '" +
                          outlier_removal + "')");
   }
@@ -92,6 +93,11 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
 PointCloud PointCloudFilter::removeOutliers(const PointCloud& voxelized) const {
   if (config_.outlier_removal == "voxel_neighbours") {
     return removeSparseVoxels(voxelized, config_.voxel_leaf_size_m, config_.min_voxel_neighbours);
+  }
+  if (config_.outlier_removal == "statistical_centres") {
+    return removeStatisticalOutliersOnVoxelCentres(voxelized, config_.sor_mean_k,
+                                                   config_.sor_stddev_mul,
+                                                   config_.voxel_leaf_size_m, config_.num_threads);
   }
   if (config_.outlier_removal == "statistical") {
     return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
@@ -302,6 +308,132 @@ PointCloud PointCloudFilter::removeSparseVoxels(const PointCloud& points, double
   out.reserve(finite.size());
   for (std::size_t i = 0; i < finite.size(); ++i) {
     if (keep[i]) out.push_back(finite[i]);
+  }
+  return out;
+}
+
+namespace {
+
+// Grid offsets (cells) within radius_cells of the origin, the origin excluded, by length (ties in
+// a fixed order), with their lengths.
+struct SortedOffsets {
+  std::vector<Eigen::Array3i> offsets;
+  std::vector<float> lengths;
+};
+
+SortedOffsets sortedOffsets(int radius_cells) {
+  std::vector<std::pair<int, Eigen::Array3i>> all;
+  for (int z = -radius_cells; z <= radius_cells; ++z) {
+    for (int y = -radius_cells; y <= radius_cells; ++y) {
+      for (int x = -radius_cells; x <= radius_cells; ++x) {
+        const int squared = x * x + y * y + z * z;
+        if (squared == 0 || squared > radius_cells * radius_cells) continue;
+        all.emplace_back(squared, Eigen::Array3i(x, y, z));
+      }
+    }
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  SortedOffsets sorted;
+  for (const auto& entry : all) {
+    sorted.offsets.push_back(entry.second);
+    sorted.lengths.push_back(std::sqrt(static_cast<float>(entry.first)));
+  }
+  return sorted;
+}
+
+}  // namespace
+
+PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const PointCloud& points,
+                                                                     int mean_k, double stddev_mul,
+                                                                     double leaf_size_m,
+                                                                     int threads) {
+  PointCloud finite = finitePoints(points);
+  const std::size_t n = finite.size();
+  if (mean_k < 1 || !std::isfinite(stddev_mul) || n < static_cast<std::size_t>(mean_k) + 1 ||
+      !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) {
+    return finite;
+  }
+  // The mean_k nearest voxels of a surface lie within about sqrt(mean_k) cells; a point with fewer
+  // occupied voxels within twice that counts the missing ones at that distance (an outlier
+  // anyway).
+  const int radius = std::max(2, static_cast<int>(std::ceil(2.0 * std::sqrt(mean_k))));
+  // The offsets depend on mean_k only: computed once per thread and mean_k.
+  static thread_local std::map<int, SortedOffsets> tables;
+  auto cached = tables.find(radius);
+  if (cached == tables.end()) cached = tables.emplace(radius, sortedOffsets(radius)).first;
+  const SortedOffsets& table = cached->second;
+
+  const double inv_leaf = 1.0 / leaf_size_m;
+  std::vector<Eigen::Array3i> cells(n);
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(finite[i][d]) * inv_leaf);
+      cells[i][d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
+    }
+    lo = lo.min(cells[i]);
+    hi = hi.max(cells[i]);
+  }
+  // An occupancy bitset over the bounding box with a margin of `radius` cells; beyond 32 MB the
+  // exact search handles the cloud.
+  double num_cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    num_cells *= static_cast<double>(hi[d]) - static_cast<double>(lo[d]) + 1.0 + 2.0 * radius;
+  }
+  if (!(num_cells <= 256.0 * 1024 * 1024)) {
+    return removeStatisticalOutliersOnGrid(finite, mean_k, stddev_mul, leaf_size_m, threads);
+  }
+  const Eigen::Array3i dims = hi - lo + 1 + 2 * radius;
+  std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
+  const std::int64_t stride_y = dims[0];
+  const std::int64_t stride_z = static_cast<std::int64_t>(dims[0]) * dims[1];
+  const auto bit_of = [&](const Eigen::Array3i& c) {
+    const Eigen::Array3i r = c - lo + radius;
+    return r[2] * stride_z + r[1] * stride_y + r[0];
+  };
+  for (const Eigen::Array3i& c : cells) {
+    const std::int64_t b = bit_of(c);
+    bits[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
+  }
+  std::vector<std::int64_t> deltas(table.offsets.size());
+  for (std::size_t k = 0; k < deltas.size(); ++k) {
+    const Eigen::Array3i& o = table.offsets[k];
+    deltas[k] = o[2] * stride_z + o[1] * stride_y + o[0];
+  }
+  const float missing = static_cast<float>(radius + 1);
+  std::vector<float> mean_distance(n);
+  parallelRanges(n, threads, 4096, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      const std::int64_t b = bit_of(cells[i]);
+      int found = 0;
+      float sum = 0.f;
+      for (std::size_t k = 0; k < deltas.size() && found < mean_k; ++k) {
+        const std::size_t q = static_cast<std::size_t>(b + deltas[k]);
+        if ((bits[q / 64] >> (q % 64)) & 1u) {
+          sum += table.lengths[k];
+          ++found;
+        }
+      }
+      sum += static_cast<float>(mean_k - found) * missing;
+      mean_distance[i] = static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
+    }
+  });
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance) {
+    sum += distance;
+    sq_sum += static_cast<double>(distance) * distance;
+  }
+  const double count_d = static_cast<double>(n);
+  const double mean = sum / count_d;
+  const double variance = std::max(0.0, (sq_sum - sum * sum / count_d) / (count_d - 1.0));
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
   }
   return out;
 }

@@ -126,9 +126,13 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "filter/max_depth_m", &m.filter.max_depth_m, e);
   // Before outlier_removal: statistical_outlier_removal true / false (older configs).
   if (nh.hasParam("filter/statistical_outlier_removal")) {
-    bool statistical = m.filter.outlier_removal == "statistical";
+    bool statistical = m.filter.outlier_removal.rfind("statistical", 0) == 0;
     readParam(nh, "filter/statistical_outlier_removal", &statistical, e);
-    m.filter.outlier_removal = statistical ? "statistical" : "none";
+    if (!statistical) {
+      m.filter.outlier_removal = "none";
+    } else if (m.filter.outlier_removal.rfind("statistical", 0) != 0) {
+      m.filter.outlier_removal = "statistical_centres";
+    }
   }
   readParam(nh, "filter/sor_mean_k", &m.filter.sor_mean_k, e);
   readParam(nh, "filter/sor_stddev_mul", &m.filter.sor_stddev_mul, e);

@@ -78,7 +78,8 @@ const char* const kUsage =
     "                         literal fusion (Eq. 7), min/max box extents, no floor cut\n"
     "  --selection S          largest (Eq. 2) | consistent (default)\n"
     "  --fusion F             paper (Eq. 7) | evidence (default)\n"
-    "  --outlier-removal M    statistical (default, the paper's) | voxel_neighbours | none\n"
+    "  --outlier-removal M    statistical_centres (default) | statistical (PCL's exactly, the\n"
+    "                         paper's) | voxel_neighbours | none\n"
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
@@ -156,8 +157,9 @@ std::string parseArguments(int argc, char** argv, Options* options) {
     } else if (arg == "--outlier-removal") {
       if (!value(&options->outlier_removal) ||
           (options->outlier_removal != "statistical" &&
+           options->outlier_removal != "statistical_centres" &&
            options->outlier_removal != "voxel_neighbours" && options->outlier_removal != "none")) {
-        return "--outlier-removal needs statistical, voxel_neighbours or none";
+        return "--outlier-removal needs statistical, statistical_centres, voxel_neighbours or none";
       }
     } else if (arg == "--simulated-perfect") {
       options->simulated_perfect = true;

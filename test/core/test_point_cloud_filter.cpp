@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <random>
@@ -221,6 +222,81 @@ TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
   }
 }
 
+TEST(PointCloudFilterOutliers, VoxelCentresStatisticsCloseToPcls) {
+  // The same voxelised surfaces and outliers as above: on voxel centres, the statistic keeps and
+  // drops nearly the same points as PCL's exact k nearest, and every scattered outlier goes.
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0.f, 0.004f);
+  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+  PointCloud raw;
+  for (int i = 0; i < 20000; ++i) {
+    raw.emplace_back(uniform(rng), uniform(rng), noise(rng));                              // floor
+    raw.emplace_back(0.3f + 0.2f * uniform(rng), 0.2f * uniform(rng), 0.5f + noise(rng));  // top
+    Eigen::Vector3f d(noise(rng), noise(rng), noise(rng));
+    raw.push_back(Eigen::Vector3f(-0.5f, 0.5f, 0.3f) + 0.2f * d.normalized() + d);  // sphere
+  }
+  PointCloud outliers;
+  for (int i = 0; i < 300; ++i)
+    outliers.emplace_back(uniform(rng), uniform(rng), 1.3f + 0.5f * uniform(rng));
+  const double leaf = 0.01;
+  PointCloud voxelized = PointCloudFilter::voxelize(raw, leaf);
+  const PointCloud outliers_voxelized = PointCloudFilter::voxelize(outliers, leaf);
+  voxelized.insert(voxelized.end(), outliers_voxelized.begin(), outliers_voxelized.end());
+  for (const double mul : {1.0, 2.5}) {
+    const PointCloud exact =
+        PointCloudFilter::removeStatisticalOutliersOnGrid(voxelized, 20, mul, leaf);
+    const PointCloud centres =
+        PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(voxelized, 20, mul, leaf);
+    for (const Eigen::Vector3f& o : outliers_voxelized) {
+      EXPECT_FALSE(containsPoint(centres, o, 1e-6f)) << "mul " << mul;
+    }
+    // Points kept by one and not the other: a few near the threshold (under 1 % at the default
+    // 2.5, under 4 % at 1.0, where the threshold lies inside the bulk of the distances).
+    // Both keep the input order: one walk over the input.
+    std::size_t differ = 0;
+    std::size_t in_exact = 0;
+    std::size_t in_centres = 0;
+    for (const Eigen::Vector3f& p : voxelized) {
+      const bool kept_exact = in_exact < exact.size() && exact[in_exact] == p;
+      const bool kept_centres = in_centres < centres.size() && centres[in_centres] == p;
+      in_exact += kept_exact;
+      in_centres += kept_centres;
+      differ += kept_exact != kept_centres;
+    }
+    ASSERT_EQ(in_exact, exact.size());
+    ASSERT_EQ(in_centres, centres.size());
+    EXPECT_LT(differ, voxelized.size() / (mul > 2.0 ? 100 : 25))
+        << "mul " << mul << ": " << differ << " of " << voxelized.size();
+    std::printf("mul %.1f: %zu of %zu differ\n", mul, differ, voxelized.size());
+    // Something was removed besides the outliers only where the exact one removes some too.
+    EXPECT_LT(centres.size(), voxelized.size() - outliers_voxelized.size() / 2);
+    // Threads split the queries: the same result, in input order.
+    for (const int threads : {2, 3}) {
+      const PointCloud split = PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(
+          voxelized, 20, mul, leaf, threads);
+      ASSERT_EQ(split.size(), centres.size());
+      for (std::size_t i = 0; i < split.size(); ++i) ASSERT_EQ(split[i], centres[i]);
+    }
+  }
+  // A cloud spanning too many cells for its occupancy grid: the exact search's result.
+  PointCloud spread = voxelized;
+  spread.emplace_back(300.f, -300.f, 300.f);
+  const PointCloud exact_spread =
+      PointCloudFilter::removeStatisticalOutliersOnGrid(spread, 20, 2.5, leaf);
+  const PointCloud centres_spread =
+      PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(spread, 20, 2.5, leaf);
+  ASSERT_EQ(centres_spread.size(), exact_spread.size());
+  for (std::size_t i = 0; i < exact_spread.size(); ++i)
+    ASSERT_EQ(centres_spread[i], exact_spread[i]);
+  // Too few points, a bad leaf: unchanged.
+  const PointCloud few = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(5, 5, 5)};
+  EXPECT_EQ(PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(few, 20, 1.0, leaf).size(),
+            2u);
+  EXPECT_EQ(
+      PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(voxelized, 20, 1.0, 0.0).size(),
+      voxelized.size());
+}
+
 TEST(PointCloudFilterOutliers, SparseVoxelsGoSurfacesStay) {
   // On a 1 cm grid: a flat 20 x 20 patch (8 neighbours inside, 5 on its border, 3 at its four
   // corners), a line of voxels (2 neighbours), a pair (1) and isolated specks (0).
@@ -260,13 +336,14 @@ TEST(PointCloudFilterOutliers, SparseVoxelsGoSurfacesStay) {
 }
 
 TEST(PointCloudFilterOutliers, ConfiguredRemovalInBothChains) {
-  // A voxelised patch with specks: voxel_neighbours and statistical both drop the specks, none
-  // keeps them; the fused chain applies the same choice.
+  // A voxelised patch with specks: voxel_neighbours and both statistical ones drop the specks,
+  // none keeps them; the fused chain applies the same choice.
   PointCloud points = planePatch(1.0f, 0.4f, 0.005f, 0.0005f);
   const std::vector<Eigen::Vector3f> specks = {Eigen::Vector3f(0.2f, 0.2f, 1.3f),
                                                Eigen::Vector3f(0.6f, 0.1f, 0.8f)};
   points.insert(points.end(), specks.begin(), specks.end());
-  for (const std::string mode : {"voxel_neighbours", "statistical", "none"}) {
+  for (const std::string mode :
+       {"voxel_neighbours", "statistical", "statistical_centres", "none"}) {
     PointCloudFilter::Config config;
     config.outlier_removal = mode;
     ASSERT_TRUE(config.isValid().ok());

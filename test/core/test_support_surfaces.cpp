@@ -224,6 +224,14 @@ TEST_F(SupportSurfacesTest, ThingsOnATableInAChairsBoxAreNotTheChair) {
   OrientedBox theirs;
   ASSERT_TRUE(run(without, config_, box, frame, &theirs));
   EXPECT_LT(theirs.center_m.y(), 0.2) << "the scene does not test on_floor";
+  // LCCP left a few of the backrest's lowest points in the table top's segment, which widens the
+  // top's footprint up to the backrest: without the edge margin the backrest "rests" on the top.
+  ObjectMapper::Config no_margin = config_;
+  no_margin.selection.resting_edge_margin_m = 0.0;
+  OrientedBox on_rim;
+  if (run(chair_, no_margin, box, frame, &on_rim)) {
+    EXPECT_LT(top(on_rim), 0.9) << "the scene does not test resting_edge_margin_m";
+  }
   // Without the side share, the clipped backrest is a bounding surface and is dropped.
   ObjectMapper::Config any_count = config_;
   any_count.selection.min_ring_share = 0.0;
