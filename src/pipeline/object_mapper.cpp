@@ -456,6 +456,14 @@ void ObjectMapper::groundBox(const std::string& class_name, OrientedBox* box) co
   box->center_m += up * (0.5 * (top + floor_m) - centre);
 }
 
+bool ObjectMapper::clipAboveFlatTop(const std::string& class_name, const PointCloud& points_W,
+                                    const GravityFrame& gravity, PointCloud* below_W) const {
+  const ClassPrior* prior = database_.priors().find(class_name);
+  if (prior == nullptr || !prior->flat_top || !config_.selection.consistent()) return false;
+  return SegmentSelector::belowFlatTop(points_W, gravity.up, config_.selection.top_clearance_m,
+                                       config_.selection.top_min_share, below_W);
+}
+
 Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                                    const ViewContext& context, ObjectObservation* observation,
                                    StageTimes* times) const {
@@ -588,16 +596,22 @@ bool ObjectMapper::processFused(const std::string& class_name, const PointCloud&
     // (too few of them) has its normals estimated once more.
     t = Clock::now();
     const GravityFrame gravity_frame = gravity();
+    // A flat top: what single views let through above it (the cups on a table, in a view whose
+    // top was estimated higher) goes here too.
+    PointCloud below_top_W;
+    const PointCloud& object_W = clipAboveFlatTop(class_name, points_W, gravity_frame, &below_top_W)
+                                     ? below_top_W
+                                     : points_W;
     OrientedBox fused_box;
     const bool kept_normals = normals_W.size() >= 1000 || normals_W.size() * 8 >= points_W.size();
     const Status boxed =
         kept_normals
-            ? box_estimator_.estimateFromNormals(points_W, normals_W, gravity_frame, &fused_box)
-            : box_estimator_.estimate(points_W, gravity_frame, &fused_box);
+            ? box_estimator_.estimateFromNormals(object_W, normals_W, gravity_frame, &fused_box)
+            : box_estimator_.estimate(object_W, gravity_frame, &fused_box);
     if (!boxed) return false;
     groundBox(class_name, &fused_box);
     times->manhattan_ms += msSince(t);
-    *segment_W = points_W;
+    *segment_W = object_W;
     *box = fused_box;
     *yaw_rad = gravity_frame.yawOf(fused_box.rotation.col(0));
     return true;

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <unordered_map>
@@ -561,6 +563,42 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   if (result->indices.empty()) return Status::Error("nothing left below the object's top surface");
   std::sort(result->indices.begin(), result->indices.end());
   return Status::Ok();
+}
+
+bool SegmentSelector::belowFlatTop(const PointCloud& points_W, const Eigen::Vector3d& up_W,
+                                   double clearance_m, double min_share, PointCloud* below_W) {
+  if (points_W.empty() || !(clearance_m >= 0.0) || !(min_share > 0.0) || !up_W.allFinite() ||
+      !(up_W.norm() > 0.0)) {
+    return false;
+  }
+  const Eigen::Vector3f up = up_W.normalized().cast<float>();
+  constexpr float kLayerM = 0.01f;
+  std::vector<float> heights(points_W.size());
+  float lowest = std::numeric_limits<float>::infinity();
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    heights[i] = up.dot(points_W[i]);
+    if (std::isfinite(heights[i])) lowest = std::min(lowest, heights[i]);
+  }
+  if (!std::isfinite(lowest)) return false;
+  // Layers by their index above the lowest point.
+  std::map<long, size_t> layers;
+  for (const float h : heights) {
+    if (std::isfinite(h)) ++layers[static_cast<long>(std::floor((h - lowest) / kLayerM))];
+  }
+  const double needed = min_share * static_cast<double>(points_W.size());
+  long top = -1;
+  for (const auto& layer : layers) {
+    if (static_cast<double>(layer.second) >= needed) top = layer.first;
+  }
+  if (top < 0) return false;
+  const float limit =
+      lowest + static_cast<float>(top + 1) * kLayerM + static_cast<float>(clearance_m);
+  below_W->clear();
+  below_W->reserve(points_W.size());
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    if (heights[i] <= limit) below_W->push_back(points_W[i]);
+  }
+  return !below_W->empty() && below_W->size() < points_W.size();
 }
 
 }  // namespace mvod

@@ -258,5 +258,54 @@ TEST_F(SupportSurfacesTest, TheCupOnTheTableIsStillACup) {
   EXPECT_NEAR(ours.center_m.y(), -0.11, 0.04);
 }
 
+TEST(FlatTopOfFusedObjectTest, WhatStandsOnTheTopGoes) {
+  // A fused table on a 1 cm grid: a 1.4 x 0.8 m top two voxels thick (0.74-0.76 m), four legs, and
+  // what single views let through: a cup standing on it (0.76-0.86 m) and a few stray voxels.
+  const auto voxel = [](int x, int y, int z) {
+    return Eigen::Vector3f((x + 0.5f) * 0.01f, (y + 0.5f) * 0.01f, (z + 0.5f) * 0.01f);
+  };
+  PointCloud table;
+  for (int x = 0; x < 140; ++x) {
+    for (int y = 0; y < 80; ++y) {
+      for (int z = 74; z < 76; ++z) table.push_back(voxel(x, y, z));
+    }
+  }
+  for (const int x : {0, 136}) {
+    for (const int y : {0, 76}) {
+      for (int z = 0; z < 74; ++z) {
+        for (int k = 0; k < 4; ++k) table.push_back(voxel(x + k, y + k, z));
+      }
+    }
+  }
+  PointCloud above;
+  for (int z = 76; z < 86; ++z) {
+    for (int k = 0; k < 8; ++k) above.push_back(voxel(40 + k, 30, z));
+  }
+  above.push_back(voxel(100, 40, 84));
+  PointCloud cloud = table;
+  cloud.insert(cloud.end(), above.begin(), above.end());
+  PointCloud below;
+  ASSERT_TRUE(SegmentSelector::belowFlatTop(cloud, Eigen::Vector3d::UnitZ(), 0.03, 0.15, &below));
+  // The table stays whole and in order. Of the cup, what lies within the clearance of the top
+  // stays (3 cm, at the 1 cm layers' resolution: its lowest 3-4 layers); the rest and the stray
+  // voxel go.
+  ASSERT_GE(below.size(), table.size());
+  for (size_t i = 0; i < table.size(); ++i) ASSERT_EQ(below[i], table[i]);
+  for (const Eigen::Vector3f& p : below) EXPECT_LE(p.z(), 0.80f);
+  EXPECT_GE(below.size(), table.size() + 3 * 8);
+  EXPECT_LE(below.size(), table.size() + 4 * 8);
+  PointCloud ignored;
+  EXPECT_FALSE(SegmentSelector::belowFlatTop(table, Eigen::Vector3d::UnitZ(), 0.03, 0.15, &ignored))
+      << "nothing above the top: nothing to clip";
+  // No layer holds 15 % of a tall, even object (a chair's back and legs): nothing happens.
+  PointCloud column;
+  for (int z = 0; z < 100; ++z) column.push_back(voxel(0, 0, z));
+  EXPECT_FALSE(
+      SegmentSelector::belowFlatTop(column, Eigen::Vector3d::UnitZ(), 0.03, 0.15, &ignored));
+  EXPECT_FALSE(
+      SegmentSelector::belowFlatTop(PointCloud(), Eigen::Vector3d::UnitZ(), 0.03, 0.15, &ignored));
+  EXPECT_FALSE(SegmentSelector::belowFlatTop(cloud, Eigen::Vector3d::Zero(), 0.03, 0.15, &ignored));
+}
+
 }  // namespace
 }  // namespace mvod

@@ -135,6 +135,11 @@ class ObjectMapper {
   // Extends a box down to the floor when its bottom is near the floor, or wherever it is when its
   // class has a flat top on supports (ClassPrior::flat_top: a table whose legs are hidden).
   void groundBox(const std::string& class_name, OrientedBox* box) const;
+  // Evidence fusion, flat_top classes (consistent selection): the points up to the top (the
+  // highest 1 cm layer with selection.top_min_share of the points) + selection.top_clearance_m.
+  // False (and *below_W unspecified) when that removes nothing or the class has no flat top.
+  bool clipAboveFlatTop(const std::string& class_name, const PointCloud& points_W,
+                        const GravityFrame& gravity, PointCloud* below_W) const;
   bool floorCutActive() const { return config_.floor.enable && floor_.hasFloor(); }
   // Updates the gravity estimate from the frame's depth when none is configured; false while
   // unknown.

@@ -122,6 +122,13 @@ class SegmentSelector {
   // caller skips the detection.
   Status select(const Input& input, Result* result) const;
 
+  // The flat-top rule on a fused object (no segments): the top is the highest 1 cm layer (along
+  // up_W) that holds min_share of the points; *below_W gets the points at most clearance_m above
+  // that layer, in order. False (*below_W unspecified) when no layer holds min_share, nothing
+  // lies above the limit, or nothing below it.
+  static bool belowFlatTop(const PointCloud& points_W, const Eigen::Vector3d& up_W,
+                           double clearance_m, double min_share, PointCloud* below_W);
+
  private:
   Config config_;
 };
