@@ -233,8 +233,9 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
     // No voxels = no grid yet (0), as objectsToJson writes no "evidence" then: the map round-trips.
     object.evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
     for (const json& voxel : (*evidence)["voxels"]) {
-      // [i, j, k, in, out] or, with the voxel's summed normal, [i, j, k, in, out, nx, ny, nz].
-      bool ok = voxel.is_array() && (voxel.size() == 5 || voxel.size() == 8);
+      // [i, j, k, in, out], with the voxel's summed normal [i, j, k, in, out, nx, ny, nz], and
+      // with its summed signed distance and their count [..., nx, ny, nz, sdf_sum, sdf_count].
+      bool ok = voxel.is_array() && (voxel.size() == 5 || voxel.size() == 8 || voxel.size() == 10);
       // Unsigned values beyond INT64_MAX would wrap to negative numbers below: refused here.
       for (size_t i = 0; ok && i < 5; ++i) {
         ok = voxel[i].is_number_integer() &&
@@ -253,16 +254,30 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
         }
       }
       Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
-      for (size_t i = 5; ok && i < voxel.size(); ++i) {
+      for (size_t i = 5; ok && i < voxel.size() && i < 8; ++i) {
         // A sum of unit normals: no larger than the number of points that can fall in a voxel.
         ok = voxel[i].is_number() && std::isfinite(voxel[i].get<double>()) &&
              std::abs(voxel[i].get<double>()) <= kMaxNormalSum;
         if (ok) normal_sum[static_cast<int>(i) - 5] = voxel[i].get<float>();
       }
+      float sdf_sum = 0.f;
+      std::uint16_t sdf_count = 0;
+      if (ok && voxel.size() == 10) {
+        // A count of views, and their signed distances, each truncated to a few decimetres.
+        ok = voxel[9].is_number_integer() && !voxel[9].is_number_float() &&
+             voxel[9].get<std::int64_t>() >= 0 && voxel[9].get<std::int64_t>() <= UINT16_MAX &&
+             voxel[8].is_number() && std::isfinite(voxel[8].get<double>()) &&
+             std::abs(voxel[8].get<double>()) <= kMaxNormalSum;
+        if (ok) {
+          sdf_sum = voxel[8].get<float>();
+          sdf_count = static_cast<std::uint16_t>(voxel[9].get<std::int64_t>());
+        }
+      }
       if (!ok) {
         return fieldError(where,
-                          "voxels must be [i, j, k, in, out] or [i, j, k, in, out, nx, ny, nz] "
-                          "with integers in range and finite normals");
+                          "voxels must be [i, j, k, in, out], [i, j, k, in, out, nx, ny, nz] or "
+                          "[i, j, k, in, out, nx, ny, nz, sdf_sum, sdf_count] with integers in "
+                          "range and finite numbers");
       }
       const std::int64_t key =
           packVoxel(Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
@@ -270,6 +285,8 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
       e.inside = static_cast<std::uint16_t>(voxel[3].get<int>());
       e.outside = static_cast<std::uint16_t>(voxel[4].get<int>());
       e.normal_sum = normal_sum;
+      e.sdf_sum = sdf_sum;
+      e.sdf_count = sdf_count;
     }
   }
   *out = std::move(object);
@@ -334,8 +351,12 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
         for (const auto& v : voxels) {
           json voxel = {v.first.x(), v.first.y(), v.first.z(), v.second.inside, v.second.outside};
           const Eigen::Vector3f& n = v.second.normal_sum;
-          if (!n.isZero()) {
+          if (!n.isZero() || v.second.sdf_count > 0) {
             for (int i = 0; i < 3; ++i) voxel.push_back(n[i]);
+          }
+          if (v.second.sdf_count > 0) {
+            voxel.push_back(v.second.sdf_sum);
+            voxel.push_back(v.second.sdf_count);
           }
           list_json.push_back(std::move(voxel));
         }

@@ -20,6 +20,10 @@ Status ObjectDatabase::Config::isValid() const {
   if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
     return Status::Error("min_overlap_to_fuse must be in [0, 1]");
   }
+  if (!(std::isfinite(surface_band_m) && surface_band_m >= 0.0)) {
+    return Status::Error("surface_band_m must be a finite value >= 0 (got " +
+                         std::to_string(surface_band_m) + ")");
+  }
   if (fusion != "paper" && fusion != "evidence") {
     return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
   }
@@ -32,7 +36,8 @@ std::string ObjectDatabase::Config::print() const {
       << "no_fusion_within_keyframe: " << (no_fusion_within_keyframe ? "true" : "false") << "\n"
       << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n"
       << "fusion: " << fusion << "\n"
-      << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n";
+      << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n"
+      << "surface_band_m: " << surface_band_m << "\n";
   return out.str();
 }
 
@@ -62,7 +67,46 @@ void addNormals(const ObjectObservation& observation, double voxel_size_m, Evide
   }
 }
 
+// This view's signed distance of every voxel of the object it sees (the view's cost: the
+// object's voxels, one projection each).
+void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence) {
+  for (auto& entry : *evidence) {
+    VoxelEvidence& e = entry.second;
+    if (e.sdf_count == UINT16_MAX) continue;
+    const Eigen::Vector3f centre =
+        ((unpackVoxel(entry.first).cast<double>().array() + 0.5) * voxel_size_m)
+            .matrix()
+            .cast<float>();
+    float sdf_m = 0.f;
+    if (!view.signedDistance(centre, &sdf_m)) continue;
+    e.sdf_sum += sdf_m;
+    ++e.sdf_count;
+  }
+}
+
 }  // namespace
+
+bool DepthView::signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const {
+  const Eigen::Vector3d p_D = T_D_W * p_W.cast<double>();
+  if (!(p_D.z() > 0.0) || depth_m.empty() || depth_m.type() != CV_32FC1) return false;
+  const double u = std::floor(K.fx * p_D.x() / p_D.z() + K.cx + 0.5);
+  const double v = std::floor(K.fy * p_D.y() / p_D.z() + K.cy + 0.5);
+  if (!(u >= 0.0 && v >= 0.0 && u < depth_m.cols && v < depth_m.rows)) return false;
+  const float measured = depth_m.at<float>(static_cast<int>(v), static_cast<int>(u));
+  if (!(measured > 0.f) || !std::isfinite(measured)) return false;
+  const double z = p_D.z();
+  const double truncation = truncation_m + truncation_per_m2 * z * z;
+  const double sdf = static_cast<double>(measured) - z;
+  if (sdf < -truncation) return false;
+  *sdf_m = static_cast<float>(std::min(sdf, truncation));
+  return true;
+}
+
+bool ObjectDatabase::isSupported(const VoxelEvidence& e) const {
+  if (!(e.inside >= 1 && e.inside >= e.outside)) return false;
+  if (!(config_.surface_band_m > 0.0) || e.sdf_count == 0) return true;
+  return std::abs(e.sdf_sum / e.sdf_count) <= config_.surface_band_m;
+}
 
 std::int64_t ObjectDatabase::voxelKey(const Eigen::Vector3f& p_W) const {
   return voxelKeyOf(p_W, config_.fusion_voxel_size_m);
@@ -81,9 +125,7 @@ PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
   supported.reserve(object.evidence.size());
   for (const auto& entry : object.evidence) {
     const VoxelEvidence& e = entry.second;
-    if (e.inside >= 1 && e.inside >= e.outside) {
-      supported.emplace_back(static_cast<std::uint64_t>(entry.first), &e);
-    }
+    if (isSupported(e)) supported.emplace_back(static_cast<std::uint64_t>(entry.first), &e);
   }
   // Hash order is not stable across library versions: key order for reproducible boxes.
   radixSortByKey(&supported);
@@ -158,6 +200,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       int shared = 0;
       for (const std::int64_t key : cut) {
         const auto it = object.evidence.find(key);
+        // The votes only: a new view's cut may lie in the shell of noise around the surface
+        // (surface_band_m selects the object's voxels, not what it can be matched on).
         if (it != object.evidence.end() && it->second.inside >= 1 &&
             it->second.inside >= it->second.outside) {
           ++shared;
@@ -211,6 +255,9 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
         if (cut.count(key) != 0 || !outside.insert(key).second) continue;
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
+      }
+      if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
+        addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
       }
       if (defer_rebox) {
         const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
@@ -268,6 +315,9 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     object.class_scores[observation.class_name] = observation.probability;
     countInside(cut, &object.evidence);
     addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
+    if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
+      addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
+    }
     object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
     for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
   } else {

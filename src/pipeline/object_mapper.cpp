@@ -280,6 +280,27 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
     floor_.addFrame(sample_W, gravity());
   }
+  // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
+  std::shared_ptr<DepthView> depth_view;
+  if (config_.database.fusion == "evidence" && config_.database.surface_band_m > 0.0 &&
+      !kept.empty()) {
+    depth_view = std::make_shared<DepthView>();
+    depth_view->depth_m = cv::Mat(frame.depth.size(), CV_32FC1);
+    for (int v = 0; v < frame.depth.rows; ++v) {
+      float* row = depth_view->depth_m.ptr<float>(v);
+      for (int u = 0; u < frame.depth.cols; ++u) {
+        const float z =
+            ObjectCloudExtractor::depthAt(frame.depth, u, v, config_.extractor.min_valid_depth_m,
+                                          config_.extractor.max_valid_depth_m);
+        row[u] = std::isfinite(z) ? z : 0.f;
+      }
+    }
+    depth_view->K = frame.K_depth;
+    depth_view->T_D_W = frame.T_W_D.inverse();
+    // The band, plus three depth steps: what lies further behind the measured surface is hidden.
+    depth_view->truncation_m = config_.database.surface_band_m;
+    depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
+  }
   std::vector<PointCloud> clouds_D;
   const Status extracted = extractor_.extract(frame, kept, &clouds_D);
   if (!extracted || clouds_D.size() != kept.size()) {
@@ -348,6 +369,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     observation.probability = detection.score;
     observation.keyframe = keyframe;
     observation.stamp_s = frame.stamp_s;
+    observation.depth_view = depth_view;
 
     // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
     t = Clock::now();

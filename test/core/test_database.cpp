@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 
 #include "multiview_object_detection/pipeline/object_database.h"
@@ -426,6 +427,90 @@ TEST_F(ObjectDatabaseTest, EvidenceVotesOutBackgroundThatOtherViewsSawOutsideThe
   obs.segment_W = obs.points_W;
   database.fuseOrInsert(obs, centroidProcessor(&calls));
   EXPECT_EQ(database.objects().begin()->second.evidence.size(), 400u);
+}
+
+// The projective signed distance of a point: measured depth at its pixel minus its depth, truncated
+// in front, unknown behind the truncation and wherever the view has no depth.
+TEST(DepthViewTest, SignedDistanceIsTruncatedAndNeedsADepth) {
+  DepthView view;
+  view.K = CameraIntrinsics{500.0, 500.0, 49.5, 49.5, 100, 100};
+  view.depth_m = cv::Mat(100, 100, CV_32FC1, cv::Scalar(2.0f));
+  view.depth_m.at<float>(50, 50) = 0.f;  // no depth at the centre pixel
+  view.truncation_m = 0.02;
+  view.truncation_per_m2 = 0.0;
+  float sdf = 0.f;
+  ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.1f, 0.f, 1.99f), &sdf));
+  EXPECT_NEAR(sdf, 0.01f, 1e-5f);  // 1 cm in front of the surface
+  ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.1f, 0.f, 2.015f), &sdf));
+  EXPECT_NEAR(sdf, -0.015f, 1e-5f);  // just behind it
+  ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.1f, 0.f, 1.5f), &sdf));
+  EXPECT_NEAR(sdf, 0.02f, 1e-6f);  // seen through: the truncation
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(0.1f, 0.f, 2.1f), &sdf));  // hidden
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(0.f, 0.f, 2.f), &sdf));    // no depth
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(1.f, 0.f, 2.f), &sdf));    // outside
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(0.1f, 0.f, -2.f), &sdf));  // behind
+  // The truncation grows with depth (the sensor's depth steps).
+  view.truncation_per_m2 = 0.01;
+  ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.05f, 0.f, 1.0f), &sdf));
+  EXPECT_NEAR(sdf, 0.02f + 0.01f * 1.0f, 1e-6f);
+}
+
+// Three views of a 0.2 m square at 2 m: the first view's depth (and cut) also holds a patch of
+// noise 5 cm in front of the surface, which the other two views see through. Its voxels, inside
+// once and never seen as surface outside the cut, have a mean signed distance of 3.3 cm: outside
+// surface_band_m (2 cm), so they are not the object; without the band they are.
+TEST_F(ObjectDatabaseTest, EvidenceKeepsTheSurfaceTheViewsAgreeOn) {
+  const auto run = [&](double band_m, std::size_t* supported_voxels, double* mean_z) {
+    ObjectDatabase::Config config;
+    config.surface_band_m = band_m;
+    ObjectDatabase database(config, priors_);
+    PointCloud noise;
+    for (int i = 0; i < 5; ++i) {
+      for (int j = 0; j < 5; ++j)
+        noise.emplace_back(0.005f + 0.01f * i, 0.005f + 0.01f * j, 1.955f);
+    }
+    for (int k = 0; k < 3; ++k) {
+      ObjectObservation obs = observation("chair", {0.0, 0.0, 2.005}, 0.8, k);
+      obs.seen_W = obs.points_W;
+      auto view = std::make_shared<DepthView>();
+      view->K = CameraIntrinsics{500.0, 500.0, 199.5, 199.5, 400, 400};
+      view->depth_m = cv::Mat(400, 400, CV_32FC1, cv::Scalar(2.005f));
+      view->truncation_m = 0.02;
+      view->truncation_per_m2 = 3 * 2.85e-3;
+      if (k == 0) {
+        // The noisy view measured the patch 5 cm nearer, and its cut holds it instead of the
+        // surface behind it.
+        for (const Eigen::Vector3f& p : noise) {
+          const int u = static_cast<int>(std::floor(500.0 * p.x() / p.z() + 199.5 + 0.5));
+          const int v = static_cast<int>(std::floor(500.0 * p.y() / p.z() + 199.5 + 0.5));
+          for (int du = -2; du <= 2; ++du) {
+            for (int dv = -2; dv <= 2; ++dv) view->depth_m.at<float>(v + dv, u + du) = 1.955f;
+          }
+        }
+        obs.segment_W.insert(obs.segment_W.end(), noise.begin(), noise.end());
+      }
+      obs.depth_view = view;
+      int calls = 0;
+      database.fuseOrInsert(obs, centroidProcessor(&calls));
+    }
+    ASSERT_EQ(database.size(), 1u);
+    const PointCloud supported = database.supportedVoxels(database.objects().begin()->second);
+    *supported_voxels = supported.size();
+    double sum = 0.0;
+    for (const Eigen::Vector3f& p : supported) sum += p.z();
+    *mean_z = sum / std::max<std::size_t>(1, supported.size());
+  };
+  std::size_t with_band = 0;
+  std::size_t without_band = 0;
+  double z_with = 0.0;
+  double z_without = 0.0;
+  run(0.02, &with_band, &z_with);
+  run(0.0, &without_band, &z_without);
+  // The square's 400 voxels stay; the 25 noise voxels go only with the band.
+  EXPECT_EQ(with_band, 400u);
+  EXPECT_EQ(without_band, 425u);
+  EXPECT_NEAR(z_with, 2.005, 1e-3);
+  EXPECT_LT(z_without, 2.005 - 1e-3);
 }
 
 // Evidence fusion keeps each voxel's normals (summed, as the views turned them to their cameras):

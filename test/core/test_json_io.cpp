@@ -139,6 +139,11 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   // A voxel with the views' summed normals (kept for the fused box's yaw).
   object.evidence[packVoxel(Eigen::Vector3i(7, 8, 9))] =
       VoxelEvidence{3, 0, Eigen::Vector3f(0.1f, -2.75f, 1e-3f)};
+  // Voxels with the views' summed signed distances (the surface band), with and without normals.
+  object.evidence[packVoxel(Eigen::Vector3i(7, 8, 10))] =
+      VoxelEvidence{2, 1, Eigen::Vector3f(0.5f, 0.f, -0.25f), 3, -0.0625f};
+  object.evidence[packVoxel(Eigen::Vector3i(7, 8, 11))] =
+      VoxelEvidence{1, 0, Eigen::Vector3f::Zero(), 65535, 1.5f};
   const std::string text = objectsToJson({object}, makeSummary(), true);
   std::vector<MapObject> loaded;
   MapSummary summary;
@@ -146,13 +151,15 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   ASSERT_EQ(loaded.size(), 1u);
   EXPECT_DOUBLE_EQ(loaded[0].evidence_voxel_size_m, 0.01);
   EXPECT_EQ(loaded[0].class_scores, object.class_scores);
-  ASSERT_EQ(loaded[0].evidence.size(), 3u);
+  ASSERT_EQ(loaded[0].evidence.size(), 5u);
   for (const auto& entry : object.evidence) {
     const auto it = loaded[0].evidence.find(entry.first);
     ASSERT_NE(it, loaded[0].evidence.end());
     EXPECT_EQ(it->second.inside, entry.second.inside);
     EXPECT_EQ(it->second.outside, entry.second.outside);
     EXPECT_EQ(it->second.normal_sum, entry.second.normal_sum);
+    EXPECT_EQ(it->second.sdf_count, entry.second.sdf_count);
+    EXPECT_EQ(it->second.sdf_sum, entry.second.sdf_sum);
   }
   // Voxels without normals are written as before ([i, j, k, in, out]): older maps stay readable.
   EXPECT_NE(text.find("[-3,5,70,4,1]"), std::string::npos);
@@ -160,7 +167,10 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   // Out-of-range votes or coordinates are refused with the field named.
   for (const char* bad :
        {"[0, 0, 0, 70000, 0]", "[0, 0, 2000000, 1, 0]", "[0, 0, 1]", "[0, 0, 0, -1, 0]",
-        "[0, 0, 0, 1, 0, 1, 2]", "[0, 0, 0, 1, 0, 1, 2, 1e30]", "[0, 0, 0, 1, 0, 1, \"x\", 0]"}) {
+        "[0, 0, 0, 1, 0, 1, 2]", "[0, 0, 0, 1, 0, 1, 2, 1e30]", "[0, 0, 0, 1, 0, 1, \"x\", 0]",
+        "[0, 0, 0, 1, 0, 0, 0, 0, 0.1]", "[0, 0, 0, 1, 0, 0, 0, 0, 0.1, -1]",
+        "[0, 0, 0, 1, 0, 0, 0, 0, 0.1, 70000]", "[0, 0, 0, 1, 0, 0, 0, 0, 0.1, 1.5]",
+        "[0, 0, 0, 1, 0, 0, 0, 0, 1e30, 2]", "[0, 0, 0, 1, 0, 0, 0, 0, \"x\", 2]"}) {
     std::string broken = text;
     const size_t at = broken.find("\"voxels\":[");
     ASSERT_NE(at, std::string::npos);

@@ -76,6 +76,9 @@ void mapCorpus(const fs::path& dir) {
   // A voxel with the views' summed normals (an 8-element voxel in the file).
   chair.evidence[mvod::packVoxel(Eigen::Vector3i(2, 2, 2))] =
       mvod::VoxelEvidence{2, 0, Eigen::Vector3f(0.25f, -1.5f, 0.125f)};
+  // ... and with the views' summed signed distances (a 10-element voxel).
+  chair.evidence[mvod::packVoxel(Eigen::Vector3i(2, 2, 3))] =
+      mvod::VoxelEvidence{2, 1, Eigen::Vector3f(0.5f, 0.f, 0.f), 3, -0.03125f};
   mvod::MapObject table = chair;
   table.id = 7;
   table.class_id = 60;

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -13,6 +15,22 @@
 #include "multiview_object_detection/pipeline/oriented_box.h"
 
 namespace mvod {
+
+// Evidence fusion: a keyframe's depth image, for the projective signed distance of the voxels it
+// sees: the depth measured at a voxel's pixel minus the voxel's own depth, positive in front of the
+// surface the view saw (the distance a TSDF averages).
+struct DepthView {
+  cv::Mat depth_m;  // CV_32FC1, 0 = invalid
+  CameraIntrinsics K;
+  Eigen::Isometry3d T_D_W = Eigen::Isometry3d::Identity();  // world -> depth camera
+  // Truncation: further in front of the measured surface counts as this much (the view saw
+  // through the voxel); further behind it is occluded and not counted.
+  double truncation_m = 0.02;
+  double truncation_per_m2 = 8.55e-3;  // ... plus this x depth^2 (3 Kinect v1 depth steps)
+  // The truncated signed distance of p_W; false outside the image, behind the camera, where the
+  // depth is invalid, and where p_W lies beyond the truncation behind the surface.
+  bool signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const;
+};
 
 // An object detected in one keyframe, after extraction, filtering, LCCP and box estimation.
 struct ObjectObservation {
@@ -27,6 +45,8 @@ struct ObjectObservation {
   // Evidence fusion: the view's surface points around the cut (in it or not). Voxels of these that
   // are not in the cut are votes against the object there.
   PointCloud seen_W;
+  // Evidence fusion: the keyframe's depth (shared by its detections); null: none.
+  std::shared_ptr<const DepthView> depth_view;
   OrientedBox box;       // from segment_W (Eq. 4)
   double yaw_rad = 0.0;  // yaw of box column 0 about gravity (GravityFrame::yawOf)
   int keyframe = 0;
@@ -38,10 +58,15 @@ struct ObjectObservation {
 // normal_sum adds the cut's normals in the voxel (each turned towards its camera), so that the
 // fused box's Manhattan yaw comes from the voxels' normals without a neighbour search over the
 // object.
+// sdf_sum / sdf_count: the mean truncated projective signed distance of the views that saw the
+// voxel (DepthView): near 0 on the surface the views measured, larger in front of it where one
+// noisy view left a voxel that the others saw through.
 struct VoxelEvidence {
   std::uint16_t inside = 0;
   std::uint16_t outside = 0;
   Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
+  std::uint16_t sdf_count = 0;
+  float sdf_sum = 0.f;
 };
 using EvidenceMap = std::unordered_map<std::int64_t, VoxelEvidence>;
 
@@ -100,6 +125,11 @@ class ObjectDatabase {
     // object's supported voxels is fused into it whatever the classes and centres (0 = centres
     // and classes only, Eq. 6).
     double min_overlap_to_fuse = 0.5;
+    // Evidence fusion: a voxel is supported only when its mean projective signed distance over the
+    // views that saw it (ObjectObservation::depth_view) lies within this band of the measured
+    // surface: the shell of noise that several views of one surface leave (several centimetres
+    // at 3-4 m) thins towards the surface they agree on. Voxels no view measured pass. 0 = off.
+    double surface_band_m = 0.02;
     Status isValid() const;
     std::string print() const;
   };
@@ -136,7 +166,10 @@ class ObjectDatabase {
   // Objects waiting for reboxPending().
   const std::vector<int>& pendingRebox() const { return pending_rebox_; }
 
-  // Evidence fusion's supported voxels (centres): inside >= outside and inside >= 1.
+  // A voxel of the object: inside >= 1, inside >= outside and, where views measured it, within
+  // surface_band_m of the surface they saw.
+  bool isSupported(const VoxelEvidence& e) const;
+  // Evidence fusion's supported voxels (centres).
   // normals_W (optional): the supported voxels' normals (normalised sums) where they have one.
   PointCloud supportedVoxels(const MapObject& object,
                              std::vector<Eigen::Vector3f>* normals_W = nullptr) const;
