@@ -285,14 +285,15 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   if (config_.database.fusion == "evidence" && config_.database.surface_band_m > 0.0 &&
       !kept.empty()) {
     depth_view = std::make_shared<DepthView>();
-    depth_view->depth_m = cv::Mat(frame.depth.size(), CV_32FC1);
-    for (int v = 0; v < frame.depth.rows; ++v) {
+    // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
+    frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
+                          frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
+    const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
+    const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
+    for (int v = 0; v < depth_view->depth_m.rows; ++v) {
       float* row = depth_view->depth_m.ptr<float>(v);
-      for (int u = 0; u < frame.depth.cols; ++u) {
-        const float z =
-            ObjectCloudExtractor::depthAt(frame.depth, u, v, config_.extractor.min_valid_depth_m,
-                                          config_.extractor.max_valid_depth_m);
-        row[u] = std::isfinite(z) ? z : 0.f;
+      for (int u = 0; u < depth_view->depth_m.cols; ++u) {
+        row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
       }
     }
     depth_view->K = frame.K_depth;
