@@ -435,7 +435,7 @@ TEST(DepthViewTest, SignedDistanceIsTruncatedAndNeedsADepth) {
   DepthView view;
   view.K = CameraIntrinsics{500.0, 500.0, 49.5, 49.5, 100, 100};
   view.depth_m = cv::Mat(100, 100, CV_32FC1, cv::Scalar(2.0f));
-  view.depth_m.at<float>(50, 50) = 0.f;  // no depth at the centre pixel
+  view.depth_m(cv::Rect(49, 49, 3, 3)).setTo(0.f);  // no depth around the centre pixel
   view.truncation_m = 0.02;
   view.truncation_per_m2 = 0.0;
   float sdf = 0.f;
@@ -453,6 +453,16 @@ TEST(DepthViewTest, SignedDistanceIsTruncatedAndNeedsADepth) {
   view.truncation_per_m2 = 0.01;
   ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.05f, 0.f, 1.0f), &sdf));
   EXPECT_NEAR(sdf, 0.02f + 0.01f * 1.0f, 1e-6f);
+  // A thin leg at 1 m (pixel columns 70-74) before the 2 m surface: a point of the leg that
+  // rounds to the column just beside it (75) lies at a depth edge, where the view abstains,
+  // instead of looking seen through.
+  view.depth_m(cv::Rect(70, 0, 5, 100)).setTo(1.0f);
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(0.051f, 0.f, 1.0f), &sdf));  // u = 75
+  ASSERT_TRUE(view.signedDistance(Eigen::Vector3f(0.055f, 0.f, 1.0f), &sdf));   // u = 77
+  EXPECT_NEAR(sdf, 0.03f, 1e-6f);  // two columns off: seen through
+  // One pixel without depth next to it: no vote either.
+  view.depth_m.at<float>(10, 86) = 0.f;
+  EXPECT_FALSE(view.signedDistance(Eigen::Vector3f(0.070f, -0.080f, 1.0f), &sdf));  // u 85, v 10
 }
 
 // Three views of a 0.2 m square at 2 m: the first view's depth (and cut) also holds a patch of
