@@ -272,14 +272,19 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
       }
-      if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
-        addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
-      }
+      const bool measure = observation.depth_view != nullptr && config_.surface_band_m > 0.0;
       if (defer_rebox) {
         const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
         if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
+        // The keyframe's signed distances once per object, however many of its detections fuse
+        // here, with the boxing (in parallel).
+        if (measure) pending_depth_views_[object.id] = observation.depth_view;
         to_process = nullptr;
       } else {
+        if (measure) {
+          addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m,
+                             &object.evidence);
+        }
         supported = supportedVoxels(object, &supported_normals);
         object.points_W.clear();
         for (const auto& entry : object.evidence) {
@@ -355,16 +360,23 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
 
 int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads) {
   std::vector<MapObject*> pending;
+  std::vector<const DepthView*> views;
   pending.reserve(pending_rebox_.size());
   for (const int id : pending_rebox_) {
     const auto it = objects_.find(id);
-    if (it != objects_.end() && !it->second.evidence.empty()) pending.push_back(&it->second);
+    if (it == objects_.end() || it->second.evidence.empty()) continue;
+    pending.push_back(&it->second);
+    const auto view = pending_depth_views_.find(id);
+    views.push_back(view != pending_depth_views_.end() ? view->second.get() : nullptr);
   }
   pending_rebox_.clear();
   // Each job reads and writes its own object only (the map itself does not change meanwhile).
   parallelRanges(pending.size(), threads, 1, [&](std::size_t first, std::size_t last) {
     for (std::size_t k = first; k < last; ++k) {
       MapObject& object = *pending[k];
+      if (views[k] != nullptr) {
+        addSignedDistances(*views[k], config_.fusion_voxel_size_m, &object.evidence);
+      }
       std::vector<Eigen::Vector3f> normals;
       const PointCloud supported = supportedVoxels(object, &normals);
       object.points_W.clear();
@@ -382,6 +394,7 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
       }
     }
   });
+  pending_depth_views_.clear();
   return static_cast<int>(pending.size());
 }
 
@@ -401,6 +414,7 @@ std::vector<const MapObject*> ObjectDatabase::findByClass(const std::string& cla
 bool ObjectDatabase::remove(int id) {
   pending_rebox_.erase(std::remove(pending_rebox_.begin(), pending_rebox_.end(), id),
                        pending_rebox_.end());
+  pending_depth_views_.erase(id);
   inserted_this_keyframe_.erase(
       std::remove(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), id),
       inserted_this_keyframe_.end());
@@ -410,6 +424,7 @@ bool ObjectDatabase::remove(int id) {
 void ObjectDatabase::clear() {
   objects_.clear();
   pending_rebox_.clear();
+  pending_depth_views_.clear();
   inserted_this_keyframe_.clear();
   current_keyframe_ = -1;
 }

@@ -159,10 +159,10 @@ class ObjectDatabase {
   // segment and box (a later detection of the same keyframe is matched against those).
   FusionResult fuseOrInsert(const ObjectObservation& observation,
                             const FusedCloudProcessor& process, bool defer_rebox = false);
-  // Boxes the supported voxels of every object fused with defer_rebox since the last call, on up
-  // to `threads` threads (each object is independent: the same result for any thread count). A
-  // processor that returns false leaves that object's previous segment and box. Returns how many
-  // objects were re-boxed.
+  // Adds the keyframe's signed distances (surface band) to, and boxes the supported voxels of,
+  // every object fused with defer_rebox since the last call, on up to `threads` threads (each
+  // object is independent: the same result for any thread count). A processor that returns false
+  // leaves that object's previous segment and box. Returns how many objects were re-boxed.
   int reboxPending(const FusedCloudProcessor& process, int threads);
   // Objects waiting for reboxPending().
   const std::vector<int>& pendingRebox() const { return pending_rebox_; }
@@ -200,6 +200,8 @@ class ObjectDatabase {
   int current_keyframe_ = -1;
   std::vector<int> inserted_this_keyframe_;
   std::vector<int> pending_rebox_;  // ascending ids
+  // Of pending objects: the keyframe whose signed distances reboxPending adds first.
+  std::map<int, std::shared_ptr<const DepthView>> pending_depth_views_;
 };
 
 }  // namespace mvod
