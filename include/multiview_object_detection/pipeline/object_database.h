@@ -17,9 +17,9 @@
 namespace mvod {
 
 // Evidence fusion: a keyframe's depth image, for the projective signed distance of the voxels it
-// sees: the depth measured at a voxel's pixel (of the 3 x 3 pixels around it, the one nearest the
-// voxel's depth) minus the voxel's own depth, positive in front of the surface the view saw (the
-// distance a TSDF averages).
+// sees: the depth measured at a voxel's pixel minus the voxel's own depth, positive in front of the
+// surface the view saw (the distance a TSDF averages). At a depth edge (the 3 x 3 pixels around the
+// voxel's pixel not all valid, or spanning more than the truncation) the view abstains.
 struct DepthView {
   cv::Mat depth_m;  // CV_32FC1, 0 = invalid
   CameraIntrinsics K;
