@@ -20,6 +20,10 @@ Status ObjectDatabase::Config::isValid() const {
   if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
     return Status::Error("min_overlap_to_fuse must be in [0, 1]");
   }
+  if (!(same_class_overlap_voxels >= 0 && same_class_overlap_voxels <= 3)) {
+    return Status::Error("same_class_overlap_voxels must be in [0, 3] (got " +
+                         std::to_string(same_class_overlap_voxels) + ")");
+  }
   if (!(std::isfinite(surface_band_m) && surface_band_m >= 0.0)) {
     return Status::Error("surface_band_m must be a finite value >= 0 (got " +
                          std::to_string(surface_band_m) + ")");
@@ -37,6 +41,7 @@ std::string ObjectDatabase::Config::print() const {
       << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n"
       << "fusion: " << fusion << "\n"
       << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n"
+      << "same_class_overlap_voxels: " << same_class_overlap_voxels << "\n"
       << "surface_band_m: " << surface_band_m << "\n";
   return out.str();
 }
@@ -213,15 +218,32 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
           0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
         continue;  // the boxes cannot overlap
       }
+      // The votes only: a new view's cut may lie in the shell of noise around the surface
+      // (surface_band_m selects the object's voxels, not what it can be matched on).
+      const auto voted = [&object](std::int64_t key) {
+        const auto it = object.evidence.find(key);
+        return it != object.evidence.end() && it->second.inside >= 1 &&
+               it->second.inside >= it->second.outside;
+      };
+      const int reach =
+          object.class_name == observation.class_name ? config_.same_class_overlap_voxels : 0;
       int shared = 0;
       for (const std::int64_t key : cut) {
-        const auto it = object.evidence.find(key);
-        // The votes only: a new view's cut may lie in the shell of noise around the surface
-        // (surface_band_m selects the object's voxels, not what it can be matched on).
-        if (it != object.evidence.end() && it->second.inside >= 1 &&
-            it->second.inside >= it->second.outside) {
+        if (voted(key)) {
           ++shared;
+          continue;
         }
+        if (reach == 0) continue;
+        const Eigen::Vector3i centre = unpackVoxel(key);
+        bool near = false;
+        for (int dx = -reach; dx <= reach && !near; ++dx) {
+          for (int dy = -reach; dy <= reach && !near; ++dy) {
+            for (int dz = -reach; dz <= reach && !near; ++dz) {
+              near = voted(packVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
+            }
+          }
+        }
+        if (near) ++shared;
       }
       const double overlap = cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
       if (overlap > best_overlap) {

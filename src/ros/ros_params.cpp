@@ -191,6 +191,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "database/disable_fusion", &m.database.disable_fusion, e);
   readParam(nh, "database/fusion", &m.database.fusion, e);
   readNumber(nh, "database/min_overlap_to_fuse", &m.database.min_overlap_to_fuse, e);
+  readParam(nh, "database/same_class_overlap_voxels", &m.database.same_class_overlap_voxels, e);
   readNumber(nh, "database/surface_band_m", &m.database.surface_band_m, e);
 
   readParam(nh, "prior_filter/enable", &m.prior_filter.enable, e);

@@ -194,6 +194,37 @@ TEST_F(ObjectDatabaseTest, OverlappingCutsFuseAcrossClassesAndTheClassIsVoted) {
   EXPECT_EQ(database.size(), 2u);
 }
 
+TEST_F(ObjectDatabaseTest, SameClassCutsOneVoxelApartFuseOthersNeedTheVoxelsThemselves) {
+  // Evidence fusion: a thin part seen from either side fills neighbouring voxels (here the patch
+  // one voxel higher), and the second view's box centre is beyond the chair's 0.4 m: only the
+  // overlap within same_class_overlap_voxels can fuse it.
+  const auto run = [this](const std::string& second_class, int reach) {
+    ObjectDatabase::Config config;
+    config.same_class_overlap_voxels = reach;
+    ObjectDatabase database(config, priors_);
+    int calls = 0;
+    database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.505}, 0.8, 0),
+                          centroidProcessor(&calls));
+    ObjectObservation other = observation(second_class, {1.0, 2.0, 0.515}, 0.8, 1);
+    other.box.center_m = Eigen::Vector3d(1.0, 2.6, 0.515);
+    other.box.size_m = Eigen::Vector3d(1.0, 1.0, 1.0);
+    return database.fuseOrInsert(other, centroidProcessor(&calls)).decision;
+  };
+  EXPECT_EQ(run("chair", 1), ObjectDatabase::Decision::kFused);
+  EXPECT_EQ(run("chair", 0), ObjectDatabase::Decision::kInserted);
+  // Another class matches on shared voxels only: a book on a table top does not join the table.
+  EXPECT_EQ(run("couch", 1), ObjectDatabase::Decision::kInserted);
+  // The same patch again (shared voxels) fuses whatever the class.
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.505}, 0.8, 0), centroidProcessor(&calls));
+  ObjectObservation same = observation("couch", {1.0, 2.0, 0.505}, 0.8, 1);
+  same.box.center_m = Eigen::Vector3d(1.0, 2.6, 0.505);
+  same.box.size_m = Eigen::Vector3d(1.0, 1.0, 1.0);
+  EXPECT_EQ(database.fuseOrInsert(same, centroidProcessor(&calls)).decision,
+            ObjectDatabase::Decision::kFused);
+}
+
 TEST_F(ObjectDatabaseTest, DetectionsOfOneKeyframeDoNotFuseWithEachOther) {
   int calls = 0;
   {
@@ -376,6 +407,10 @@ TEST_F(ObjectDatabaseTest, ConfigValidation) {
   EXPECT_NE(config.isValid().message().find("fusion_voxel_size_m"), std::string::npos);
   config.fusion_voxel_size_m = std::nan("");
   EXPECT_FALSE(config.isValid().ok());
+  config = ObjectDatabase::Config();
+  config.same_class_overlap_voxels = 4;
+  EXPECT_FALSE(config.isValid().ok());
+  EXPECT_NE(config.isValid().message().find("same_class_overlap_voxels"), std::string::npos);
   EXPECT_NE(ObjectDatabase::Config().print().find("fusion_voxel_size_m: 0.01"), std::string::npos);
 }
 

@@ -126,6 +126,12 @@ class ObjectDatabase {
     // object's supported voxels is fused into it whatever the classes and centres (0 = centres
     // and classes only, Eq. 6).
     double min_overlap_to_fuse = 0.5;
+    // Evidence fusion, the overlap above with an object of the detection's class: a cut voxel
+    // counts as on the object when a supported voxel lies within this many voxels of it (any of
+    // the (2n+1)^3 around it). Views of a thin part from either side (a backrest seen from the
+    // front and from behind) fill neighbouring voxels, not the same ones. Objects of other classes
+    // match on the voxels themselves (a book on a table stays a book). 0 = the voxels themselves.
+    int same_class_overlap_voxels = 1;
     // Evidence fusion: a voxel is supported only when its mean projective signed distance over the
     // views that saw it (ObjectObservation::depth_view) lies within this band of the measured
     // surface: the shell of noise that several views of one surface leave (several centimetres
