@@ -181,19 +181,27 @@ TEST(PointCloudFilterOutliers, RemovesIsolatedPointsKeepsPlane) {
   for (const Eigen::Vector3f& p : out) EXPECT_NEAR(p.z(), 1.0f, 0.002f);
 }
 
-TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
-  // Voxelised surfaces (a floor, a box, a noisy sphere) plus scattered outliers, at several cell
-  // sizes and neighbour counts: the grid's k nearest neighbours give PCL's kept points.
-  std::mt19937 rng(7);
+// A floor, a box top and a sphere (60 000 points, 4 mm Gaussian noise) drawn from rng.
+PointCloud noisySurfaces(std::mt19937* rng) {
   std::normal_distribution<float> noise(0.f, 0.004f);
   std::uniform_real_distribution<float> uniform(-1.f, 1.f);
   PointCloud raw;
   for (int i = 0; i < 20000; ++i) {
-    raw.emplace_back(uniform(rng), uniform(rng), noise(rng));                              // floor
-    raw.emplace_back(0.3f + 0.2f * uniform(rng), 0.2f * uniform(rng), 0.5f + noise(rng));  // top
-    Eigen::Vector3f d(noise(rng), noise(rng), noise(rng));
+    raw.emplace_back(uniform(*rng), uniform(*rng), noise(*rng));  // floor
+    raw.emplace_back(0.3f + 0.2f * uniform(*rng), 0.2f * uniform(*rng),
+                     0.5f + noise(*rng));  // top
+    Eigen::Vector3f d(noise(*rng), noise(*rng), noise(*rng));
     raw.push_back(Eigen::Vector3f(-0.5f, 0.5f, 0.3f) + 0.2f * d.normalized() + d);  // sphere
   }
+  return raw;
+}
+
+TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
+  // Voxelised surfaces (a floor, a box, a noisy sphere) plus scattered outliers, at several cell
+  // sizes and neighbour counts: the grid's k nearest neighbours give PCL's kept points.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+  PointCloud raw = noisySurfaces(&rng);
   for (int i = 0; i < 300; ++i) raw.emplace_back(uniform(rng), uniform(rng), 1.f + uniform(rng));
   for (const double leaf : {0.01, 0.02, 0.035}) {
     const PointCloud voxelized = PointCloudFilter::voxelize(raw, leaf);
@@ -226,15 +234,8 @@ TEST(PointCloudFilterOutliers, VoxelCentresStatisticsCloseToPcls) {
   // The same voxelised surfaces and outliers as above: on voxel centres, the statistic keeps and
   // drops nearly the same points as PCL's exact k nearest, and every scattered outlier goes.
   std::mt19937 rng(11);
-  std::normal_distribution<float> noise(0.f, 0.004f);
   std::uniform_real_distribution<float> uniform(-1.f, 1.f);
-  PointCloud raw;
-  for (int i = 0; i < 20000; ++i) {
-    raw.emplace_back(uniform(rng), uniform(rng), noise(rng));                              // floor
-    raw.emplace_back(0.3f + 0.2f * uniform(rng), 0.2f * uniform(rng), 0.5f + noise(rng));  // top
-    Eigen::Vector3f d(noise(rng), noise(rng), noise(rng));
-    raw.push_back(Eigen::Vector3f(-0.5f, 0.5f, 0.3f) + 0.2f * d.normalized() + d);  // sphere
-  }
+  PointCloud raw = noisySurfaces(&rng);
   PointCloud outliers;
   for (int i = 0; i < 300; ++i)
     outliers.emplace_back(uniform(rng), uniform(rng), 1.3f + 0.5f * uniform(rng));
