@@ -214,6 +214,19 @@ TEST_F(ObjectDatabaseTest, SameClassCutsOneVoxelApartFuseOthersNeedTheVoxelsThem
   EXPECT_EQ(run("chair", 0), ObjectDatabase::Decision::kInserted);
   // Another class matches on shared voxels only: a book on a table top does not join the table.
   EXPECT_EQ(run("couch", 1), ObjectDatabase::Decision::kInserted);
+  // A chair touching another along one edge: only that edge's voxels (20 of 400) lie within a
+  // voxel of it, under min_overlap_to_fuse: two chairs side by side stay two.
+  {
+    ObjectDatabase database(ObjectDatabase::Config(), priors_);
+    int calls = 0;
+    database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.505}, 0.8, 0),
+                          centroidProcessor(&calls));
+    ObjectObservation beside = observation("chair", {1.2, 2.0, 0.505}, 0.8, 1);
+    beside.box.center_m = Eigen::Vector3d(1.5, 2.0, 0.505);
+    beside.box.size_m = Eigen::Vector3d(1.0, 1.0, 1.0);
+    EXPECT_EQ(database.fuseOrInsert(beside, centroidProcessor(&calls)).decision,
+              ObjectDatabase::Decision::kInserted);
+  }
   // The same patch again (shared voxels) fuses whatever the class.
   ObjectDatabase database(ObjectDatabase::Config(), priors_);
   int calls = 0;

@@ -127,7 +127,8 @@ class ObjectDatabase {
     // and classes only, Eq. 6).
     double min_overlap_to_fuse = 0.5;
     // Evidence fusion, the overlap above with an object of the detection's class: a cut voxel
-    // counts as on the object when a supported voxel lies within this many voxels of it (any of
+    // counts as on the object when one of its voted voxels (inside >= outside) lies within this
+    // many voxels of it (any of
     // the (2n+1)^3 around it). Views of a thin part from either side (a backrest seen from the
     // front and from behind) fill neighbouring voxels, not the same ones. Objects of other classes
     // match on the voxels themselves (a book on a table stays a book). 0 = the voxels themselves.
