@@ -2,6 +2,7 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <atomic>
 #include <thread>
 
 namespace mvod {
@@ -38,6 +39,23 @@ void parallelRanges(std::size_t count, int threads, std::size_t min_per_thread,
     pool.emplace_back([&job, &begin_of, w] { job(begin_of(w), begin_of(w + 1)); });
   }
   job(0, begin_of(1));
+  for (std::thread& thread : pool) thread.join();
+}
+
+void parallelForEach(std::size_t count, int threads, const std::function<void(std::size_t)>& job) {
+  const std::size_t workers = std::min(count, static_cast<std::size_t>(std::max(1, threads)));
+  if (workers <= 1) {
+    for (std::size_t i = 0; i < count; ++i) job(i);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  const auto work = [&] {
+    for (std::size_t i = next++; i < count; i = next++) job(i);
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(workers - 1);
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
   for (std::thread& thread : pool) thread.join();
 }
 

@@ -73,23 +73,44 @@ void addNormals(const ObjectObservation& observation, double voxel_size_m, Evide
 }
 
 // This view's signed distance of every voxel of the object it sees (the view's cost: the
-// object's voxels, one projection each).
-void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence) {
-  for (auto& entry : *evidence) {
-    VoxelEvidence& e = entry.second;
-    if (e.sdf_count == UINT16_MAX) continue;
-    const Eigen::Vector3f centre =
-        ((unpackVoxel(entry.first).cast<double>().array() + 0.5) * voxel_size_m)
-            .matrix()
-            .cast<float>();
-    float sdf_m = 0.f;
-    if (!view.signedDistance(centre, &sdf_m)) continue;
-    e.sdf_sum += sdf_m;
-    ++e.sdf_count;
+// object's voxels, one projection each), over the hash buckets [first_bucket, last_bucket): each
+// voxel lies in one bucket, so disjoint bucket ranges can run in parallel with the same result.
+void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence,
+                        std::size_t first_bucket, std::size_t last_bucket) {
+  for (std::size_t bucket = first_bucket; bucket < last_bucket; ++bucket) {
+    for (auto it = evidence->begin(bucket); it != evidence->end(bucket); ++it) {
+      VoxelEvidence& e = it->second;
+      if (e.sdf_count == UINT16_MAX) continue;
+      const Eigen::Vector3f centre =
+          ((unpackVoxel(it->first).cast<double>().array() + 0.5) * voxel_size_m)
+              .matrix()
+              .cast<float>();
+      float sdf_m = 0.f;
+      if (!view.signedDistance(centre, &sdf_m)) continue;
+      e.sdf_sum += sdf_m;
+      ++e.sdf_count;
+    }
   }
 }
 
+void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence) {
+  addSignedDistances(view, voxel_size_m, evidence, 0, evidence->bucket_count());
+}
+
 }  // namespace
+
+FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
+                          double voxel_size_m) {
+  FusionKeys keys;
+  keys.voxel_size_m = voxel_size_m;
+  keys.cut = voxelKeys(segment_W, voxel_size_m);
+  std::unordered_set<std::int64_t> outside;
+  for (const Eigen::Vector3f& p : seen_W) {
+    const std::int64_t key = voxelKeyOf(p, voxel_size_m);
+    if (keys.cut.count(key) == 0 && outside.insert(key).second) keys.outside.push_back(key);
+  }
+  return keys;
+}
 
 bool DepthView::signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const {
   const Eigen::Vector3d p_D = T_D_W * p_W.cast<double>();
@@ -194,10 +215,15 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
 
   const double threshold_m = priors_.fusionDistance(observation.class_name);
   const bool evidence = config_.fusion == "evidence";
-  // Evidence fusion: the voxels of this view's cut, computed once.
-  const std::unordered_set<std::int64_t> cut =
-      evidence ? voxelKeys(observation.segment_W, config_.fusion_voxel_size_m)
-               : std::unordered_set<std::int64_t>();
+  // Evidence fusion: the voxels of this view's cut and of what it saw around it, computed once
+  // (by the single-view stage, or here).
+  std::shared_ptr<const FusionKeys> keys = observation.fusion_keys;
+  if (evidence && (keys == nullptr || keys->voxel_size_m != config_.fusion_voxel_size_m)) {
+    keys = std::make_shared<const FusionKeys>(
+        makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
+  }
+  const std::unordered_set<std::int64_t> no_keys;
+  const std::unordered_set<std::int64_t>& cut = evidence ? keys->cut : no_keys;
   bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
   if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
     // Not near a same-class object: the object (any class) whose supported voxels hold most of
@@ -287,10 +313,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       // in but left out of the cut. Cost: the view's points, not the object's size.
       countInside(cut, &object.evidence);
       addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
-      std::unordered_set<std::int64_t> outside;
-      for (const Eigen::Vector3f& p : observation.seen_W) {
-        const std::int64_t key = voxelKey(p);
-        if (cut.count(key) != 0 || !outside.insert(key).second) continue;
+      for (const std::int64_t key : keys->outside) {
         const auto it = object.evidence.find(key);
         if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
       }
@@ -392,28 +415,50 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
     views.push_back(view != pending_depth_views_.end() ? view->second.get() : nullptr);
   }
   pending_rebox_.clear();
+  // The keyframe's signed distances first, in chunks of hash buckets of every object: one large
+  // object (a bed, ~10^5 voxels) would otherwise keep one core busy while the other idles.
+  struct BucketChunk {
+    std::size_t object;
+    std::size_t first_bucket;
+    std::size_t last_bucket;
+  };
+  constexpr std::size_t kBucketsPerChunk = 4096;
+  std::vector<BucketChunk> chunks;
+  for (std::size_t k = 0; k < pending.size(); ++k) {
+    if (views[k] == nullptr) continue;
+    const std::size_t buckets = pending[k]->evidence.bucket_count();
+    for (std::size_t first = 0; first < buckets; first += kBucketsPerChunk) {
+      chunks.push_back({k, first, std::min(buckets, first + kBucketsPerChunk)});
+    }
+  }
+  parallelForEach(chunks.size(), threads, [&](std::size_t c) {
+    const BucketChunk& chunk = chunks[c];
+    addSignedDistances(*views[chunk.object], config_.fusion_voxel_size_m,
+                       &pending[chunk.object]->evidence, chunk.first_bucket, chunk.last_bucket);
+  });
+  // Then each object's box, largest first, each thread taking the next object as it finishes.
   // Each job reads and writes its own object only (the map itself does not change meanwhile).
-  parallelRanges(pending.size(), threads, 1, [&](std::size_t first, std::size_t last) {
-    for (std::size_t k = first; k < last; ++k) {
-      MapObject& object = *pending[k];
-      if (views[k] != nullptr) {
-        addSignedDistances(*views[k], config_.fusion_voxel_size_m, &object.evidence);
-      }
-      std::vector<Eigen::Vector3f> normals;
-      const PointCloud supported = supportedVoxels(object, &normals);
-      object.points_W.clear();
-      object.points_W.reserve(object.evidence.size());
-      for (const auto& entry : object.evidence) {
-        object.points_W.push_back(voxelCentre(entry.first));
-      }
-      PointCloud segment_W;
-      OrientedBox box;
-      double yaw_rad = object.yaw_rad;
-      if (process && process(object.class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
-        object.segment_W = std::move(segment_W);
-        object.box = box;
-        object.yaw_rad = yaw_rad;
-      }
+  std::vector<std::size_t> by_size(pending.size());
+  for (std::size_t k = 0; k < by_size.size(); ++k) by_size[k] = k;
+  std::stable_sort(by_size.begin(), by_size.end(), [&pending](std::size_t a, std::size_t b) {
+    return pending[a]->evidence.size() > pending[b]->evidence.size();
+  });
+  parallelForEach(by_size.size(), threads, [&](std::size_t j) {
+    MapObject& object = *pending[by_size[j]];
+    std::vector<Eigen::Vector3f> normals;
+    const PointCloud supported = supportedVoxels(object, &normals);
+    object.points_W.clear();
+    object.points_W.reserve(object.evidence.size());
+    for (const auto& entry : object.evidence) {
+      object.points_W.push_back(voxelCentre(entry.first));
+    }
+    PointCloud segment_W;
+    OrientedBox box;
+    double yaw_rad = object.yaw_rad;
+    if (process && process(object.class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
+      object.segment_W = std::move(segment_W);
+      object.box = box;
+      object.yaw_rad = yaw_rad;
     }
   });
   pending_depth_views_.clear();

@@ -425,21 +425,8 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
 int ObjectMapper::threadCount() const { return poolSize(config_); }
 
 void ObjectMapper::parallelFor(size_t count, int threads, const std::function<void(size_t)>& job) {
-  const size_t workers = std::min(count, static_cast<size_t>(std::max(1, threads)));
-  if (workers <= 1) {
-    for (size_t k = 0; k < count; ++k) job(k);
-    return;
-  }
   // Detections differ a lot in size: each worker takes the next one as it finishes.
-  std::atomic<size_t> next{0};
-  const auto work = [&] {
-    for (size_t k = next++; k < count; k = next++) job(k);
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(workers - 1);
-  for (size_t w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (std::thread& thread : pool) thread.join();
+  parallelForEach(count, threads, job);
 }
 
 bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
@@ -600,6 +587,11 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
     }
   }
 
+  if (config_.database.fusion == "evidence") {
+    // The voxels this view votes on, here on the pool rather than in the ordered fusion.
+    observation->fusion_keys = std::make_shared<const FusionKeys>(
+        makeFusionKeys(segment_W, observation->seen_W, config_.database.fusion_voxel_size_m));
+  }
   observation->points_W = std::move(points_W);
   observation->segment_W = std::move(segment_W);
   observation->segment_normals_W = std::move(normals_W);

@@ -630,6 +630,84 @@ TEST_F(ObjectDatabaseTest, EvidenceKeepsTheViewsNormalsPerVoxel) {
   EXPECT_TRUE(received[1].empty());
 }
 
+// The single-view stage's precomputed voxels (ObjectObservation::fusion_keys) and the re-boxing's
+// signed distances in chunks of hash buckets on several threads give the same evidence, voxel by
+// voxel, as computing them in the fusion on one thread. The object (a 0.8 m square, 6400 voxels)
+// spans several bucket chunks; keys on another grid are ignored.
+TEST_F(ObjectDatabaseTest, PrecomputedVoxelsAndParallelSignedDistancesGiveTheSameEvidence) {
+  auto view = std::make_shared<DepthView>();
+  view->K = CameraIntrinsics{400.0, 400.0, 199.5, 199.5, 400, 400};
+  view->depth_m = cv::Mat(400, 400, CV_32FC1, cv::Scalar(1.0f));
+  view->depth_m(cv::Rect(0, 0, 400, 200)).setTo(1.004f);  // two depths: distinct sums
+  view->truncation_m = 0.02;
+  const auto make = [&](int keyframe, double shift_m, bool precompute, double keys_voxel_m) {
+    ObjectObservation obs;
+    obs.class_name = "chair";
+    obs.class_id = 56;
+    obs.probability = 0.8;
+    obs.keyframe = keyframe;
+    for (int i = 0; i < 160; ++i) {
+      for (int j = 0; j < 160; ++j) {
+        const Eigen::Vector3f p(-0.4f + 0.005f * i + static_cast<float>(shift_m),
+                                -0.4f + 0.005f * j, 1.0f + 0.0001f * (i % 7));
+        obs.points_W.push_back(p);
+        (keyframe > 0 && j >= 150 ? obs.seen_W : obs.segment_W).push_back(p);  // a strip later
+        // views see but leave out of their cut
+      }
+    }
+    obs.seen_W.insert(obs.seen_W.end(), obs.segment_W.begin(), obs.segment_W.end());
+    obs.segment_normals_W.assign(obs.segment_W.size(), Eigen::Vector3f(0.f, 0.f, -1.f));
+    obs.box.center_m = Eigen::Vector3d(shift_m, -0.025, 1.0);
+    obs.box.size_m = Eigen::Vector3d(0.8, 0.75, 0.01);
+    obs.depth_view = view;
+    if (precompute) {
+      obs.fusion_keys = std::make_shared<const FusionKeys>(
+          makeFusionKeys(obs.segment_W, obs.seen_W, keys_voxel_m));
+    }
+    return obs;
+  };
+  const auto run = [&](bool precompute, double keys_voxel_m, int threads) {
+    ObjectDatabase database(ObjectDatabase::Config(), priors_);
+    int calls = 0;
+    database.fuseOrInsert(make(0, 0.0, precompute, keys_voxel_m), centroidProcessor(&calls));
+    database.fuseOrInsert(make(1, 0.013, precompute, keys_voxel_m), centroidProcessor(&calls),
+                          true);
+    database.fuseOrInsert(make(2, -0.021, precompute, keys_voxel_m), centroidProcessor(&calls),
+                          true);
+    EXPECT_EQ(database.reboxPending(centroidProcessor(&calls), threads), 1);
+    EXPECT_EQ(database.size(), 1u);
+    return database.objects().begin()->second;
+  };
+  const MapObject reference = run(false, 0.0, 1);
+  ASSERT_GT(reference.evidence.bucket_count(), 2u * 4096u);  // several chunks
+  int measured = 0;
+  for (const auto& entry : reference.evidence) measured += entry.second.sdf_count > 0 ? 1 : 0;
+  EXPECT_GT(measured, 6000);
+  for (const auto& variant :
+       {std::make_pair(true, 1), std::make_pair(true, 3), std::make_pair(false, 2)}) {
+    const MapObject other = run(variant.first, 0.01, variant.second);
+    ASSERT_EQ(other.evidence.size(), reference.evidence.size());
+    for (const auto& entry : reference.evidence) {
+      const auto it = other.evidence.find(entry.first);
+      ASSERT_NE(it, other.evidence.end());
+      EXPECT_EQ(it->second.inside, entry.second.inside);
+      EXPECT_EQ(it->second.outside, entry.second.outside);
+      EXPECT_EQ(it->second.sdf_count, entry.second.sdf_count);
+      EXPECT_EQ(it->second.sdf_sum, entry.second.sdf_sum);  // bit for bit
+      EXPECT_EQ(it->second.normal_sum, entry.second.normal_sum);
+    }
+    EXPECT_EQ(other.box.center_m, reference.box.center_m);
+  }
+  // Keys on another grid than the database's are recomputed, not used.
+  const MapObject other_grid = run(true, 0.02, 2);
+  EXPECT_EQ(other_grid.evidence.size(), reference.evidence.size());
+  EXPECT_EQ(other_grid.box.center_m, reference.box.center_m);
+  // Some voxels were seen outside the cut.
+  int voted_out = 0;
+  for (const auto& entry : reference.evidence) voted_out += entry.second.outside > 0 ? 1 : 0;
+  EXPECT_GT(voted_out, 0);
+}
+
 TEST_F(ObjectDatabaseTest, DeferredReboxingBoxesEachObjectOnceWithTheSameResult) {
   // Two chairs seen in keyframe 0, then each twice in keyframe 1 (the second time shifted) and a
   // cup once: the same objects, votes and boxes as fusing immediately, one box per object.

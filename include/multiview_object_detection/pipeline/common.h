@@ -65,6 +65,11 @@ Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& M);
 void parallelRanges(std::size_t count, int threads, std::size_t min_per_thread,
                     const std::function<void(std::size_t, std::size_t)>& job);
 
+// Runs job(i) for each i in [0, count) on up to `threads` threads (the caller's included), each
+// thread taking the next index as it finishes one: for jobs of very different sizes, given largest
+// first. The jobs must be independent (their result must not depend on the thread that ran them).
+void parallelForEach(std::size_t count, int threads, const std::function<void(std::size_t)>& job);
+
 // True if every element of the matrix is finite and its rotation part is orthonormal within tol.
 bool isValidPose(const Eigen::Isometry3d& T, double tol = 1e-3);
 

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/class_priors.h"
@@ -33,6 +34,17 @@ struct DepthView {
   bool signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const;
 };
 
+// Evidence fusion: the voxels a view votes on, on a grid of voxel_size_m. They depend on the view
+// only, so the single-view stage (in parallel) computes them and the ordered fusion does not.
+struct FusionKeys {
+  double voxel_size_m = 0.0;
+  std::unordered_set<std::int64_t> cut;  // the voxels of the cut (segment_W)
+  std::vector<std::int64_t> outside;     // the voxels of seen_W not in the cut, each once
+};
+// Built from the cut and the points seen around it (ObjectObservation::segment_W and seen_W).
+FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
+                          double voxel_size_m);
+
 // An object detected in one keyframe, after extraction, filtering, LCCP and box estimation.
 struct ObjectObservation {
   int class_id = -1;
@@ -46,6 +58,9 @@ struct ObjectObservation {
   // Evidence fusion: the view's surface points around the cut (in it or not). Voxels of these that
   // are not in the cut are votes against the object there.
   PointCloud seen_W;
+  // Evidence fusion: segment_W's and seen_W's voxels (makeFusionKeys); null, or on another grid
+  // than the database's: fuseOrInsert computes them.
+  std::shared_ptr<const FusionKeys> fusion_keys;
   // Evidence fusion: the keyframe's depth (shared by its detections); null: none.
   std::shared_ptr<const DepthView> depth_view;
   OrientedBox box;       // from segment_W (Eq. 4)
