@@ -269,55 +269,69 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   const bool need_view = config_.floor.enable || config_.selection.consistent() ||
                          config_.database.fusion == "evidence";
   SegmentSelector::FrameView view;
-  if (need_view) {
-    view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
-                                          config_.extractor.max_valid_depth_m);
-  }
-  if (config_.floor.enable) {
-    // Every 2nd point of the view is plenty for the floor's layer.
-    PointCloud sample_W;
-    sample_W.reserve(view.points_W.size() / 2 + 1);
-    for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
-    floor_.addFrame(sample_W, gravity());
-  }
-  // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
   std::shared_ptr<DepthView> depth_view;
-  if (config_.database.fusion == "evidence" && config_.database.surface_band_m > 0.0 &&
-      !kept.empty()) {
-    depth_view = std::make_shared<DepthView>();
-    // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
-    frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
-                          frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
-    const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
-    const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
-    for (int v = 0; v < depth_view->depth_m.rows; ++v) {
-      float* row = depth_view->depth_m.ptr<float>(v);
-      for (int u = 0; u < depth_view->depth_m.cols; ++u) {
-        row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
-      }
-    }
-    depth_view->K = frame.K_depth;
-    depth_view->T_D_W = frame.T_W_D.inverse();
-    // The band, plus three depth steps: what lies further behind the measured surface is hidden.
-    depth_view->truncation_m = config_.database.surface_band_m;
-    depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
-  }
   std::vector<PointCloud> clouds_D;
-  const Status extracted = extractor_.extract(frame, kept, &clouds_D);
-  if (!extracted || clouds_D.size() != kept.size()) {
-    // One bad detection (a mask of the wrong size, say) must not cost the others: retry one by one.
-    clouds_D.assign(kept.size(), PointCloud());
-    for (size_t k = 0; k < kept.size(); ++k) {
-      std::vector<PointCloud> single;
-      const Status status = extractor_.extract(frame, {kept[k]}, &single);
-      if (!status || single.size() != 1) {
-        out.warnings.push_back(label + ": " + detectionLabel(kept_index[k], kept[k]) + ": " +
-                               (status ? std::string("extraction failed") : status.message()));
-        continue;
-      }
-      clouds_D[k] = std::move(single[0]);
+  // Two independent jobs on the pool: the view (and the floor from it), and the keyframe's depth
+  // in metres plus the detections' clouds. Each writes only its own results.
+  const auto view_and_floor = [&]() {
+    if (need_view) {
+      view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
+                                            config_.extractor.max_valid_depth_m);
     }
-  }
+    if (config_.floor.enable) {
+      // Every 2nd point of the view is plenty for the floor's layer.
+      PointCloud sample_W;
+      sample_W.reserve(view.points_W.size() / 2 + 1);
+      for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
+      floor_.addFrame(sample_W, gravity());
+    }
+  };
+  const auto depth_and_clouds = [&]() {
+    // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
+    if (config_.database.fusion == "evidence" && config_.database.surface_band_m > 0.0 &&
+        !kept.empty()) {
+      depth_view = std::make_shared<DepthView>();
+      // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
+      frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
+                            frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
+      const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
+      const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
+      for (int v = 0; v < depth_view->depth_m.rows; ++v) {
+        float* row = depth_view->depth_m.ptr<float>(v);
+        for (int u = 0; u < depth_view->depth_m.cols; ++u) {
+          row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
+        }
+      }
+      depth_view->K = frame.K_depth;
+      depth_view->T_D_W = frame.T_W_D.inverse();
+      // The band, plus three depth steps: what lies further behind the measured surface is hidden.
+      depth_view->truncation_m = config_.database.surface_band_m;
+      depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
+    }
+    const Status extracted = extractor_.extract(frame, kept, &clouds_D);
+    if (!extracted || clouds_D.size() != kept.size()) {
+      // One bad detection (a mask of the wrong size, say) must not cost the others: retry one by
+      // one.
+      clouds_D.assign(kept.size(), PointCloud());
+      for (size_t k = 0; k < kept.size(); ++k) {
+        std::vector<PointCloud> single;
+        const Status status = extractor_.extract(frame, {kept[k]}, &single);
+        if (!status || single.size() != 1) {
+          out.warnings.push_back(label + ": " + detectionLabel(kept_index[k], kept[k]) + ": " +
+                                 (status ? std::string("extraction failed") : status.message()));
+          continue;
+        }
+        clouds_D[k] = std::move(single[0]);
+      }
+    }
+  };
+  parallelForEach(2, threadCount(), [&](size_t job) {
+    if (job == 0) {
+      view_and_floor();
+    } else {
+      depth_and_clouds();
+    }
+  });
   out.times.extraction_ms = msSince(t);
 
   // Sec. 3.2-3.3 for each detection, on the thread pool: each reads the frame and the mapper's
