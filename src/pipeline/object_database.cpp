@@ -443,26 +443,87 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
   std::stable_sort(by_size.begin(), by_size.end(), [&pending](std::size_t a, std::size_t b) {
     return pending[a]->evidence.size() > pending[b]->evidence.size();
   });
-  parallelForEach(by_size.size(), threads, [&](std::size_t j) {
-    MapObject& object = *pending[by_size[j]];
-    std::vector<Eigen::Vector3f> normals;
-    const PointCloud supported = supportedVoxels(object, &normals);
-    object.points_W.clear();
-    object.points_W.reserve(object.evidence.size());
-    for (const auto& entry : object.evidence) {
-      object.points_W.push_back(voxelCentre(entry.first));
-    }
-    PointCloud segment_W;
-    OrientedBox box;
-    double yaw_rad = object.yaw_rad;
-    if (process && process(object.class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
-      object.segment_W = std::move(segment_W);
-      object.box = box;
-      object.yaw_rad = yaw_rad;
-    }
-  });
+  parallelForEach(by_size.size(), threads,
+                  [&](std::size_t j) { rebox(pending[by_size[j]], process); });
   pending_depth_views_.clear();
   return static_cast<int>(pending.size());
+}
+
+void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process) const {
+  std::vector<Eigen::Vector3f> normals;
+  const PointCloud supported = supportedVoxels(*object, &normals);
+  object->points_W.clear();
+  object->points_W.reserve(object->evidence.size());
+  for (const auto& entry : object->evidence) object->points_W.push_back(voxelCentre(entry.first));
+  PointCloud segment_W;
+  OrientedBox box;
+  double yaw_rad = object->yaw_rad;
+  if (process && process(object->class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
+    object->segment_W = std::move(segment_W);
+    object->box = box;
+    object->yaw_rad = yaw_rad;
+  }
+}
+
+bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcessor& process) {
+  const auto into_it = objects_.find(into_id);
+  const auto from_it = objects_.find(from_id);
+  if (into_id == from_id || into_it == objects_.end() || from_it == objects_.end()) return false;
+  MapObject& into = into_it->second;
+  const MapObject& from = from_it->second;
+  if (into.evidence.empty() || from.evidence.empty() ||
+      into.evidence_voxel_size_m != config_.fusion_voxel_size_m ||
+      from.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
+    return false;
+  }
+  const auto saturated = [](std::uint16_t a, std::uint16_t b) {
+    return static_cast<std::uint16_t>(std::min<int>(UINT16_MAX, int{a} + int{b}));
+  };
+  // In key order: the sums do not depend on the hash map's iteration order.
+  std::vector<std::pair<std::uint64_t, const VoxelEvidence*>> voxels;
+  voxels.reserve(from.evidence.size());
+  for (const auto& entry : from.evidence) {
+    voxels.emplace_back(static_cast<std::uint64_t>(entry.first), &entry.second);
+  }
+  radixSortByKey(&voxels);
+  for (const auto& voxel : voxels) {
+    VoxelEvidence& e = into.evidence[static_cast<std::int64_t>(voxel.first)];
+    const VoxelEvidence& f = *voxel.second;
+    e.inside = saturated(e.inside, f.inside);
+    e.outside = saturated(e.outside, f.outside);
+    e.normal_sum += f.normal_sum;
+    e.sdf_sum += f.sdf_sum;
+    e.sdf_count = saturated(e.sdf_count, f.sdf_count);
+  }
+  const auto scores = [](const MapObject& object) {
+    std::map<std::string, double> result = object.class_scores;
+    if (result.empty()) result[object.class_name] = object.probability * object.observations;
+    return result;
+  };
+  std::map<std::string, double> class_scores = scores(into);
+  for (const auto& entry : scores(from)) class_scores[entry.first] += entry.second;
+  into.class_scores = class_scores;
+  const auto best =
+      std::max_element(class_scores.begin(), class_scores.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (best->first != into.class_name) {
+    into.class_name = best->first;
+    into.class_id = cocoClassId(best->first);
+  }
+  const int observations = into.observations + from.observations;
+  if (observations > 0) {
+    into.probability =
+        (into.probability * into.observations + from.probability * from.observations) /
+        observations;
+  }
+  into.observations = observations;
+  into.first_keyframe = std::min(into.first_keyframe, from.first_keyframe);
+  into.last_keyframe = std::max(into.last_keyframe, from.last_keyframe);
+  into.first_seen_s = std::min(into.first_seen_s, from.first_seen_s);
+  into.last_seen_s = std::max(into.last_seen_s, from.last_seen_s);
+  remove(from_id);
+  rebox(&into, process);
+  return true;
 }
 
 const MapObject* ObjectDatabase::find(int id) const {

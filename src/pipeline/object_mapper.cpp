@@ -1,11 +1,11 @@
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -683,7 +683,28 @@ ObjectMapper::RefinementReport ObjectMapper::refine() {
     for (const int id : report.atypical_ids) database_.remove(id);
   }
   if (config_.intersection_filter.enable) {
-    report.intersecting_ids = intersection_filter_.intersectingObjects(database_, gravity().up);
+    std::vector<std::pair<int, int>> duplicates;
+    report.intersecting_ids =
+        intersection_filter_.intersectingObjects(database_, gravity().up, &duplicates);
+    // Not in the single-frame baseline (Table 2): that would be fusion after all.
+    if (config_.intersection_filter.merge_duplicates && config_.database.fusion == "evidence" &&
+        !config_.database.disable_fusion) {
+      const std::set<int> deleted(report.intersecting_ids.begin(), report.intersecting_ids.end());
+      StageTimes times;
+      const FusedCloudProcessor process =
+          [this, &times](const std::string& class_name, const PointCloud& points_W,
+                         const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                         OrientedBox* box, double* yaw_rad) {
+            return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &times);
+          };
+      for (const auto& duplicate : duplicates) {
+        // Into an object that stays only (a chain: what it was merged into may go too).
+        if (deleted.count(duplicate.second) != 0) continue;
+        if (database_.mergeInto(duplicate.second, duplicate.first, process)) {
+          report.merged_ids.push_back(duplicate);
+        }
+      }
+    }
     for (const int id : report.intersecting_ids) database_.remove(id);
   }
   report.time_ms = msSince(start);

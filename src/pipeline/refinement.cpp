@@ -129,6 +129,7 @@ std::string IntersectionFilter::Config::print() const {
   out << "enable: " << (enable ? "true" : "false") << "\n"
       << "volume_ratio_threshold: " << volume_ratio_threshold << "\n"
       << "duplicate_ratio: " << duplicate_ratio << "\n"
+      << "merge_duplicates: " << (merge_duplicates ? "true" : "false") << "\n"
       << "container_support_ratio: " << container_support_ratio << "\n";
   return out.str();
 }
@@ -169,8 +170,10 @@ IntersectionFilter::Case IntersectionFilter::classify(const OrientedBox& a, cons
 //    keep the second of two objects lying inside one large object; Eq. 11 says every object mostly
 //    inside another goes, and with the repetition nested chains (A ⊃ B ⊃ C) lose every inner box
 //    whatever the id order.
-std::vector<int> IntersectionFilter::intersectingObjects(const ObjectDatabase& database,
-                                                         const Eigen::Vector3d& up) const {
+std::vector<int> IntersectionFilter::intersectingObjects(
+    const ObjectDatabase& database, const Eigen::Vector3d& up,
+    std::vector<std::pair<int, int>>* duplicates) const {
+  if (duplicates != nullptr) duplicates->clear();
   std::vector<int> deleted_ids;
   if (!config_.enable) return deleted_ids;
 
@@ -216,9 +219,15 @@ std::vector<int> IntersectionFilter::intersectingObjects(const ObjectDatabase& d
           std::min(xi->eta_sigma, xi->eta_tau) > config_.duplicate_ratio) {
         if (support(*objects[sigma]) < support(*objects[xi->tau])) {
           deleted[sigma] = true;
+          if (duplicates != nullptr) {
+            duplicates->emplace_back(objects[sigma]->id, objects[xi->tau]->id);
+          }
           break;
         }
         deleted[xi->tau] = true;
+        if (duplicates != nullptr) {
+          duplicates->emplace_back(objects[xi->tau]->id, objects[sigma]->id);
+        }
         continue;
       }
       const bool sigma_inner = xi->eta_sigma > xi->eta_tau;

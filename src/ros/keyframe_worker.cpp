@@ -312,9 +312,14 @@ void KeyframeWorker::refineLocked(const std::string& why) {
     stats.stage_times.refinement_ms = report.time_ms;
   });
   if (!report.atypical_ids.empty() || !report.intersecting_ids.empty()) {
-    ROS_INFO("refinement (%s): removed atypical %s, intersecting %s (%.1f ms)", why.c_str(),
+    std::string merged;
+    for (const auto& pair : report.merged_ids) {
+      merged += (merged.empty() ? "" : ", ") + std::to_string(pair.first) + " into " +
+                std::to_string(pair.second);
+    }
+    ROS_INFO("refinement (%s): removed atypical %s, intersecting %s%s%s (%.1f ms)", why.c_str(),
              idList(report.atypical_ids).c_str(), idList(report.intersecting_ids).c_str(),
-             report.time_ms);
+             merged.empty() ? "" : "; duplicates merged: ", merged.c_str(), report.time_ms);
   }
 }
 

@@ -205,6 +205,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "intersection_filter/volume_ratio_threshold",
             &m.intersection_filter.volume_ratio_threshold, e);
   readNumber(nh, "intersection_filter/duplicate_ratio", &m.intersection_filter.duplicate_ratio, e);
+  readParam(nh, "intersection_filter/merge_duplicates", &m.intersection_filter.merge_duplicates, e);
   readNumber(nh, "intersection_filter/container_support_ratio",
              &m.intersection_filter.container_support_ratio, e);
 

@@ -633,17 +633,17 @@ int run(int argc, char** argv) {
   if (!options.quiet) {
     std::fprintf(stderr,
                  "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
-                 "(removed: %zu atypical, %zu intersecting)\n"
+                 "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate)\n"
                  "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
                  "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n"
                  "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                  "%d objects before refinement\n",
                  frames.size(), keyframes, stage_times.size(), errors, objects.size(),
                  refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
-                 median(detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
-                 med.manhattan_ms, med.fusion_ms, med.total_ms, med.refinement_ms,
-                 counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
-                 counts.fused, counts.before_refinement);
+                 refinement.merged_ids.size(), median(detection_ms), med.extraction_ms,
+                 med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms, med.total_ms,
+                 med.refinement_ms, counts.detections, counts.above_threshold, counts.with_box,
+                 counts.inserted, counts.fused, counts.before_refinement);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
   }
   return exit_code;

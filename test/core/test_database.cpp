@@ -708,6 +708,60 @@ TEST_F(ObjectDatabaseTest, PrecomputedVoxelsAndParallelSignedDistancesGiveTheSam
   EXPECT_GT(voted_out, 0);
 }
 
+// One object mapped twice: merging adds the second's votes, signed distances and normals to the
+// first's voxels, with its observations and class scores, re-boxes the merged object and removes
+// the second. Refused: an unknown or identical id, an object without evidence.
+TEST_F(ObjectDatabaseTest, MergingADuplicateAddsItsEvidenceAndRemovesIt) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  // Two chairs' views 1 m apart (not fused), then one more view of the first.
+  const int a =
+      database
+          .fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.8, 0), centroidProcessor(&calls))
+          .object_id;
+  const int b =
+      database
+          .fuseOrInsert(observation("chair", {1.1, 2.0, 0.5}, 0.5, 0), centroidProcessor(&calls))
+          .object_id;
+  ASSERT_NE(a, b);
+  database.fuseOrInsert(observation("chair", {1.0, 2.0, 0.5}, 0.6, 1), centroidProcessor(&calls));
+  ASSERT_EQ(database.size(), 2u);
+  const MapObject before_a = *database.find(a);
+  const MapObject before_b = *database.find(b);
+  EXPECT_EQ(before_a.observations, 2);
+  EXPECT_FALSE(database.mergeInto(a, a, centroidProcessor(&calls)));
+  EXPECT_FALSE(database.mergeInto(a, 99, centroidProcessor(&calls)));
+  calls = 0;
+  ASSERT_TRUE(database.mergeInto(a, b, centroidProcessor(&calls)));
+  EXPECT_EQ(calls, 1);  // re-boxed once
+  ASSERT_EQ(database.size(), 1u);
+  EXPECT_EQ(database.find(b), nullptr);
+  const MapObject& merged = *database.find(a);
+  EXPECT_EQ(merged.observations, 3);
+  EXPECT_NEAR(merged.probability, (before_a.probability * 2 + 0.5) / 3.0, 1e-12);
+  // a's 400 voxels and b's 400, 10 columns over: 200 shared.
+  EXPECT_EQ(merged.evidence.size(), 600u);
+  for (const auto& entry : before_b.evidence) {
+    const auto it = merged.evidence.find(entry.first);
+    ASSERT_NE(it, merged.evidence.end());
+    const auto in_a = before_a.evidence.find(entry.first);
+    const int inside_a = in_a == before_a.evidence.end() ? 0 : in_a->second.inside;
+    EXPECT_EQ(it->second.inside, inside_a + entry.second.inside);
+  }
+  EXPECT_EQ(merged.points_W.size(), 600u);
+  EXPECT_EQ(merged.segment_W.size(), 600u);  // the processor's segment: every supported voxel
+  // The merged box: the processor's, from the union (its centre between the two patches).
+  EXPECT_GT(merged.box.center_m.x(), before_a.box.center_m.x());
+  EXPECT_NEAR(merged.class_scores.at("chair"), 0.8 + 0.6 + 0.5, 1e-12);
+  // An object without evidence (a map from the paper's fusion) is not merged.
+  MapObject legacy = merged;
+  legacy.id = 42;
+  legacy.evidence.clear();
+  database.setObjects({merged, legacy});
+  EXPECT_FALSE(database.mergeInto(a, 42, centroidProcessor(&calls)));
+  EXPECT_EQ(database.size(), 2u);
+}
+
 TEST_F(ObjectDatabaseTest, DeferredReboxingBoxesEachObjectOnceWithTheSameResult) {
   // Two chairs seen in keyframe 0, then each twice in keyframe 1 (the second time shifted) and a
   // cup once: the same objects, votes and boxes as fusing immediately, one box per object.

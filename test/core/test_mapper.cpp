@@ -307,6 +307,64 @@ TEST_F(ObjectMapperTest, RefineRemovesAnAtypicalObject) {
   EXPECT_EQ(mapper.database().find(cup_id), nullptr);
 }
 
+// One chair mapped twice (its first views saw disjoint parts): a copy without legs, seen in 8
+// keyframes, and a whole one seen in 2, each box mostly inside the other. The refinement's
+// duplicate rule keeps the better-supported copy; merging gives it the other's voxels, legs
+// included. Without merging the kept box stays legless.
+TEST_F(ObjectMapperTest, RefineMergesADuplicateIntoTheCopyItKeeps) {
+  const auto run = [&](bool merge) {
+    ObjectMapper::Config config = config_;
+    config.intersection_filter.merge_duplicates = merge;
+    ObjectMapper mapper(config, priors_);
+    const auto copy = [&](int id, int observations, double bottom_m) {
+      MapObject object;
+      object.id = id;
+      object.class_name = "chair";
+      object.class_id = cocoClassId("chair");
+      object.probability = 0.8;
+      object.observations = observations;
+      object.evidence_voxel_size_m = config.database.fusion_voxel_size_m;
+      // The four sides of a 0.5 m square chair from bottom_m to 0.9 m, 1 cm voxels.
+      for (int k = static_cast<int>(std::lround(bottom_m * 100)); k < 90; ++k) {
+        for (int i = 0; i < 50; ++i) {
+          const float z = 0.005f + 0.01f * k;
+          const float t = -0.245f + 0.01f * i;
+          for (const Eigen::Vector3f& p :
+               {Eigen::Vector3f(t, -0.245f, z), Eigen::Vector3f(t, 0.245f, z),
+                Eigen::Vector3f(-0.245f, t, z), Eigen::Vector3f(0.245f, t, z)}) {
+            VoxelEvidence& e =
+                object.evidence[mapper.database().voxelKey(p + Eigen::Vector3f(1.f, 2.f, 0.f))];
+            e.inside = static_cast<std::uint16_t>(observations);
+          }
+        }
+      }
+      for (const auto& entry : object.evidence) {
+        object.points_W.push_back(mapper.database().voxelCentre(entry.first));
+      }
+      object.segment_W = object.points_W;
+      object.box.center_m = Eigen::Vector3d(1.0, 2.0, 0.5 * (bottom_m + 0.9));
+      object.box.size_m = Eigen::Vector3d(0.5, 0.5, 0.9 - bottom_m);
+      return object;
+    };
+    EXPECT_TRUE(mapper.mutableDatabase().setObjects({copy(1, 8, 0.3), copy(2, 2, 0.0)}).ok());
+    const ObjectMapper::RefinementReport refined = mapper.refine();
+    EXPECT_EQ(refined.intersecting_ids, std::vector<int>{2});
+    EXPECT_EQ(mapper.database().size(), 1u);
+    const MapObject* kept = mapper.database().find(1);
+    EXPECT_NE(kept, nullptr);
+    return std::make_pair(refined, kept != nullptr ? *kept : MapObject());
+  };
+  const auto merged = run(true);
+  EXPECT_EQ(merged.first.merged_ids, (std::vector<std::pair<int, int>>{{2, 1}}));
+  EXPECT_EQ(merged.second.observations, 10);
+  EXPECT_GT(merged.second.box.size_m.z(), 0.85);  // down to the legs' feet
+  EXPECT_NEAR(merged.second.box.center_m.z(), 0.45, 0.03);
+  const auto deleted = run(false);
+  EXPECT_TRUE(deleted.first.merged_ids.empty());
+  EXPECT_EQ(deleted.second.observations, 8);
+  EXPECT_NEAR(deleted.second.box.size_m.z(), 0.6, 0.01);  // untouched: no legs
+}
+
 TEST_F(ObjectMapperTest, WaitsForGravityWhenNoneIsConfigured) {
   config_.gravity_down_W = Eigen::Vector3d::Zero();
   ObjectMapper mapper(config_, priors_);

@@ -226,6 +226,17 @@ TEST_F(IntersectionFilterTest, OfTwoDuplicatesUnderTwoLabelsTheLessSupportedIsDe
   chair.observations = 7;
   const ObjectDatabase database = makeDatabase({couch, chair});
   EXPECT_EQ(filter_.intersectingObjects(database, kUp), std::vector<int>{3});
+  // The deleted duplicate is reported with the object it duplicates (to merge it there); a
+  // deletion by Algorithm 1's containment rule is not a duplicate.
+  std::vector<std::pair<int, int>> duplicates;
+  EXPECT_EQ(filter_.intersectingObjects(database, kUp, &duplicates), std::vector<int>{3});
+  EXPECT_EQ(duplicates, (std::vector<std::pair<int, int>>{{3, 5}}));
+  const OrientedBox small = makeBox(Eigen::Vector3d(0.4, 0.0, 0.0), Eigen::Vector3d(1.0, 0.5, 1.0));
+  EXPECT_EQ(filter_.intersectingObjects(
+                makeDatabase({makeObject(1, "chair", small), makeObject(2, "chair", a_)}), kUp,
+                &duplicates),
+            std::vector<int>{1});
+  EXPECT_TRUE(duplicates.empty());
   // Algorithm 1 as published: ids and containment decide, not support.
   IntersectionFilter::Config paper;
   paper.duplicate_ratio = 0.0;

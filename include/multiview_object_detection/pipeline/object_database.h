@@ -188,6 +188,12 @@ class ObjectDatabase {
   int reboxPending(const FusedCloudProcessor& process, int threads);
   // Objects waiting for reboxPending().
   const std::vector<int>& pendingRebox() const { return pending_rebox_; }
+  // Evidence fusion: one object mapped twice (the refinement's duplicates) becomes one. The votes,
+  // signed distances and normals of `from_id` are added to `into_id`'s voxels, with its
+  // observations and class scores; the probability becomes the observation-weighted mean; the
+  // merged object is boxed (`process`) and `from_id` removed. False (and nothing changes) unless
+  // both exist, differ and hold evidence on this database's grid.
+  bool mergeInto(int into_id, int from_id, const FusedCloudProcessor& process);
 
   // A voxel of the object: inside >= 1, inside >= outside and, where views measured it, within
   // surface_band_m of the surface they saw.
@@ -214,6 +220,8 @@ class ObjectDatabase {
 
  private:
   int takeNextId();
+  // Boxes an object's supported voxels (`process`) and rebuilds its cloud from its evidence.
+  void rebox(MapObject* object, const FusedCloudProcessor& process) const;
 
   Config config_;
   ClassPriors priors_;

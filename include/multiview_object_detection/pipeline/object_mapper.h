@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/floor_estimator.h"
@@ -75,6 +76,9 @@ class ObjectMapper {
   struct RefinementReport {
     std::vector<int> atypical_ids;
     std::vector<int> intersecting_ids;
+    // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
+    // (deleted id, id merged into).
+    std::vector<std::pair<int, int>> merged_ids;
     double time_ms = 0.0;
   };
 

@@ -2,6 +2,7 @@
 // 11, Algorithm 1).
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/class_priors.h"
@@ -43,6 +44,12 @@ class IntersectionFilter {
     // with less support (observations x probability) goes, whatever their sizes and ids.
     // 0 = Algorithm 1 as published (the more contained one goes, the later one on ties).
     double duplicate_ratio = 0.5;
+    // Evidence fusion: the deleted duplicate's views are merged into the one kept (its voxels'
+    // votes, observations, class scores) and the merged object re-boxed, instead of being lost: an
+    // object whose first views saw disjoint parts is mapped twice, and each copy has parts the
+    // other lacks (a chair's legs, its backrest). false, and in the single-frame baseline
+    // (database disable_fusion): the duplicate is deleted.
+    bool merge_duplicates = true;
     // Containers: of an object mostly inside another (Eq. 11), Algorithm 1 deletes the inner
     // one. When the inner one has at least this many times the container's support, the container
     // goes instead: a real container is in view whenever what lies inside it is, so it collects
@@ -70,8 +77,12 @@ class IntersectionFilter {
   // Algorithm 1 over the objects in id order: for each σ, ξ is the later object whose containment
   // ratio with σ is largest; whichever of the two is more contained (ratio above the threshold) is
   // deleted (or the container, see container_support_ratio).
-  std::vector<int> intersectingObjects(const ObjectDatabase& database,
-                                       const Eigen::Vector3d& up) const;
+  // duplicates (optional): for each object deleted by the duplicate rule, (its id, the id of the
+  // object it duplicates), so that a caller can merge the two instead of losing the deleted one's
+  // views (ObjectDatabase::mergeInto).
+  std::vector<int> intersectingObjects(
+      const ObjectDatabase& database, const Eigen::Vector3d& up,
+      std::vector<std::pair<int, int>>* duplicates = nullptr) const;
 
  private:
   Config config_;
