@@ -97,6 +97,21 @@ void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap*
   addSignedDistances(view, voxel_size_m, evidence, 0, evidence->bucket_count());
 }
 
+// Evidence fusion's class vote: `score` more for `class_name`; the object takes the class with the
+// largest sum. An object without scores yet (a map saved before them) starts from its own class.
+void addClassScore(const std::string& class_name, double score, MapObject* object) {
+  std::map<std::string, double>& scores = object->class_scores;
+  if (scores.empty()) scores[object->class_name] = object->probability * object->observations;
+  scores[class_name] += score;
+  const auto best =
+      std::max_element(scores.begin(), scores.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (best->first != object->class_name) {
+    object->class_name = best->first;
+    object->class_id = cocoClassId(best->first);
+  }
+}
+
 }  // namespace
 
 FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
@@ -287,21 +302,9 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     MapObject& object = *nearest;
     if (evidence) {
       // The class: the largest summed probability of the detections fused here.
-      if (object.class_scores.empty()) {
-        object.class_scores[object.class_name] = object.probability * object.observations;
-      }
-      object.class_scores[observation.class_name] += observation.probability;
-      const auto best =
-          std::max_element(object.class_scores.begin(), object.class_scores.end(),
-                           [](const auto& a, const auto& b) { return a.second < b.second; });
-      if (best->first != object.class_name) {
-        object.class_name = best->first;
-        object.class_id = cocoClassId(best->first);
-      }
+      addClassScore(observation.class_name, observation.probability, &object);
     }
-    const PointCloud* to_process = &object.points_W;
-    PointCloud supported;
-    std::vector<Eigen::Vector3f> supported_normals;
+    const PointCloud* to_process = &object.points_W;  // the paper's fusion: Eq. 7's cloud
     if (config_.fusion == "evidence") {
       // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
       if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
@@ -330,12 +333,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
           addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m,
                              &object.evidence);
         }
-        supported = supportedVoxels(object, &supported_normals);
-        object.points_W.clear();
-        for (const auto& entry : object.evidence) {
-          object.points_W.push_back(voxelCentre(entry.first));
-        }
-        to_process = &supported;
+        rebox(&object, process);
+        to_process = nullptr;
       }
     } else {
       // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface
@@ -351,7 +350,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     OrientedBox box;
     double yaw_rad = object.yaw_rad;
     if (process && to_process != nullptr &&
-        process(object.class_name, *to_process, supported_normals, &segment_W, &box, &yaw_rad)) {
+        process(object.class_name, *to_process, {}, &segment_W, &box, &yaw_rad)) {
       object.segment_W = std::move(segment_W);
       object.box = box;
       object.yaw_rad = yaw_rad;
@@ -495,21 +494,10 @@ bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcess
     e.sdf_sum += f.sdf_sum;
     e.sdf_count = saturated(e.sdf_count, f.sdf_count);
   }
-  const auto scores = [](const MapObject& object) {
-    std::map<std::string, double> result = object.class_scores;
-    if (result.empty()) result[object.class_name] = object.probability * object.observations;
-    return result;
-  };
-  std::map<std::string, double> class_scores = scores(into);
-  for (const auto& entry : scores(from)) class_scores[entry.first] += entry.second;
-  into.class_scores = class_scores;
-  const auto best =
-      std::max_element(class_scores.begin(), class_scores.end(),
-                       [](const auto& a, const auto& b) { return a.second < b.second; });
-  if (best->first != into.class_name) {
-    into.class_name = best->first;
-    into.class_id = cocoClassId(best->first);
-  }
+  // from's class scores (its own class, for a map saved before them) into into's vote.
+  std::map<std::string, double> from_scores = from.class_scores;
+  if (from_scores.empty()) from_scores[from.class_name] = from.probability * from.observations;
+  for (const auto& entry : from_scores) addClassScore(entry.first, entry.second, &into);
   const int observations = into.observations + from.observations;
   if (observations > 0) {
     into.probability =
