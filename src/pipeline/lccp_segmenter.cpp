@@ -21,6 +21,92 @@ constexpr double kMaxVoxelsPerAxis = 1.0e6;
 bool finitePositive(double value) { return std::isfinite(value) && value > 0.0; }
 bool finiteNonNegative(double value) { return std::isfinite(value) && value >= 0.0; }
 
+// The "pcl" implementation: PCL's supervoxels and LCCP's edge classification.
+Status pclSupervoxels(const PointCloud& points, const std::vector<std::size_t>& source_index,
+                      bool log_transform, const LccpSegmenter::Config& config_,
+                      LccpSegmenter::SupervoxelGraph* graph) {
+  using SupervoxelEdge = LccpSegmenter::SupervoxelEdge;
+  *graph = LccpSegmenter::SupervoxelGraph();
+  graph->point_supervoxel.assign(points.size(), -1);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(source_index.size());
+  for (const std::size_t i : source_index) {
+    cloud->push_back(pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z()));
+  }
+  try {
+    pcl::SupervoxelClustering<pcl::PointXYZ> supervoxels(
+        static_cast<float>(config_.voxel_resolution_m),
+        static_cast<float>(config_.seed_resolution_m));
+    supervoxels.setUseSingleCameraTransform(log_transform);
+    supervoxels.setInputCloud(cloud);
+    supervoxels.setSpatialImportance(static_cast<float>(config_.spatial_importance));
+    supervoxels.setNormalImportance(static_cast<float>(config_.normal_importance));
+    supervoxels.setColorImportance(static_cast<float>(config_.color_importance));
+    std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZ>::Ptr> clusters;
+    supervoxels.extract(clusters);
+    if (clusters.empty()) return Status::Ok();
+    std::multimap<std::uint32_t, std::uint32_t> adjacency;
+    supervoxels.getSupervoxelAdjacency(adjacency);
+
+    pcl::LCCPSegmentation<pcl::PointXYZ> lccp;
+    lccp.setConcavityToleranceThreshold(static_cast<float>(config_.concavity_tolerance_deg));
+    lccp.setSanityCheck(config_.use_sanity_criterion);
+    lccp.setSmoothnessCheck(true, static_cast<float>(config_.voxel_resolution_m),
+                            static_cast<float>(config_.seed_resolution_m),
+                            static_cast<float>(config_.smoothness_threshold));
+    lccp.setKFactor(config_.use_extended_convexity ? 1 : 0);
+    // PCL groups and merges small segments in the order of its graph's vertices, which are heap
+    // addresses (boost::setS): the same input could give different segments in another thread or
+    // process. Only the convex/concave classification of each edge is taken from PCL; grouping and
+    // merging follow the supervoxel labels (groupSupervoxels).
+    lccp.setMinSegmentSize(0);
+    lccp.setInputSupervoxels(clusters, adjacency);
+    lccp.segment();
+    pcl::LCCPSegmentation<pcl::PointXYZ>::SupervoxelAdjacencyList lccp_graph;
+    lccp.getSVAdjacencyList(lccp_graph);
+    std::vector<std::uint32_t> labels;
+    labels.reserve(clusters.size());
+    for (const auto& entry : clusters) {  // ascending labels (std::map)
+      labels.push_back(entry.first);
+      const pcl::PointXYZRGBA& c = entry.second->centroid_;
+      const pcl::Normal& n = entry.second->normal_;
+      graph->centroids.emplace_back(c.x, c.y, c.z);
+      graph->normals.emplace_back(n.normal_x, n.normal_y, n.normal_z);
+    }
+    const auto indexOf = [&labels](std::uint32_t label) {
+      return static_cast<int>(std::lower_bound(labels.begin(), labels.end(), label) -
+                              labels.begin());
+    };
+    graph->edges.reserve(boost::num_edges(lccp_graph));
+    const auto edge_range = boost::edges(lccp_graph);
+    for (auto it = edge_range.first; it != edge_range.second; ++it) {
+      SupervoxelEdge edge;
+      edge.a = indexOf(lccp_graph[boost::source(*it, lccp_graph)]);
+      edge.b = indexOf(lccp_graph[boost::target(*it, lccp_graph)]);
+      edge.convex = lccp_graph[*it].is_valid;
+      graph->edges.push_back(edge);
+    }
+
+    // Each input point takes its supervoxel; label 0 = not in any supervoxel.
+    const pcl::PointCloud<pcl::PointXYZL>::Ptr labeled = supervoxels.getLabeledCloud();
+    if (labeled == nullptr || labeled->size() != cloud->size()) {
+      return Status::Error("supervoxel labels do not match the input cloud");
+    }
+    for (std::size_t i = 0; i < labeled->size(); ++i) {
+      const std::uint32_t label = (*labeled)[i].label;
+      if (label == 0 || !std::binary_search(labels.begin(), labels.end(), label)) continue;
+      graph->point_supervoxel[source_index[i]] = indexOf(label);
+    }
+  } catch (const std::exception& e) {
+    *graph = LccpSegmenter::SupervoxelGraph();
+    return Status::Error(std::string("PCL supervoxel/LCCP failed: ") + e.what());
+  } catch (...) {
+    *graph = LccpSegmenter::SupervoxelGraph();
+    return Status::Error("PCL supervoxel/LCCP failed with an unknown exception");
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status LccpSegmenter::Config::isValid() const {
@@ -48,6 +134,12 @@ Status LccpSegmenter::Config::isValid() const {
     return Status::Error("min_segment_size must be >= 0 (got " + std::to_string(min_segment_size) +
                          ")");
   }
+  if (implementation != "voxel_grid" && implementation != "pcl") {
+    return Status::Error("implementation must be voxel_grid or pcl (got '" + implementation + "')");
+  }
+  if (use_extended_convexity && implementation != "pcl") {
+    return Status::Error("use_extended_convexity needs implementation: pcl");
+  }
   if (min_points < 1) {
     return Status::Error("min_points must be >= 1 (got " + std::to_string(min_points) + ")");
   }
@@ -57,6 +149,7 @@ Status LccpSegmenter::Config::isValid() const {
 std::string LccpSegmenter::Config::print() const {
   std::ostringstream out;
   out << "enable: " << (enable ? "true" : "false") << "\n"
+      << "implementation: " << implementation << "\n"
       << "voxel_resolution_m: " << voxel_resolution_m << "\n"
       << "seed_resolution_m: " << seed_resolution_m << "\n"
       << "spatial_importance: " << spatial_importance << "\n"
@@ -172,24 +265,20 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   const Status valid = config_.isValid();
   if (!valid) return valid;
 
-  // PCL gets only finite points; `source_index` maps them back to the caller's points.
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->reserve(points.size());
+  // Only finite points are clustered; `source_index` lists them.
   std::vector<std::size_t> source_index;
   source_index.reserve(points.size());
   float min_z = std::numeric_limits<float>::infinity();
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f& p = points[i];
-    if (!p.allFinite()) continue;
-    cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    if (!points[i].allFinite()) continue;
     source_index.push_back(i);
-    min_z = std::min(min_z, p.z());
+    min_z = std::min(min_z, points[i].z());
   }
-  if (cloud->empty()) {
+  if (source_index.empty()) {
     return Status::Error("no finite points to segment (" + std::to_string(points.size()) +
                          " points in)");
   }
-  if (static_cast<int>(cloud->size()) < config_.min_points) {
+  if (static_cast<int>(source_index.size()) < config_.min_points) {
     // Too small to split into supervoxels: keep it whole.
     for (const std::size_t i : source_index) result->largest_segment.push_back(points[i]);
     wholeCloud();
@@ -203,9 +292,11 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   // PCL's octree keys are 32-bit (and it asserts on overflow): refuse absurd extents.
   Eigen::Array3d lower = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Array3d upper = -lower;
-  for (const pcl::PointXYZ& p : *cloud) {
-    const Eigen::Array3d q = log_transform ? Eigen::Array3d(p.x / p.z, p.y / p.z, std::log(p.z))
-                                           : Eigen::Array3d(p.x, p.y, p.z);
+  for (const std::size_t i : source_index) {
+    const Eigen::Vector3f& p = points[i];
+    const Eigen::Array3d q = log_transform
+                                 ? Eigen::Array3d(p.x() / p.z(), p.y() / p.z(), std::log(p.z()))
+                                 : p.cast<double>().array();
     lower = lower.min(q);
     upper = upper.max(q);
   }
@@ -215,121 +306,50 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
                          std::to_string(config_.voxel_resolution_m));
   }
 
-  try {
-    pcl::SupervoxelClustering<pcl::PointXYZ> supervoxels(
-        static_cast<float>(config_.voxel_resolution_m),
-        static_cast<float>(config_.seed_resolution_m));
-    supervoxels.setUseSingleCameraTransform(log_transform);
-    supervoxels.setInputCloud(cloud);
-    supervoxels.setSpatialImportance(static_cast<float>(config_.spatial_importance));
-    supervoxels.setNormalImportance(static_cast<float>(config_.normal_importance));
-    supervoxels.setColorImportance(static_cast<float>(config_.color_importance));
-    std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZ>::Ptr> clusters;
-    supervoxels.extract(clusters);
-    result->num_supervoxels = static_cast<int>(clusters.size());
-    if (clusters.empty()) {
-      return Status::Error("supervoxel clustering found no supervoxels in " +
-                           std::to_string(cloud->size()) + " points (too sparse?)");
-    }
-    std::multimap<std::uint32_t, std::uint32_t> adjacency;
-    supervoxels.getSupervoxelAdjacency(adjacency);
-
-    // Eq. 2: merge supervoxels across convex (and, with the sanity criterion, not singular)
-    // edges; concave edges separate an object from the floor and wall it stands against.
-    pcl::LCCPSegmentation<pcl::PointXYZ> lccp;
-    lccp.setConcavityToleranceThreshold(static_cast<float>(config_.concavity_tolerance_deg));
-    lccp.setSanityCheck(config_.use_sanity_criterion);
-    lccp.setSmoothnessCheck(true, static_cast<float>(config_.voxel_resolution_m),
-                            static_cast<float>(config_.seed_resolution_m),
-                            static_cast<float>(config_.smoothness_threshold));
-    lccp.setKFactor(config_.use_extended_convexity ? 1 : 0);
-    // PCL groups and merges small segments in the order of its graph's vertices, which are heap
-    // addresses (boost::setS): the same input could give different segments in another thread or
-    // process. Only the convex/concave classification of each edge is taken from PCL; grouping and
-    // merging follow the supervoxel labels (groupSupervoxels).
-    lccp.setMinSegmentSize(0);
-    lccp.setInputSupervoxels(clusters, adjacency);
-    lccp.segment();
-    pcl::LCCPSegmentation<pcl::PointXYZ>::SupervoxelAdjacencyList graph;
-    lccp.getSVAdjacencyList(graph);
-    std::vector<std::uint32_t> labels;
-    labels.reserve(clusters.size());
-    for (const auto& entry : clusters) labels.push_back(entry.first);  // ascending (std::map)
-    std::vector<SupervoxelEdge> edges;
-    edges.reserve(boost::num_edges(graph));
-    const auto indexOf = [&labels](std::uint32_t label) {
-      return static_cast<int>(std::lower_bound(labels.begin(), labels.end(), label) -
-                              labels.begin());
-    };
-    const auto edge_range = boost::edges(graph);
-    for (auto it = edge_range.first; it != edge_range.second; ++it) {
-      SupervoxelEdge edge;
-      edge.a = indexOf(graph[boost::source(*it, graph)]);
-      edge.b = indexOf(graph[boost::target(*it, graph)]);
-      edge.convex = graph[*it].is_valid;
-      edges.push_back(edge);
-    }
-    const std::vector<int> supervoxel_segment =
-        groupSupervoxels(static_cast<int>(labels.size()), edges, config_.min_segment_size);
-    std::map<std::uint32_t, std::uint32_t> supervoxel_to_segment;
-    std::set<int> segment_ids;
-    for (size_t i = 0; i < labels.size(); ++i) {
-      supervoxel_to_segment[labels[i]] = static_cast<std::uint32_t>(supervoxel_segment[i]);
-      segment_ids.insert(supervoxel_segment[i]);
-    }
-    result->num_segments = static_cast<int>(segment_ids.size());
-
-    // Each input point takes its supervoxel's segment; label 0 = not in any supervoxel.
-    const pcl::PointCloud<pcl::PointXYZL>::Ptr labeled = supervoxels.getLabeledCloud();
-    if (labeled == nullptr || labeled->size() != cloud->size()) {
-      return Status::Error("supervoxel labels do not match the input cloud");
-    }
-    std::vector<std::uint32_t> point_segment(cloud->size(), 0);
-    std::map<std::uint32_t, std::size_t> segment_points;
-    for (std::size_t i = 0; i < labeled->size(); ++i) {
-      const std::uint32_t supervoxel = (*labeled)[i].label;
-      if (supervoxel == 0) continue;
-      const auto it = supervoxel_to_segment.find(supervoxel);
-      if (it == supervoxel_to_segment.end() || it->second == 0) continue;
-      point_segment[i] = it->second;
-      ++segment_points[it->second];
-    }
-    if (segment_points.empty()) {
-      return Status::Error("LCCP assigned no point to a segment");
-    }
-
-    // The largest segment by point count is the object; ties go to the lower label.
-    std::uint32_t largest = 0;
-    std::size_t largest_count = 0;
-    for (const auto& entry : segment_points) {
-      if (entry.second > largest_count) {
-        largest = entry.first;
-        largest_count = entry.second;
-      }
-    }
-    result->largest_segment.reserve(largest_count);
-    for (std::size_t i = 0; i < point_segment.size(); ++i) {
-      if (point_segment[i] == largest) result->largest_segment.push_back(points[source_index[i]]);
-    }
-    std::map<std::uint32_t, std::vector<int>> by_label;
-    for (std::size_t i = 0; i < point_segment.size(); ++i) {
-      if (point_segment[i] != 0) {
-        by_label[point_segment[i]].push_back(static_cast<int>(source_index[i]));
-      }
-    }
-    result->segments.push_back(std::move(by_label[largest]));
-    by_label.erase(largest);
-    for (auto& entry : by_label) result->segments.push_back(std::move(entry.second));
-    std::stable_sort(
-        result->segments.begin() + 1, result->segments.end(),
-        [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
-  } catch (const std::exception& e) {
-    *result = Result();
-    return Status::Error(std::string("PCL supervoxel/LCCP failed: ") + e.what());
-  } catch (...) {
-    *result = Result();
-    return Status::Error("PCL supervoxel/LCCP failed with an unknown exception");
+  SupervoxelGraph graph;
+  if (config_.implementation == "pcl") {
+    const Status clustered = pclSupervoxels(points, source_index, log_transform, config_, &graph);
+    if (!clustered) return clustered;
+  } else {
+    const Status clustered = gridSupervoxels(points, log_transform, &graph);
+    if (!clustered) return clustered;
   }
+  const int num_supervoxels = static_cast<int>(graph.centroids.size());
+  result->num_supervoxels = num_supervoxels;
+  if (num_supervoxels == 0) {
+    return Status::Error("supervoxel clustering found no supervoxels in " +
+                         std::to_string(source_index.size()) + " points (too sparse?)");
+  }
+  // Eq. 2: merge supervoxels across convex (and, with the sanity criterion, not singular) edges;
+  // concave edges separate an object from the floor and wall it stands against.
+  const std::vector<int> supervoxel_segment =
+      groupSupervoxels(num_supervoxels, graph.edges, config_.min_segment_size);
+  const int num_segments =
+      *std::max_element(supervoxel_segment.begin(), supervoxel_segment.end());  // ids 1..n
+  result->num_segments = num_segments;
+
+  // Each point takes its supervoxel's segment; points in no supervoxel are in none.
+  std::vector<std::vector<int>> by_segment(num_segments + 1);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int supervoxel = graph.point_supervoxel[i];
+    if (supervoxel >= 0) by_segment[supervoxel_segment[supervoxel]].push_back(static_cast<int>(i));
+  }
+  // The largest segment by point count is the object; ties go to the lower segment id.
+  int largest = 0;
+  for (int id = 1; id <= num_segments; ++id) {
+    if (by_segment[id].size() > by_segment[largest].size()) largest = id;
+  }
+  if (largest == 0) return Status::Error("LCCP assigned no point to a segment");
+  result->largest_segment.reserve(by_segment[largest].size());
+  for (const int i : by_segment[largest]) result->largest_segment.push_back(points[i]);
+  result->segments.push_back(std::move(by_segment[largest]));
+  for (int id = 1; id <= num_segments; ++id) {
+    if (id != largest && !by_segment[id].empty())
+      result->segments.push_back(std::move(by_segment[id]));
+  }
+  std::stable_sort(
+      result->segments.begin() + 1, result->segments.end(),
+      [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
   return Status::Ok();
 }
 

@@ -104,6 +104,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.outline_cell_m = 0.0;
   extractor.min_consistent_neighbours = 0;
   filter.outlier_removal = "statistical";
+  lccp.implementation = "pcl";
   intersection_filter.duplicate_ratio = 0.0;
   intersection_filter.container_support_ratio = 0.0;
 }

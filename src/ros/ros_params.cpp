@@ -157,6 +157,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "filter/outlier_removal", &m.filter.outlier_removal, e);
   readParam(nh, "filter/min_voxel_neighbours", &m.filter.min_voxel_neighbours, e);
   readParam(nh, "lccp/selection", &m.selection.selection, e);
+  readParam(nh, "lccp/implementation", &m.lccp.implementation, e);
   readNumber(nh, "selection/core_box_fraction", &m.selection.core_box_fraction, e);
   readNumber(nh, "selection/core_mask_erosion", &m.selection.core_mask_erosion, e);
   readNumber(nh, "selection/adjacency_distance_m", &m.selection.adjacency_distance_m, e);

@@ -80,6 +80,8 @@ const char* const kUsage =
     "  --fusion F             paper (Eq. 7) | evidence (default)\n"
     "  --outlier-removal M    statistical_centres (default) | statistical (PCL's exactly, the\n"
     "                         paper's) | voxel_neighbours | none\n"
+    "  --lccp-implementation I  voxel_grid (default: supervoxels on a hash grid) | pcl (PCL's,\n"
+    "                         the paper's)\n"
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
@@ -115,6 +117,7 @@ struct Options {
   std::string selection;
   std::string fusion;
   std::string outlier_removal;
+  std::string lccp_implementation;
   bool estimate_gravity = false;
   bool simulated_perfect = false;
   long simulated_seed = 1;
@@ -153,6 +156,11 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (!value(&options->fusion) ||
           (options->fusion != "paper" && options->fusion != "evidence")) {
         return "--fusion needs paper or evidence";
+      }
+    } else if (arg == "--lccp-implementation") {
+      if (!value(&options->lccp_implementation) ||
+          (options->lccp_implementation != "voxel_grid" && options->lccp_implementation != "pcl")) {
+        return "--lccp-implementation needs voxel_grid or pcl";
       }
     } else if (arg == "--outlier-removal") {
       if (!value(&options->outlier_removal) ||
@@ -442,6 +450,9 @@ int run(int argc, char** argv) {
   if (!options.selection.empty()) config.selection.selection = options.selection;
   if (!options.fusion.empty()) config.database.fusion = options.fusion;
   if (!options.outlier_removal.empty()) config.filter.outlier_removal = options.outlier_removal;
+  if (!options.lccp_implementation.empty()) {
+    config.lccp.implementation = options.lccp_implementation;
+  }
   if (options.no_floor) config.floor.enable = false;
   config.min_probability = options.min_probability;
   config.num_threads = options.threads;

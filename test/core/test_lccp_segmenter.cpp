@@ -115,7 +115,14 @@ SegmentStats segmentStats(const LabeledCloud& cloud, const PointCloud& segment) 
   return stats;
 }
 
-class LccpSegmenterBoxScene : public ::testing::Test {
+// Both implementations ("voxel_grid", the default, and "pcl") must cut the same way.
+LccpSegmenter::Config withImplementation(const std::string& implementation) {
+  LccpSegmenter::Config config;
+  config.implementation = implementation;
+  return config;
+}
+
+class LccpSegmenterBoxScene : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
     T_W_C_ = test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
@@ -128,7 +135,7 @@ class LccpSegmenterBoxScene : public ::testing::Test {
 
 }  // namespace
 
-TEST_F(LccpSegmenterBoxScene, MaskedViewHoldsBoxFloorAndWall) {
+TEST_P(LccpSegmenterBoxScene, MaskedViewHoldsBoxFloorAndWall) {
   // The premise of the test: the mask brought plenty of background along.
   const auto count = [&](Surface s) {
     return std::count(cloud_.surfaces.begin(), cloud_.surfaces.end(), s);
@@ -140,8 +147,8 @@ TEST_F(LccpSegmenterBoxScene, MaskedViewHoldsBoxFloorAndWall) {
   EXPECT_GT(count(Surface::kFloor) + count(Surface::kWall), count(Surface::kBox));
 }
 
-TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallWithLogDepth) {
-  const LccpSegmenter segmenter;  // defaults, as for a single Kinect view
+TEST_P(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallWithLogDepth) {
+  const LccpSegmenter segmenter(withImplementation(GetParam()));  // as for a single Kinect view
   LccpSegmenter::Result result;
   ASSERT_TRUE(segmenter.segment(cloud_.points_C, true, &result).ok());
   const SegmentStats stats = segmentStats(cloud_, result.largest_segment);
@@ -151,14 +158,14 @@ TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallWithLogDepth) {
   EXPECT_GE(result.num_segments, 2);
 }
 
-TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallInWorldFrame) {
+TEST_P(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallInWorldFrame) {
   // The fused path: gravity-aligned world frame, no log-depth transform. Its origin is a camera
   // centre, as in ORB-SLAM2's map (normals are flipped towards the origin).
   Eigen::Isometry3d R_W_C = T_W_C_;
   R_W_C.translation().setZero();
   const PointCloud points_W = transformCloud(cloud_.points_C, R_W_C);
   LabeledCloud cloud_W{points_W, cloud_.surfaces};
-  const LccpSegmenter segmenter;
+  const LccpSegmenter segmenter(withImplementation(GetParam()));
   LccpSegmenter::Result result;
   ASSERT_TRUE(segmenter.segment(points_W, false, &result).ok());
   const SegmentStats stats = segmentStats(cloud_W, result.largest_segment);
@@ -166,21 +173,22 @@ TEST_F(LccpSegmenterBoxScene, CutsBoxFromFloorAndWallInWorldFrame) {
   EXPECT_LE(stats.contamination(), 0.1) << "box recall " << stats.boxRecall();
 }
 
-TEST_F(LccpSegmenterBoxScene, CutsBoxStandingAgainstWall) {
+TEST_P(LccpSegmenterBoxScene, CutsBoxStandingAgainstWall) {
   // Box square to the camera with its back touching the wall: only concave edges separate them.
   scene_.box_yaw_rad = 0.0;
   scene_.wall_y_m = scene_.box_center.y() + scene_.box_half_size.y();
   const LabeledCloud cloud = renderMaskedView(scene_, T_W_C_, kMaskMargin, 1.0);
   LccpSegmenter::Result result;
-  ASSERT_TRUE(LccpSegmenter().segment(cloud.points_C, true, &result).ok());
+  ASSERT_TRUE(
+      LccpSegmenter(withImplementation(GetParam())).segment(cloud.points_C, true, &result).ok());
   const SegmentStats stats = segmentStats(cloud, result.largest_segment);
   EXPECT_GE(stats.boxRecall(), 0.8) << "contamination " << stats.contamination();
   EXPECT_LE(stats.contamination(), 0.1) << "box recall " << stats.boxRecall();
 }
 
-TEST_F(LccpSegmenterBoxScene, LogTransformFlagChangesSupervoxels) {
+TEST_P(LccpSegmenterBoxScene, LogTransformFlagChangesSupervoxels) {
   // With the flag on and off the camera-frame cloud is clustered differently (the transform runs).
-  LccpSegmenter::Config config;
+  LccpSegmenter::Config config = withImplementation(GetParam());
   config.log_depth_transform = true;
   LccpSegmenter::Result with_log;
   ASSERT_TRUE(LccpSegmenter(config).segment(cloud_.points_C, true, &with_log).ok());
@@ -194,7 +202,7 @@ TEST_F(LccpSegmenterBoxScene, LogTransformFlagChangesSupervoxels) {
   PointCloud behind = cloud_.points_C;
   behind.emplace_back(0.0f, 0.0f, -1.0f);
   LccpSegmenter::Result result;
-  EXPECT_TRUE(LccpSegmenter().segment(behind, true, &result).ok());
+  EXPECT_TRUE(LccpSegmenter(withImplementation(GetParam())).segment(behind, true, &result).ok());
   EXPECT_FALSE(result.largest_segment.empty());
 }
 
@@ -221,8 +229,13 @@ TEST(LccpSegmenterPassThrough, TinyCloudKeptWhole) {
   EXPECT_EQ(result.num_supervoxels, 0);
 }
 
-TEST(LccpSegmenterBadInput, EmptyAndNonFinite) {
-  const LccpSegmenter segmenter;
+INSTANTIATE_TEST_SUITE_P(Implementations, LccpSegmenterBoxScene,
+                         ::testing::Values("voxel_grid", "pcl"));
+
+class LccpSegmenterBadInput : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(LccpSegmenterBadInput, EmptyAndNonFinite) {
+  const LccpSegmenter segmenter(withImplementation(GetParam()));
   LccpSegmenter::Result result;
   EXPECT_FALSE(segmenter.segment(PointCloud(), true, &result).ok());
   EXPECT_TRUE(result.largest_segment.empty());
@@ -246,6 +259,9 @@ TEST(LccpSegmenterBadInput, EmptyAndNonFinite) {
   EXPECT_EQ(result.largest_segment.size(), 10u);
 }
 
+INSTANTIATE_TEST_SUITE_P(Implementations, LccpSegmenterBadInput,
+                         ::testing::Values("voxel_grid", "pcl"));
+
 TEST(LccpSegmenterConfig, Validation) {
   LccpSegmenter::Config config;
   EXPECT_TRUE(config.isValid().ok());
@@ -265,6 +281,15 @@ TEST(LccpSegmenterConfig, Validation) {
   bad = config;
   bad.normal_importance = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
+  bad.implementation = "octree";
+  EXPECT_FALSE(bad.isValid().ok());
+  // PCL's extended convexity (k-convexity) exists only in PCL's implementation.
+  bad = config;
+  bad.use_extended_convexity = true;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad.implementation = "pcl";
+  EXPECT_TRUE(bad.isValid().ok());
   // An invalid config is reported by segment(), not acted on.
   LccpSegmenter::Result result;
   bad = config;
@@ -346,6 +371,165 @@ TEST(LccpGrouping, EdgeOrderAndDirectionDoNotMatter) {
           << "min_segment_size " << min_size << ", trial " << trial;
     }
   }
+}
+
+}  // namespace mvod
+
+namespace mvod {
+namespace {
+
+// Share of the points of `a` that are also in `b` and vice versa (indices into the same cloud).
+double overlap(const std::vector<int>& a, const std::vector<int>& b) {
+  std::vector<int> sa = a, sb = b, both;
+  std::sort(sa.begin(), sa.end());
+  std::sort(sb.begin(), sb.end());
+  std::set_intersection(sa.begin(), sa.end(), sb.begin(), sb.end(), std::back_inserter(both));
+  const std::size_t larger = std::max(sa.size(), sb.size());
+  return larger > 0 ? static_cast<double>(both.size()) / larger : 1.0;
+}
+
+}  // namespace
+
+// The voxel grid reimplements PCL's supervoxels (same voxels, seeds, expansion and convexity
+// test), so both give the same segments up to float rounding: on these scenes, bit for bit.
+TEST(LccpGridSupervoxels, SameSegmentsAsPcl) {
+  const Eigen::Isometry3d T_W_C = test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
+  for (const double yaw_deg : {0.0, 30.0, 60.0}) {
+    test::BoxScene scene = lccpScene();
+    scene.box_yaw_rad = yaw_deg * kPi / 180.0;
+    const LabeledCloud cloud = renderMaskedView(scene, T_W_C, kMaskMargin, 1.0);
+    Eigen::Isometry3d R_W_C = T_W_C;
+    R_W_C.translation().setZero();
+    // Seeds of 0.1 m also exercise PCL's seed bar (voxels near a seed), inactive at 0.05 m.
+    for (const double seed_m : {0.05, 0.1}) {
+      for (const bool camera_frame : {true, false}) {
+        SCOPED_TRACE("yaw " + std::to_string(yaw_deg) + " seed " + std::to_string(seed_m) +
+                     (camera_frame ? " camera" : " world"));
+        const PointCloud points =
+            camera_frame ? cloud.points_C : transformCloud(cloud.points_C, R_W_C);
+        LccpSegmenter::Config grid_config = withImplementation("voxel_grid");
+        grid_config.seed_resolution_m = seed_m;
+        LccpSegmenter::Config pcl_config = grid_config;
+        pcl_config.implementation = "pcl";
+        LccpSegmenter::Result grid, pcl;
+        ASSERT_TRUE(LccpSegmenter(grid_config).segment(points, camera_frame, &grid).ok());
+        ASSERT_TRUE(LccpSegmenter(pcl_config).segment(points, camera_frame, &pcl).ok());
+        EXPECT_GT(grid.num_supervoxels, 10);
+        EXPECT_NEAR(grid.num_supervoxels, pcl.num_supervoxels, 0.02 * pcl.num_supervoxels);
+        EXPECT_NEAR(grid.num_segments, pcl.num_segments, 1);
+        ASSERT_FALSE(grid.segments.empty());
+        ASSERT_FALSE(pcl.segments.empty());
+        EXPECT_GE(overlap(grid.segments[0], pcl.segments[0]), 0.99);
+      }
+    }
+  }
+}
+
+TEST(LccpGridSupervoxels, GraphIsWellFormedAndDeterministic) {
+  const test::BoxScene scene = lccpScene();
+  LabeledCloud cloud = renderMaskedView(
+      scene, test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0), kMaskMargin, 1.0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.points_C.insert(cloud.points_C.begin() + 7, Eigen::Vector3f(nan, 0.0f, 1.0f));
+  const LccpSegmenter segmenter;
+  LccpSegmenter::SupervoxelGraph graph;
+  ASSERT_TRUE(segmenter.gridSupervoxels(cloud.points_C, true, &graph).ok());
+  const int n = static_cast<int>(graph.centroids.size());
+  ASSERT_GT(n, 50);
+  ASSERT_EQ(graph.normals.size(), graph.centroids.size());
+  ASSERT_EQ(graph.point_supervoxel.size(), cloud.points_C.size());
+  EXPECT_EQ(graph.point_supervoxel[7], -1);  // the NaN
+  std::vector<int> points_in(n, 0);
+  int labelled = 0;
+  for (const int s : graph.point_supervoxel) {
+    ASSERT_GE(s, -1);
+    ASSERT_LT(s, n);
+    if (s >= 0) {
+      ++points_in[s];
+      ++labelled;
+    }
+  }
+  EXPECT_GE(labelled, 0.95 * (cloud.points_C.size() - 1));
+  EXPECT_EQ(std::count(points_in.begin(), points_in.end(), 0), 0) << "empty supervoxel";
+  for (int s = 0; s < n; ++s) {
+    EXPECT_NEAR(graph.normals[s].norm(), 1.0f, 1e-4f);
+    EXPECT_LE(graph.centroids[s].dot(graph.normals[s]), 0.0f) << "normal not towards the camera";
+  }
+  for (std::size_t k = 0; k < graph.edges.size(); ++k) {
+    const LccpSegmenter::SupervoxelEdge& e = graph.edges[k];
+    ASSERT_TRUE(e.a >= 0 && e.a < e.b && e.b < n);
+    if (k > 0) {
+      const LccpSegmenter::SupervoxelEdge& p = graph.edges[k - 1];
+      EXPECT_TRUE(std::make_pair(p.a, p.b) < std::make_pair(e.a, e.b)) << "edges not ascending";
+    }
+  }
+  LccpSegmenter::SupervoxelGraph again;
+  ASSERT_TRUE(segmenter.gridSupervoxels(cloud.points_C, true, &again).ok());
+  EXPECT_EQ(again.point_supervoxel, graph.point_supervoxel);
+  ASSERT_EQ(again.edges.size(), graph.edges.size());
+  for (std::size_t k = 0; k < graph.edges.size(); ++k) {
+    EXPECT_EQ(again.edges[k].convex, graph.edges[k].convex);
+  }
+  // Nothing usable: an error, not an empty success.
+  EXPECT_FALSE(
+      segmenter.gridSupervoxels(PointCloud(3, Eigen::Vector3f(nan, nan, nan)), true, &graph).ok());
+  EXPECT_FALSE(segmenter.gridSupervoxels(cloud.points_C, true, nullptr).ok());
+}
+
+// LCCP's edge test on two patches 5 cm apart: z up, normals towards the viewer.
+TEST(LccpConvexity, ConvexRidgeJoinsAndConcaveCornerSeparates) {
+  const LccpSegmenter::Config config;
+  // A box's top and its front face meet at a ridge: convex.
+  EXPECT_TRUE(LccpSegmenter::convexConnection({0.0f, 0.0f, 0.5f}, {0.0f, 0.0f, 1.0f},
+                                              {0.0f, 0.05f, 0.45f}, {0.0f, 1.0f, 0.0f}, config));
+  // The floor and a wall behind it meet in a corner: concave.
+  EXPECT_FALSE(LccpSegmenter::convexConnection({0.0f, 0.05f, 0.0f}, {0.0f, 0.0f, 1.0f},
+                                               {0.0f, 0.0f, 0.05f}, {0.0f, 1.0f, 0.0f}, config));
+  // The direction of the test does not matter.
+  EXPECT_FALSE(LccpSegmenter::convexConnection({0.0f, 0.0f, 0.05f}, {0.0f, 1.0f, 0.0f},
+                                               {0.0f, 0.05f, 0.0f}, {0.0f, 0.0f, 1.0f}, config));
+}
+
+TEST(LccpConvexity, ShallowConcavityWithinToleranceJoins) {
+  LccpSegmenter::Config config;
+  // Two patches of a slightly concave surface (normals 6 degrees apart, bending up).
+  const float a = static_cast<float>(3.0 * kPi / 180.0);
+  const Eigen::Vector3f n_s(-std::sin(a), 0.0f, std::cos(a));
+  const Eigen::Vector3f n_t(std::sin(a), 0.0f, std::cos(a));
+  const Eigen::Vector3f c_s(0.05f, 0.0f, 0.05f * std::tan(a));
+  const Eigen::Vector3f c_t(-0.05f, 0.0f, 0.05f * std::tan(a));
+  config.concavity_tolerance_deg = 10.0;
+  EXPECT_TRUE(LccpSegmenter::convexConnection(c_s, n_s, c_t, n_t, config));
+  config.concavity_tolerance_deg = 5.0;
+  EXPECT_FALSE(LccpSegmenter::convexConnection(c_s, n_s, c_t, n_t, config));
+}
+
+TEST(LccpConvexity, StepBetweenParallelPatchesSeparates) {
+  LccpSegmenter::Config config;
+  const Eigen::Vector3f up(0.0f, 0.0f, 1.0f);
+  // Same plane: joined. A 4 cm step (a book on a table): not, though the normals agree.
+  EXPECT_TRUE(
+      LccpSegmenter::convexConnection({0.05f, 0.0f, 0.0f}, up, {0.0f, 0.0f, 0.0f}, up, config));
+  EXPECT_FALSE(
+      LccpSegmenter::convexConnection({0.05f, 0.0f, 0.04f}, up, {0.0f, 0.0f, 0.0f}, up, config));
+  // The slack is smoothness_threshold voxels: a 1 mm step passes.
+  EXPECT_TRUE(
+      LccpSegmenter::convexConnection({0.05f, 0.0f, 0.001f}, up, {0.0f, 0.0f, 0.0f}, up, config));
+}
+
+TEST(LccpConvexity, SanityCriterionRejectsConnectionsAlongTheBendAxis) {
+  LccpSegmenter::Config config;
+  // Normals 60 degrees apart bending about x; the centroids lie along x, on the bend axis:
+  // convexity is undefined there.
+  const float a = static_cast<float>(30.0 * kPi / 180.0);
+  const Eigen::Vector3f n_s(0.0f, -std::sin(a), std::cos(a));
+  const Eigen::Vector3f n_t(0.0f, std::sin(a), std::cos(a));
+  const Eigen::Vector3f c_s(0.05f, 0.0f, 0.0f), c_t(0.0f, 0.0f, 0.0f);
+  config.use_sanity_criterion = true;
+  config.smoothness_threshold = 10.0;  // isolate the sanity criterion
+  EXPECT_FALSE(LccpSegmenter::convexConnection(c_s, n_s, c_t, n_t, config));
+  config.use_sanity_criterion = false;
+  EXPECT_TRUE(LccpSegmenter::convexConnection(c_s, n_s, c_t, n_t, config));
 }
 
 }  // namespace mvod

@@ -2,6 +2,9 @@
 // the object.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "multiview_object_detection/pipeline/common.h"
 
 namespace mvod {
@@ -10,6 +13,11 @@ class LccpSegmenter {
  public:
   struct Config {
     bool enable = true;  // false = Table 3's "-LCCP" ablation (cloud passes through)
+    // Who computes the supervoxels and LCCP's edge classification. "voxel_grid": this package, on a
+    // hash voxel grid (adjacency by grid offsets, normals from neighbourhood moments), PCL's
+    // algorithm without its octree. "pcl": pcl::SupervoxelClustering and pcl::LCCPSegmentation,
+    // the paper's implementation. The grouping into segments is the same code for both.
+    std::string implementation = "voxel_grid";
     // Supervoxel octree leaf, coarser than the 0.01 m filter grid: Kinect rows on surfaces seen
     // at a grazing angle (box tops) lie ~2 cm apart at 2 m and must still be adjacent voxels.
     double voxel_resolution_m = 0.015;
@@ -69,6 +77,28 @@ class LccpSegmenter {
   static std::vector<int> groupSupervoxels(int num_supervoxels,
                                            const std::vector<SupervoxelEdge>& edges,
                                            int min_segment_size);
+
+  // Supervoxels and their adjacency with each edge classified (what LCCP's grouping needs).
+  struct SupervoxelGraph {
+    std::vector<int> point_supervoxel;       // per input point; -1: non-finite or in none
+    std::vector<Eigen::Vector3f> centroids;  // per supervoxel: mean of its voxels' centroids
+    std::vector<Eigen::Vector3f> normals;    // per supervoxel: unit (zero where undefined)
+    std::vector<SupervoxelEdge> edges;       // a < b, ascending (a, b)
+  };
+  // The "voxel_grid" implementation: PCL's supervoxel clustering (voxels of voxel_resolution_m in
+  // the log-depth space when log_transform, seeds on a seed_resolution_m grid, flow-constrained
+  // expansion by spatial and normal distance) on a hash grid, then each adjacency classified by
+  // convexConnection. Deterministic: voxels, seeds and supervoxels are in grid key order.
+  Status gridSupervoxels(const PointCloud& points, bool log_transform,
+                         SupervoxelGraph* graph) const;
+
+  // LCCP's edge test (Stein et al. 2014) between patches s and t with centroids c and normals n
+  // (normals point to the sensor): joined when the connection is convex, or concave with normals
+  // within concavity_tolerance_deg; not where the sanity criterion (use_sanity_criterion) finds
+  // convexity undefined, nor across a step (the smoothness criterion, smoothness_threshold).
+  static bool convexConnection(const Eigen::Vector3f& c_s, const Eigen::Vector3f& n_s,
+                               const Eigen::Vector3f& c_t, const Eigen::Vector3f& n_t,
+                               const Config& config);
 
  private:
   Config config_;
