@@ -108,6 +108,11 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
 
   // Core: every ObjectMapper::Config field, section/field.
   ObjectMapper::Config& m = cfg.mapper;
+  // paper_method first (Eq. 2 largest segment, Eq. 7 literal fusion, PCL's LCCP, ...): every single
+  // setting read below starts from it, so one set as a parameter overrides it wherever it is read.
+  bool paper_method = false;
+  readParam(nh, "paper_method", &paper_method, e);
+  if (paper_method) m.usePaperMethod();
   readParam(nh, "min_probability", &m.min_probability, e);
   readParam(nh, "min_object_points", &m.min_object_points, e);
   readParam(nh, "num_threads", &m.num_threads, e);
@@ -149,11 +154,6 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readParam(nh, "lccp/use_extended_convexity", &m.lccp.use_extended_convexity, e);
   readParam(nh, "lccp/use_sanity_criterion", &m.lccp.use_sanity_criterion, e);
   readParam(nh, "lccp/min_points", &m.lccp.min_points, e);
-  // paper_method: Eq. 2 largest segment, Eq. 7 literal fusion, min/max extents, no floor cut;
-  // the single settings below still override it.
-  bool paper_method = false;
-  readParam(nh, "paper_method", &paper_method, e);
-  if (paper_method) m.usePaperMethod();
   readParam(nh, "filter/outlier_removal", &m.filter.outlier_removal, e);
   readParam(nh, "filter/min_voxel_neighbours", &m.filter.min_voxel_neighbours, e);
   readParam(nh, "lccp/selection", &m.selection.selection, e);

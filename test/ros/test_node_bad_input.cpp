@@ -16,6 +16,7 @@
 
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/MapFile.h"
+#include "multiview_object_detection/ros/ros_params.h"
 #include "test_node_common.h"
 
 namespace mvod_test {
@@ -381,6 +382,54 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
   GetObjects after;
   ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/get_objects", after));
   EXPECT_EQ(after.response.objects.objects.size(), before.response.objects.objects.size());
+}
+
+// The node's parameters (read in one place, ros_params.cpp): paper_method applies first, and every
+// single setting given as a parameter overrides it, wherever it is read; a wrong type is reported.
+TEST(NodeParametersTest, PaperMethodFirstThenEachSettingGivenOverridesIt) {
+  const auto read = [](const std::string& ns, std::vector<std::string>* errors) {
+    return mvod::getObjectDetectionConfigFromRosParam(ros::NodeHandle(ns), errors);
+  };
+  std::vector<std::string> errors;
+  const mvod::ObjectMapper::Config defaults = read("/params_defaults", &errors).mapper;
+  EXPECT_TRUE(errors.empty());
+  EXPECT_EQ(defaults.selection.selection, "consistent");
+  EXPECT_EQ(defaults.lccp.implementation, "voxel_grid");
+  EXPECT_EQ(defaults.extractor.min_consistent_neighbours, 3);
+
+  ros::NodeHandle paper("/params_paper");
+  paper.setParam("paper_method", true);
+  const mvod::ObjectMapper::Config paper_config = read("/params_paper", &errors).mapper;
+  EXPECT_TRUE(errors.empty());
+  EXPECT_EQ(paper_config.selection.selection, "largest");
+  EXPECT_EQ(paper_config.database.fusion, "paper");
+  EXPECT_EQ(paper_config.lccp.implementation, "pcl");
+  EXPECT_EQ(paper_config.extractor.min_consistent_neighbours, 0);
+
+  // Settings read before and after the switch in the file both override it.
+  ros::NodeHandle mixed("/params_paper_overridden");
+  mixed.setParam("paper_method", true);
+  mixed.setParam("extractor/min_consistent_neighbours", 2);
+  mixed.setParam("lccp/implementation", std::string("voxel_grid"));
+  const mvod::ObjectMapper::Config mixed_config = read("/params_paper_overridden", &errors).mapper;
+  EXPECT_TRUE(errors.empty());
+  EXPECT_EQ(mixed_config.selection.selection, "largest");
+  EXPECT_EQ(mixed_config.extractor.min_consistent_neighbours, 2);
+  EXPECT_EQ(mixed_config.lccp.implementation, "voxel_grid");
+
+  ros::NodeHandle bad("/params_bad");
+  bad.setParam("lccp/implementation", 5);
+  const mvod::ObjectDetectionRosConfig bad_type = read("/params_bad", &errors);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("lccp/implementation"), std::string::npos) << errors[0];
+  EXPECT_EQ(bad_type.mapper.lccp.implementation, "voxel_grid");  // the default stays
+  errors.clear();
+  bad.setParam("lccp/implementation", std::string("octree"));
+  const mvod::ObjectDetectionRosConfig bad_value = read("/params_bad", &errors);
+  EXPECT_TRUE(errors.empty());
+  EXPECT_FALSE(bad_value.isValid().ok());
+  EXPECT_NE(bad_value.isValid().message().find("implementation"), std::string::npos)
+      << bad_value.isValid().message();
 }
 
 }  // namespace
