@@ -356,6 +356,15 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   // the voxel nearest to the cell's centre; kept where enough voxels lie within half a seed. The
   // cells and their order are those of PCL's seed octree, which grows around the first centroid.
   const double seed_m = static_cast<float>(config_.seed_resolution_m);
+  Eigen::Vector3d centroid_lower = centroid.front().cast<double>();
+  Eigen::Vector3d centroid_upper = centroid_lower;
+  for (const Eigen::Vector3f& c : centroid) {
+    centroid_lower = centroid_lower.cwiseMin(c.cast<double>());
+    centroid_upper = centroid_upper.cwiseMax(c.cast<double>());
+  }
+  if (((centroid_upper - centroid_lower) / seed_m).maxCoeff() >= static_cast<double>(kKeyMax / 4)) {
+    return Status::Error("cloud extent too large for seed_resolution_m " + std::to_string(seed_m));
+  }
   const Eigen::Vector3d seed_origin = growingOctreeOrigin(centroid, seed_m);
   const auto cellOf = [&](const Eigen::Vector3f& p) {
     const Eigen::Vector3d cell = ((p.cast<double>() - seed_origin) / seed_m).array().floor();

@@ -289,9 +289,13 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   // to the depth-dependent density of a single view; only defined in front of the camera.
   const bool log_transform = config_.log_depth_transform && points_in_camera_frame && min_z > 1e-3f;
 
-  // PCL's octree keys are 32-bit (and it asserts on overflow): refuse absurd extents.
+  // PCL's octree keys are 32-bit (and it asserts on overflow), the voxel grid's 21-bit: refuse
+  // absurd extents, of the voxels (in the log-depth space for a single view) and of the seeds (in
+  // metres: a view spanning 1 m to 1e20 m is small in log depth).
   Eigen::Array3d lower = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Array3d upper = -lower;
+  Eigen::Array3d lower_m = lower;
+  Eigen::Array3d upper_m = upper;
   for (const std::size_t i : source_index) {
     const Eigen::Vector3f& p = points[i];
     const Eigen::Array3d q = log_transform
@@ -299,11 +303,18 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
                                  : p.cast<double>().array();
     lower = lower.min(q);
     upper = upper.max(q);
+    lower_m = lower_m.min(p.cast<double>().array());
+    upper_m = upper_m.max(p.cast<double>().array());
   }
   if ((upper - lower).maxCoeff() / config_.voxel_resolution_m > kMaxVoxelsPerAxis) {
     return Status::Error("cloud extent " + std::to_string((upper - lower).maxCoeff()) +
                          " is too large for voxel_resolution_m " +
                          std::to_string(config_.voxel_resolution_m));
+  }
+  if ((upper_m - lower_m).maxCoeff() / config_.seed_resolution_m > kMaxVoxelsPerAxis) {
+    return Status::Error("cloud extent " + std::to_string((upper_m - lower_m).maxCoeff()) +
+                         " m is too large for seed_resolution_m " +
+                         std::to_string(config_.seed_resolution_m));
   }
 
   SupervoxelGraph graph;

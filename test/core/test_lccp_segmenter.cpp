@@ -247,6 +247,10 @@ TEST_P(LccpSegmenterBadInput, EmptyAndNonFinite) {
   PointCloud huge;
   for (int i = 0; i < 100; ++i) huge.emplace_back(1e8f * (i % 2), 0.01f * i, 1.0f);
   EXPECT_FALSE(segmenter.segment(huge, false, &result).ok());
+  // Small in log depth (1 m to 1e20 m) but not in metres: refused too, not an overflow.
+  PointCloud deep;
+  for (int i = 0; i < 100; ++i) deep.emplace_back(0.01f * i, 0.0f, i % 2 ? 1.0f : 1e20f);
+  EXPECT_FALSE(segmenter.segment(deep, true, &result).ok());
   // Identical points are one supervoxel, kept whole.
   ASSERT_TRUE(
       segmenter.segment(PointCloud(100, Eigen::Vector3f(0.1f, 0.2f, 1.0f)), true, &result).ok());
