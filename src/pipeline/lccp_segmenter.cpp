@@ -23,7 +23,7 @@ bool finiteNonNegative(double value) { return std::isfinite(value) && value >= 0
 
 // The "pcl" implementation: PCL's supervoxels and LCCP's edge classification.
 Status pclSupervoxels(const PointCloud& points, const std::vector<std::size_t>& source_index,
-                      bool log_transform, const LccpSegmenter::Config& config_,
+                      bool log_transform, const LccpSegmenter::Config& config,
                       LccpSegmenter::SupervoxelGraph* graph) {
   using SupervoxelEdge = LccpSegmenter::SupervoxelEdge;
   *graph = LccpSegmenter::SupervoxelGraph();
@@ -35,13 +35,13 @@ Status pclSupervoxels(const PointCloud& points, const std::vector<std::size_t>& 
   }
   try {
     pcl::SupervoxelClustering<pcl::PointXYZ> supervoxels(
-        static_cast<float>(config_.voxel_resolution_m),
-        static_cast<float>(config_.seed_resolution_m));
+        static_cast<float>(config.voxel_resolution_m),
+        static_cast<float>(config.seed_resolution_m));
     supervoxels.setUseSingleCameraTransform(log_transform);
     supervoxels.setInputCloud(cloud);
-    supervoxels.setSpatialImportance(static_cast<float>(config_.spatial_importance));
-    supervoxels.setNormalImportance(static_cast<float>(config_.normal_importance));
-    supervoxels.setColorImportance(static_cast<float>(config_.color_importance));
+    supervoxels.setSpatialImportance(static_cast<float>(config.spatial_importance));
+    supervoxels.setNormalImportance(static_cast<float>(config.normal_importance));
+    supervoxels.setColorImportance(static_cast<float>(config.color_importance));
     std::map<std::uint32_t, pcl::Supervoxel<pcl::PointXYZ>::Ptr> clusters;
     supervoxels.extract(clusters);
     if (clusters.empty()) return Status::Ok();
@@ -49,12 +49,12 @@ Status pclSupervoxels(const PointCloud& points, const std::vector<std::size_t>& 
     supervoxels.getSupervoxelAdjacency(adjacency);
 
     pcl::LCCPSegmentation<pcl::PointXYZ> lccp;
-    lccp.setConcavityToleranceThreshold(static_cast<float>(config_.concavity_tolerance_deg));
-    lccp.setSanityCheck(config_.use_sanity_criterion);
-    lccp.setSmoothnessCheck(true, static_cast<float>(config_.voxel_resolution_m),
-                            static_cast<float>(config_.seed_resolution_m),
-                            static_cast<float>(config_.smoothness_threshold));
-    lccp.setKFactor(config_.use_extended_convexity ? 1 : 0);
+    lccp.setConcavityToleranceThreshold(static_cast<float>(config.concavity_tolerance_deg));
+    lccp.setSanityCheck(config.use_sanity_criterion);
+    lccp.setSmoothnessCheck(true, static_cast<float>(config.voxel_resolution_m),
+                            static_cast<float>(config.seed_resolution_m),
+                            static_cast<float>(config.smoothness_threshold));
+    lccp.setKFactor(config.use_extended_convexity ? 1 : 0);
     // PCL groups and merges small segments in the order of its graph's vertices, which are heap
     // addresses (boost::setS): the same input could give different segments in another thread or
     // process. Only the convex/concave classification of each edge is taken from PCL; grouping and
