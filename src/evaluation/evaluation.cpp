@@ -429,6 +429,7 @@ OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector
   manhattan.extent_trim_fraction = 0.0;      // ground truth: the whole surface
   manhattan.footprint_yaw_area_ratio = 0.0;  // (the ground truth of earlier releases)
   manhattan.outline_cell_m = 0.0;
+  manhattan.normal_estimation = "radius";  // per point, as for the ground truth before
   if (points_W.size() >= 200 && BoxEstimator(manhattan).estimate(points_W, frame, &box).ok()) {
     return box;
   }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/point_moments.h"
 #include "multiview_object_detection/pipeline/radix_sort.h"
 
 namespace mvod {
@@ -155,54 +156,15 @@ void forEachNeighbourKey(std::uint64_t key, const KeyIndex& index, Visit visit) 
   }
 }
 
-// Zeroth, first and second moments of a multiset of points (relative to a common origin).
-struct Moments {
-  double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-  void add(const Eigen::Vector3d& p) {
-    n += 1.0;
-    x += p.x();
-    y += p.y();
-    z += p.z();
-    xx += p.x() * p.x();
-    xy += p.x() * p.y();
-    xz += p.x() * p.z();
-    yy += p.y() * p.y();
-    yz += p.y() * p.z();
-    zz += p.z() * p.z();
-  }
-  void add(const Moments& m) {
-    n += m.n;
-    x += m.x;
-    y += m.y;
-    z += m.z;
-    xx += m.xx;
-    xy += m.xy;
-    xz += m.xz;
-    yy += m.yy;
-    yz += m.yz;
-    zz += m.zz;
-  }
-  // The plane normal: the covariance's eigenvector of the smallest eigenvalue; zero when the
-  // points do not span a plane's worth of directions (one point, repeated).
-  Eigen::Vector3f normal() const {
-    if (n < 1.0) return Eigen::Vector3f::Zero();
-    const Eigen::Vector3d mean(x / n, y / n, z / n);
-    Eigen::Matrix3d covariance;
-    covariance(0, 0) = xx / n - mean.x() * mean.x();
-    covariance(0, 1) = xy / n - mean.x() * mean.y();
-    covariance(0, 2) = xz / n - mean.x() * mean.z();
-    covariance(1, 1) = yy / n - mean.y() * mean.y();
-    covariance(1, 2) = yz / n - mean.y() * mean.z();
-    covariance(2, 2) = zz / n - mean.z() * mean.z();
-    covariance(1, 0) = covariance(0, 1);
-    covariance(2, 0) = covariance(0, 2);
-    covariance(2, 1) = covariance(1, 2);
-    if (!(covariance.trace() > 1e-12)) return Eigen::Vector3f::Zero();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-    solver.computeDirect(covariance);
-    return solver.eigenvectors().col(0).normalized().cast<float>();
-  }
-};
+// The plane normal of a multiset: the covariance's eigenvector of the smallest eigenvalue; zero
+// when the points do not span a plane's worth of directions (one point, repeated).
+Eigen::Vector3f planeNormal(const PointMoments& moments) {
+  const Eigen::Matrix3d covariance = moments.covariance();
+  if (!(covariance.trace() > 1e-12)) return Eigen::Vector3f::Zero();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  return solver.eigenvectors().col(0).normalized().cast<float>();
+}
 
 double angleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
   const double cosine =
@@ -335,7 +297,7 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   // 2. Voxel normals. PCL fits each to its voxel, its neighbours and their neighbours, counted with
   // multiplicity: moments(v) + sum over neighbours n of (moments(n) + neighbourhood moments(n)).
   const Eigen::Vector3d origin = centroid.front().cast<double>();  // for the moments' precision
-  std::vector<Moments> own(num_voxels), around(num_voxels);
+  std::vector<PointMoments> own(num_voxels), around(num_voxels);
   for (int v = 0; v < num_voxels; ++v) own[v].add(centroid[v].cast<double>() - origin);
   for (int v = 0; v < num_voxels; ++v) {
     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k)
@@ -343,12 +305,12 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   }
   std::vector<Eigen::Vector3f> normal(num_voxels);
   for (int v = 0; v < num_voxels; ++v) {
-    Moments total = own[v];
+    PointMoments total = own[v];
     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k) {
       total.add(own[neighbours[k]]);
       total.add(around[neighbours[k]]);
     }
-    normal[v] = total.normal();
+    normal[v] = planeNormal(total);
     if (centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];  // towards the frame's origin
   }
 

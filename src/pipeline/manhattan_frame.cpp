@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "multiview_object_detection/pipeline/point_moments.h"
 #include "multiview_object_detection/pipeline/radix_sort.h"
 
 namespace mvod {
@@ -195,6 +196,88 @@ std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vect
   };
   // Below a few hundred queries a thread costs more than it saves.
   parallelRanges(order.size(), threads, 512, estimate);
+  return normals;
+}
+
+// Normals at `queries` from cell moments: cells of half the radius, and for a query the summed
+// moments of the cells whose centres lie within the radius of its cell's centre (33 cells), PCA
+// as in normalsAt. Queries in one cell share its normal, so the cost is that of the occupied cells,
+// whatever the radius.
+std::vector<Eigen::Vector3f> normalsOnCells(const PointCloud& points,
+                                            const std::vector<int>& queries, double radius_m) {
+  std::vector<Eigen::Vector3f> normals(queries.size(), nanNormal());
+  if (!(std::isfinite(radius_m) && radius_m > 0.0)) return normals;
+  const double cell_m = 0.5 * radius_m;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // moments relative to a point of the cloud
+  for (const Eigen::Vector3f& p : points) {
+    if (p.allFinite()) {
+      origin = p.cast<double>();
+      break;
+    }
+  }
+  // Cell keys: 21 bits a coordinate, offset so that cells up to 2^20 either side of the origin
+  // are positive (a cloud that spans more has no meaningful normals at this radius anyway).
+  constexpr std::int64_t kHalf = std::int64_t{1} << 20;
+  const auto cellOf = [&](const Eigen::Vector3f& p, Eigen::Vector3i* cell) {
+    const Eigen::Vector3d c = ((p.cast<double>() - origin) / cell_m).array().floor();
+    if (!(c.cwiseAbs().maxCoeff() < static_cast<double>(kHalf - 2))) return false;
+    *cell = c.cast<int>();
+    return true;
+  };
+  const auto keyOf = [kHalf](const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(c.x() + kHalf) << 42) |
+           (static_cast<std::uint64_t>(c.y() + kHalf) << 21) |
+           static_cast<std::uint64_t>(c.z() + kHalf);
+  };
+  std::unordered_map<std::uint64_t, PointMoments> cells;
+  cells.reserve(points.size() / 2 + 1);
+  Eigen::Vector3i cell;
+  for (const Eigen::Vector3f& p : points) {
+    if (p.allFinite() && cellOf(p, &cell)) cells[keyOf(cell)].add(p.cast<double>() - origin);
+  }
+  static const std::vector<Eigen::Vector3i> kOffsets = [] {
+    std::vector<Eigen::Vector3i> offsets;
+    for (int dx = -2; dx <= 2; ++dx) {
+      for (int dy = -2; dy <= 2; ++dy) {
+        for (int dz = -2; dz <= 2; ++dz) {
+          if (dx * dx + dy * dy + dz * dz <= 4) offsets.emplace_back(dx, dy, dz);
+        }
+      }
+    }
+    return offsets;
+  }();
+  // Queries in cell order: each cell's normal is computed once.
+  std::vector<std::pair<std::uint64_t, int>> order;
+  order.reserve(queries.size());
+  for (std::size_t i = 0; i < queries.size(); ++i) {
+    if (points[queries[i]].allFinite() && cellOf(points[queries[i]], &cell)) {
+      order.emplace_back(keyOf(cell), static_cast<int>(i));
+    }
+  }
+  radixSortByKey(&order);
+  Eigen::Vector3f normal = nanNormal();
+  for (std::size_t o = 0; o < order.size(); ++o) {
+    if (o == 0 || order[o].first != order[o - 1].first) {
+      cellOf(points[queries[order[o].second]], &cell);
+      PointMoments around;
+      for (const Eigen::Vector3i& offset : kOffsets) {
+        const auto it = cells.find(keyOf(cell + offset));
+        if (it != cells.end()) around.add(it->second);
+      }
+      normal = nanNormal();
+      if (around.n >= 3.0) {
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+        solver.computeDirect(around.covariance());
+        const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
+        // Coincident or collinear points do not define a plane.
+        if (eigenvalues[2] > 0.0 && eigenvalues[1] > 1e-6 * eigenvalues[2]) {
+          const Eigen::Vector3d n = solver.eigenvectors().col(0);
+          if (n.allFinite() && n.norm() > 0.5) normal = n.normalized().cast<float>();
+        }
+      }
+    }
+    normals[order[o].second] = normal;
+  }
   return normals;
 }
 
@@ -672,6 +755,10 @@ Status BoxEstimator::Config::isValid() const {
     return Status::Error("box outline_cell_m must be >= 0 (got " + std::to_string(outline_cell_m) +
                          ")");
   }
+  if (normal_estimation != "cells" && normal_estimation != "radius") {
+    return Status::Error("box normal_estimation must be cells or radius (got '" +
+                         normal_estimation + "')");
+  }
   if (!(footprint_yaw_area_ratio >= 0.0 && footprint_yaw_area_ratio <= 1.0)) {
     return Status::Error("box footprint_yaw_area_ratio must be in [0, 1] (got " +
                          std::to_string(footprint_yaw_area_ratio) + ")");
@@ -693,7 +780,8 @@ std::string BoxEstimator::Config::print() const {
       << "extent_trim_fraction: " << extent_trim_fraction << "\n"
       << "depth_step_per_m2: " << depth_step_per_m2 << "\n"
       << "footprint_yaw_area_ratio: " << footprint_yaw_area_ratio << "\n"
-      << "outline_cell_m: " << outline_cell_m << "\n";
+      << "outline_cell_m: " << outline_cell_m << "\n"
+      << "normal_estimation: " << normal_estimation << "\n";
   return out.str();
 }
 
@@ -719,7 +807,9 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   const double area_ratio = std::pow(radius_m / mf_config.normal_radius_m, 2.0);
   const int max_neighbours = static_cast<int>(std::min(400.0, std::ceil(30.0 * area_ratio)));
   const std::vector<Eigen::Vector3f> normals =
-      normalsAt(points, queries, radius_m, max_neighbours, config_.num_threads);
+      config_.normal_estimation == "cells"
+          ? normalsOnCells(points, queries, radius_m)
+          : normalsAt(points, queries, radius_m, max_neighbours, config_.num_threads);
   if (normals_W != nullptr) {
     for (size_t q = 0; q < queries.size(); ++q) (*normals_W)[source[queries[q]]] = normals[q];
   }

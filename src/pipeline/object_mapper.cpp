@@ -102,6 +102,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.depth_step_per_m2 = 0.0;
   box.footprint_yaw_area_ratio = 0.0;
   box.outline_cell_m = 0.0;
+  box.normal_estimation = "radius";
   extractor.min_consistent_neighbours = 0;
   filter.outlier_removal = "statistical";
   lccp.implementation = "pcl";

@@ -186,6 +186,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readNumber(nh, "box/depth_step_per_m2", &m.box.depth_step_per_m2, e);
   readNumber(nh, "box/footprint_yaw_area_ratio", &m.box.footprint_yaw_area_ratio, e);
   readNumber(nh, "box/outline_cell_m", &m.box.outline_cell_m, e);
+  readParam(nh, "box/normal_estimation", &m.box.normal_estimation, e);
 
   readParam(nh, "database/fusion_voxel_size_m", &m.database.fusion_voxel_size_m, e);
   readParam(nh, "database/no_fusion_within_keyframe", &m.database.no_fusion_within_keyframe, e);

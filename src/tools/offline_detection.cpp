@@ -82,6 +82,8 @@ const char* const kUsage =
     "                         paper's) | voxel_neighbours | none\n"
     "  --lccp-implementation I  voxel_grid (default: supervoxels on a hash grid) | pcl (PCL's,\n"
     "                         the paper's)\n"
+    "  --normal-estimation N  cells (default: single-view normals from cell moments) | radius\n"
+    "                         (per point over the radius, the paper's)\n"
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
@@ -118,6 +120,7 @@ struct Options {
   std::string fusion;
   std::string outlier_removal;
   std::string lccp_implementation;
+  std::string normal_estimation;
   bool estimate_gravity = false;
   bool simulated_perfect = false;
   long simulated_seed = 1;
@@ -156,6 +159,11 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       if (!value(&options->fusion) ||
           (options->fusion != "paper" && options->fusion != "evidence")) {
         return "--fusion needs paper or evidence";
+      }
+    } else if (arg == "--normal-estimation") {
+      if (!value(&options->normal_estimation) ||
+          (options->normal_estimation != "cells" && options->normal_estimation != "radius")) {
+        return "--normal-estimation needs cells or radius";
       }
     } else if (arg == "--lccp-implementation") {
       if (!value(&options->lccp_implementation) ||
@@ -450,6 +458,7 @@ int run(int argc, char** argv) {
   if (!options.selection.empty()) config.selection.selection = options.selection;
   if (!options.fusion.empty()) config.database.fusion = options.fusion;
   if (!options.outlier_removal.empty()) config.filter.outlier_removal = options.outlier_removal;
+  if (!options.normal_estimation.empty()) config.box.normal_estimation = options.normal_estimation;
   if (!options.lccp_implementation.empty()) {
     config.lccp.implementation = options.lccp_implementation;
   }

@@ -164,6 +164,32 @@ TEST(ManhattanNormals, DegenerateInputsGiveNaNNotCrashes) {
   }
 }
 
+// The cells' normals (BoxEstimator's default for single views) on the same degenerate inputs.
+TEST(ManhattanNormals, CellNormalsOfDegenerateInputsAreNaNAndFarPlanesRight) {
+  const GravityFrame gravity(Eigen::Vector3d(0, 0, -1));
+  const BoxEstimator estimator{BoxEstimator::Config()};
+  ASSERT_EQ(estimator.config().normal_estimation, "cells");
+  OrientedBox box;
+  std::vector<Eigen::Vector3f> normals;
+  PointCloud line;
+  for (int i = 0; i < 40; ++i) line.emplace_back(0.005f * i, 0.0f, 1.0f);
+  estimator.estimate(line, gravity, &box, nullptr, &normals);  // a box or an error, no crash
+  ASSERT_EQ(normals.size(), line.size());
+  for (const Eigen::Vector3f& n : normals) EXPECT_FALSE(n.allFinite());
+  PointCloud far;
+  for (int i = 0; i < 30; ++i) {
+    for (int j = 0; j < 30; ++j) far.emplace_back(1000.0f + 0.01f * i, -500.0f + 0.01f * j, 7.0f);
+  }
+  far.emplace_back(NAN, 0.0f, 0.0f);
+  ASSERT_TRUE(estimator.estimate(far, gravity, &box, nullptr, &normals).ok());
+  ASSERT_EQ(normals.size(), far.size());
+  EXPECT_FALSE(normals.back().allFinite());
+  for (std::size_t i = 0; i + 1 < normals.size(); ++i) {
+    ASSERT_TRUE(normals[i].allFinite()) << i;
+    EXPECT_GT(std::abs(normals[i].z()), 0.99);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------------
 
 TEST(ManhattanConfig, ValidationAndPrint) {
@@ -189,6 +215,11 @@ TEST(ManhattanConfig, ValidationAndPrint) {
   box_config.min_points = 0;
   EXPECT_FALSE(box_config.isValid().ok());
   box_config.min_points = 10;
+  EXPECT_NE(text.find("normal_estimation: cells\n"), std::string::npos);
+  box_config.normal_estimation = "pca";
+  EXPECT_FALSE(box_config.isValid().ok());
+  box_config.normal_estimation = "radius";
+  EXPECT_TRUE(box_config.isValid().ok());
   box_config.manhattan.inlier_angle_deg = -1.0;
   EXPECT_FALSE(box_config.isValid().ok());
 }
@@ -317,17 +348,21 @@ TEST(ManhattanBox, YawWithin2DegOnNoisyBoxWith30PercentOutliers) {
     const double yaw_true = 27.0 * kDeg;
     const PointCloud points = noisyBoxWithOutliers(gravity, yaw_true, 0.3, &rng);
     for (bool constrained : {true, false}) {
-      BoxEstimator::Config config;
-      config.manhattan.gravity_constrained = constrained;
-      const BoxEstimator estimator(config);
-      OrientedBox box;
-      ManhattanFrameEstimator::Result frame;
-      ASSERT_TRUE(estimator.estimate(points, gravity, &box, &frame).ok());
-      EXPECT_LT(yawErrorDeg(frame.yaw_rad, yaw_true), 2.0)
-          << "gravity " << down.transpose() << " constrained " << constrained;
-      EXPECT_LT(yawErrorDeg(gravity.yawOf(box.rotation.col(0)), yaw_true), 2.0);
-      EXPECT_TRUE(box.rotation.col(2).isApprox(gravity.up, 1e-9));
-      EXPECT_GT(frame.inliers, frame.num_normals / 3);
+      for (const char* normals : {"cells", "radius"}) {
+        BoxEstimator::Config config;
+        config.manhattan.gravity_constrained = constrained;
+        config.normal_estimation = normals;
+        const BoxEstimator estimator(config);
+        OrientedBox box;
+        ManhattanFrameEstimator::Result frame;
+        ASSERT_TRUE(estimator.estimate(points, gravity, &box, &frame).ok());
+        EXPECT_LT(yawErrorDeg(frame.yaw_rad, yaw_true), 2.0)
+            << "gravity " << down.transpose() << " constrained " << constrained << " normals "
+            << normals;
+        EXPECT_LT(yawErrorDeg(gravity.yawOf(box.rotation.col(0)), yaw_true), 2.0);
+        EXPECT_TRUE(box.rotation.col(2).isApprox(gravity.up, 1e-9));
+        EXPECT_GT(frame.inliers, frame.num_normals / 3);
+      }
     }
   }
 }
@@ -363,16 +398,19 @@ TEST(ManhattanBox, NormalRadiusGrowsWithTheViewsDepthSteps) {
       }
     }
   }
-  const BoxEstimator estimator{BoxEstimator::Config()};
+  BoxEstimator::Config radius_config;
+  radius_config.normal_estimation = "radius";  // per point; the cells' normals are checked below
+  const BoxEstimator estimator(radius_config);
   EXPECT_DOUBLE_EQ(estimator.normalRadius(0.0), 0.03);
   EXPECT_NEAR(estimator.normalRadius(4.0), 2 * k * 16.0, 1e-12);
   EXPECT_LE(estimator.normalRadius(20.0), 0.15);  // capped
 
-  const auto medianAngleDeg = [&](double view_depth_m, double* yaw_error_deg) {
+  const auto medianAngleDeg = [&](double view_depth_m, double* yaw_error_deg,
+                                  const BoxEstimator& box_estimator) {
     OrientedBox box;
     ManhattanFrameEstimator::Result frame;
     std::vector<Eigen::Vector3f> normals;
-    EXPECT_TRUE(estimator.estimate(points, gravity, &box, &frame, &normals, view_depth_m).ok());
+    EXPECT_TRUE(box_estimator.estimate(points, gravity, &box, &frame, &normals, view_depth_m).ok());
     EXPECT_EQ(normals.size(), points.size());
     std::vector<double> angles;
     for (size_t i = 0; i < normals.size(); ++i) {
@@ -386,11 +424,18 @@ TEST(ManhattanBox, NormalRadiusGrowsWithTheViewsDepthSteps) {
   };
   double fixed_yaw_error = 0.0;
   double grown_yaw_error = 0.0;
-  const double fixed = medianAngleDeg(0.0, &fixed_yaw_error);
-  const double grown = medianAngleDeg(4.0, &grown_yaw_error);
+  const double fixed = medianAngleDeg(0.0, &fixed_yaw_error, estimator);
+  const double grown = medianAngleDeg(4.0, &grown_yaw_error, estimator);
   EXPECT_GT(fixed, 20.0);
   EXPECT_LT(grown, 5.0);
   EXPECT_LT(grown_yaw_error, 2.0);
+  // Cell moments (the default) on the same radii: the same picture.
+  const BoxEstimator cells{BoxEstimator::Config()};
+  double cells_fixed_yaw_error = 0.0;
+  double cells_grown_yaw_error = 0.0;
+  EXPECT_GT(medianAngleDeg(0.0, &cells_fixed_yaw_error, cells), 20.0);
+  EXPECT_LT(medianAngleDeg(4.0, &cells_grown_yaw_error, cells), 5.0);
+  EXPECT_LT(cells_grown_yaw_error, 2.0);
   std::cout << "median normal error: fixed radius " << fixed << " deg, grown " << grown
             << " deg; yaw error " << fixed_yaw_error << " / " << grown_yaw_error << " deg\n";
 
@@ -399,7 +444,7 @@ TEST(ManhattanBox, NormalRadiusGrowsWithTheViewsDepthSteps) {
   std::vector<Eigen::Vector3f> normals_1;
   ASSERT_TRUE(estimator.estimate(points, gravity, &box_1, nullptr, &normals_1, 4.0).ok());
   for (const int threads : {2, 3}) {
-    BoxEstimator::Config config;
+    BoxEstimator::Config config = radius_config;
     config.num_threads = threads;
     OrientedBox box_n;
     std::vector<Eigen::Vector3f> normals_n;

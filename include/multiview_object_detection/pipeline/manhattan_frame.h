@@ -1,6 +1,8 @@
 // Sec. 3.3: Manhattan frame (Eq. 3) from surface normals and the oriented box (Eq. 4).
 #pragma once
 
+#include <string>
+
 #include "multiview_object_detection/pipeline/oriented_box.h"
 
 namespace mvod {
@@ -76,6 +78,12 @@ class BoxEstimator {
     // table top seen from above carry its yaw where its own normals, all vertical, carry none.
     // 0 = the surface normals only (the paper's).
     double outline_cell_m = 0.02;
+    // How a single view's normals are estimated (Eq. 3's input). "cells": from the summed moments
+    // of the cells of half the normal radius whose centres lie within the radius of the query's
+    // cell, one normal per cell; the cost does not grow with the radius, which grows with depth.
+    // "radius": PCA over the points within the radius (the nearest ones beyond a cap), per point;
+    // the paper's (PCL's normal estimation).
+    std::string normal_estimation = "cells";
     // Threads for one cloud's normals (independent queries): the mapper sets its own num_threads
     // here, as for the outlier removal. The result does not depend on it.
     int num_threads = 1;
