@@ -289,6 +289,66 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
       e.sdf_count = sdf_count;
     }
   }
+  // Amodal completion's free space around the object (optional; maps without it count afresh).
+  const auto free_space = value.find("free_space");
+  if (free_space != value.end()) {
+    const std::string where = prefix + "free_space";
+    const char* expected =
+        "expected {\"cell_size_m\": s, \"cells\": [[i, j, k, in_view, seen_free], ...]} with "
+        "integers in range and seen_free <= in_view";
+    if (!free_space->is_object() || !free_space->contains("cell_size_m") ||
+        !(*free_space)["cell_size_m"].is_number() || !free_space->contains("cells") ||
+        !(*free_space)["cells"].is_array()) {
+      return fieldError(where, expected);
+    }
+    const double size_m = (*free_space)["cell_size_m"].get<double>();
+    if (!(std::isfinite(size_m) && size_m > 0.0)) {
+      return fieldError(where, "cell_size_m must be > 0");
+    }
+    object.free_space_cell_m = (*free_space)["cells"].empty() ? 0.0 : size_m;
+    for (const json& cell : (*free_space)["cells"]) {
+      bool ok = cell.is_array() && cell.size() == 5;
+      for (size_t i = 0; ok && i < 5; ++i) {
+        // Unsigned values beyond INT64_MAX would wrap to negative numbers: refused here.
+        ok = cell[i].is_number_integer() &&
+             !(cell[i].is_number_unsigned() &&
+               cell[i].get<std::uint64_t>() >
+                   static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()));
+        if (!ok) break;
+        const std::int64_t v = cell[i].get<std::int64_t>();
+        ok = i < 3 ? (v >= -(1 << 20) && v < (1 << 20)) : (v >= 0 && v <= UINT16_MAX);
+      }
+      if (ok) ok = cell[4].get<std::int64_t>() <= cell[3].get<std::int64_t>();
+      if (!ok) return fieldError(where, expected);
+      FreeSpaceCount& count = object.free_space[packVoxel(
+          Eigen::Vector3i(cell[0].get<int>(), cell[1].get<int>(), cell[2].get<int>()))];
+      count.in_view = static_cast<std::uint16_t>(cell[3].get<int>());
+      count.seen_free = static_cast<std::uint16_t>(cell[4].get<int>());
+    }
+  }
+  const auto completed = value.find("box_completed");
+  if (completed != value.end()) {
+    if (!completed->is_boolean()) {
+      return fieldError(prefix + "box_completed", "expected true or false");
+    }
+    object.box_completed = completed->get<bool>();
+  }
+  // A completed box's observed part (same rotation); without it, the completed box stands in.
+  object.observed_box = object.box;
+  const auto observed = value.find("observed_box");
+  if (observed != value.end()) {
+    const std::string where = prefix + "observed_box";
+    if (!observed->is_object()) {
+      return fieldError(where, "expected {\"center\": [x, y, z], \"size\": [sx, sy, sz]} (m)");
+    }
+    Eigen::Vector3d center;
+    Eigen::Vector3d size;
+    if (!(status = readVector3(*observed, where + ".", "center", &center))) return status;
+    if (!(status = readVector3(*observed, where + ".", "size", &size))) return status;
+    if ((size.array() < 0.0).any()) return fieldError(where + ".size", "negative");
+    object.observed_box.center_m = center;
+    object.observed_box.size_m = size;
+  }
   *out = std::move(object);
   return Status::Ok();
 }
@@ -328,7 +388,12 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
                   {"first_keyframe", object.first_keyframe},
                   {"last_keyframe", object.last_keyframe},
                   {"first_seen", object.first_seen_s},
-                  {"last_seen", object.last_seen_s}};
+                  {"last_seen", object.last_seen_s},
+                  {"box_completed", object.box_completed}};
+    if (object.box_completed) {
+      entry["observed_box"] = {{"center", vectorToJson(object.observed_box.center_m)},
+                               {"size", vectorToJson(object.observed_box.size_m)}};
+    }
     if (!object.class_scores.empty()) {
       json scores = json::object();
       for (const auto& score : object.class_scores) scores[score.first] = score.second;
@@ -362,6 +427,21 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
         }
         entry["evidence"] = {{"voxel_size_m", object.evidence_voxel_size_m},
                              {"voxels", std::move(list_json)}};
+      }
+      if (!object.free_space.empty()) {
+        std::vector<std::pair<Eigen::Vector3i, FreeSpaceCount>> cells;
+        for (const auto& c : object.free_space) cells.emplace_back(unpackVoxel(c.first), c.second);
+        std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) {
+          return std::lexicographical_compare(a.first.data(), a.first.data() + 3, b.first.data(),
+                                              b.first.data() + 3);
+        });
+        json cells_json = json::array();
+        for (const auto& c : cells) {
+          cells_json.push_back(
+              {c.first.x(), c.first.y(), c.first.z(), c.second.in_view, c.second.seen_free});
+        }
+        entry["free_space"] = {{"cell_size_m", object.free_space_cell_m},
+                               {"cells", std::move(cells_json)}};
       }
     }
     list.push_back(std::move(entry));

@@ -173,6 +173,10 @@ Status parseClass(const YAML::Node& value, const std::string& where, double defa
       const Status status =
           readDistance(field.second, where + ".fusion_distance_m", &prior->fusion_distance_m);
       if (!status) return status;
+    } else if (key == "amodal_depth_m") {
+      const Status status =
+          readDistance(field.second, where + ".amodal_depth_m", &prior->amodal_depth_m);
+      if (!status) return status;
     } else if (key == "on_floor" || key == "flat_top") {
       bool flag = false;
       try {
@@ -185,7 +189,8 @@ Status parseClass(const YAML::Node& value, const std::string& where, double defa
       (key == "on_floor" ? prior->on_floor : prior->flat_top) = flag;
     } else {
       return Status::Error(where + ": unknown key '" + key +
-                           "' (expected size_m, fusion_distance_m, on_floor, flat_top)");
+                           "' (expected size_m, fusion_distance_m, on_floor, flat_top, "
+                           "amodal_depth_m)");
     }
   }
   return Status::Ok();

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <unordered_set>
@@ -28,6 +30,8 @@ Status ObjectDatabase::Config::isValid() const {
     return Status::Error("surface_band_m must be a finite value >= 0 (got " +
                          std::to_string(surface_band_m) + ")");
   }
+  const Status amodal_status = amodal.isValid();
+  if (!amodal_status) return amodal_status;
   if (fusion != "paper" && fusion != "evidence") {
     return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
   }
@@ -43,6 +47,8 @@ std::string ObjectDatabase::Config::print() const {
       << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n"
       << "same_class_overlap_voxels: " << same_class_overlap_voxels << "\n"
       << "surface_band_m: " << surface_band_m << "\n";
+  std::istringstream amodal_lines(amodal.print());
+  for (std::string line; std::getline(amodal_lines, line);) out << "amodal." << line << "\n";
   return out.str();
 }
 
@@ -127,38 +133,6 @@ FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
   return keys;
 }
 
-bool DepthView::signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const {
-  const Eigen::Vector3d p_D = T_D_W * p_W.cast<double>();
-  if (!(p_D.z() > 0.0) || depth_m.empty() || depth_m.type() != CV_32FC1) return false;
-  const double u = std::floor(K.fx * p_D.x() / p_D.z() + K.cx + 0.5);
-  const double v = std::floor(K.fy * p_D.y() / p_D.z() + K.cy + 0.5);
-  if (!(u >= 0.0 && v >= 0.0 && u < depth_m.cols && v < depth_m.rows)) return false;
-  // A depth edge (a silhouette: a chair's leg before the wall) abstains: a voxel of the leg that
-  // rounds to a pixel beside it would look seen through. The pixel and its 8 neighbours must all
-  // have a depth, within the truncation of each other.
-  const double z = p_D.z();
-  const double truncation = truncation_m + truncation_per_m2 * z * z;
-  const int u0 = static_cast<int>(u);
-  const int v0 = static_cast<int>(v);
-  float lowest = std::numeric_limits<float>::infinity();
-  float highest = 0.f;
-  for (int dv = -1; dv <= 1; ++dv) {
-    const int row = std::min(std::max(v0 + dv, 0), depth_m.rows - 1);
-    const float* depths = depth_m.ptr<float>(row);
-    for (int du = -1; du <= 1; ++du) {
-      const float measured = depths[std::min(std::max(u0 + du, 0), depth_m.cols - 1)];
-      if (!(measured > 0.f) || !std::isfinite(measured)) return false;
-      lowest = std::min(lowest, measured);
-      highest = std::max(highest, measured);
-    }
-  }
-  if (highest - lowest > truncation) return false;
-  const double sdf = static_cast<double>(depth_m.ptr<float>(v0)[u0]) - z;
-  if (sdf < -truncation) return false;
-  *sdf_m = static_cast<float>(std::min(sdf, truncation));
-  return true;
-}
-
 bool ObjectDatabase::isSupported(const VoxelEvidence& e) const {
   if (!(e.inside >= 1 && e.inside >= e.outside)) return false;
   if (!(config_.surface_band_m > 0.0) || e.sdf_count == 0) return true;
@@ -221,7 +195,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
             inserted_this_keyframe_.end()) {
       continue;  // Sec. 3.4.1: two detections of one image are two objects.
     }
-    const double d = (object.box.center_m - observation.box.center_m).norm();
+    // A completed box's centre lies in the part no view saw: the views' own box is matched.
+    const double d = (object.seenBox().center_m - observation.box.center_m).norm();
     if (d < result.distance_m) {
       result.distance_m = d;
       nearest = &object;
@@ -295,7 +270,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     if (best_object != nullptr && best_overlap >= config_.min_overlap_to_fuse) {
       fuse = true;
       nearest = best_object;
-      result.distance_m = (nearest->box.center_m - observation.box.center_m).norm();
+      result.distance_m = (nearest->seenBox().center_m - observation.box.center_m).norm();
     }
   }
   if (!config_.disable_fusion && fuse) {
@@ -304,6 +279,12 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       // The class: the largest summed probability of the detections fused here.
       addClassScore(observation.class_name, observation.probability, &object);
     }
+    // Eq. 8 taken literally: the mean of the new and the stored probability (a running pairwise
+    // mean, which weights recent views more than an average over all views would).
+    object.probability = 0.5 * (observation.probability + object.probability);
+    object.observations += 1;
+    object.last_keyframe = observation.keyframe;
+    object.last_seen_s = observation.stamp_s;
     const PointCloud* to_process = &object.points_W;  // the paper's fusion: Eq. 7's cloud
     if (config_.fusion == "evidence") {
       // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
@@ -324,16 +305,18 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       if (defer_rebox) {
         const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
         if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
-        // The keyframe's signed distances once per object, however many of its detections fuse
-        // here, with the boxing (in parallel).
-        if (measure) pending_depth_views_[object.id] = observation.depth_view;
+        // The keyframe's signed distances (and free space) once per object, however many of its
+        // detections fuse here, with the boxing (in parallel).
+        if (observation.depth_view != nullptr) {
+          pending_depth_views_[object.id] = observation.depth_view;
+        }
         to_process = nullptr;
       } else {
         if (measure) {
           addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m,
                              &object.evidence);
         }
-        rebox(&object, process);
+        rebox(&object, process, observation.depth_view.get());
         to_process = nullptr;
       }
     } else {
@@ -355,13 +338,6 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
       object.box = box;
       object.yaw_rad = yaw_rad;
     }  // else: nothing usable in the fused cloud, the previous segment and box stay.
-
-    // Eq. 8 taken literally: the mean of the new and the stored probability (a running pairwise
-    // mean, which weights recent views more than an average over all views would).
-    object.probability = 0.5 * (observation.probability + object.probability);
-    object.observations += 1;
-    object.last_keyframe = observation.keyframe;
-    object.last_seen_s = observation.stamp_s;
 
     result.decision = Decision::kFused;
     result.object_id = object.id;
@@ -390,6 +366,7 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   }
   object.box = observation.box;
   object.yaw_rad = observation.yaw_rad;
+  if (evidence) completeBox(&object, observation.depth_view.get());
   object.first_keyframe = observation.keyframe;
   object.last_keyframe = observation.keyframe;
   object.first_seen_s = observation.stamp_s;
@@ -424,7 +401,7 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
   constexpr std::size_t kBucketsPerChunk = 4096;
   std::vector<BucketChunk> chunks;
   for (std::size_t k = 0; k < pending.size(); ++k) {
-    if (views[k] == nullptr) continue;
+    if (views[k] == nullptr || !(config_.surface_band_m > 0.0)) continue;
     const std::size_t buckets = pending[k]->evidence.bucket_count();
     for (std::size_t first = 0; first < buckets; first += kBucketsPerChunk) {
       chunks.push_back({k, first, std::min(buckets, first + kBucketsPerChunk)});
@@ -443,12 +420,13 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
     return pending[a]->evidence.size() > pending[b]->evidence.size();
   });
   parallelForEach(by_size.size(), threads,
-                  [&](std::size_t j) { rebox(pending[by_size[j]], process); });
+                  [&](std::size_t j) { rebox(pending[by_size[j]], process, views[by_size[j]]); });
   pending_depth_views_.clear();
   return static_cast<int>(pending.size());
 }
 
-void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process) const {
+void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process,
+                           const DepthView* view) const {
   std::vector<Eigen::Vector3f> normals;
   const PointCloud supported = supportedVoxels(*object, &normals);
   object->points_W.clear();
@@ -461,7 +439,36 @@ void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process
     object->segment_W = std::move(segment_W);
     object->box = box;
     object->yaw_rad = yaw_rad;
+    completeBox(object, view);
+  }  // else: the previous box (completed or not) stays.
+}
+
+void ObjectDatabase::completeBox(MapObject* object, const DepthView* view) const {
+  object->box_completed = false;
+  if (!config_.amodal.enable || config_.fusion != "evidence") return;
+  const ClassPrior* prior = priors_.find(object->class_name);
+  if (prior == nullptr || !(prior->amodal_depth_m > 0.0)) return;
+  const AmodalCompletion completion(config_.amodal);
+  if (object->free_space_cell_m != config_.amodal.cell_size_m) {
+    object->free_space.clear();
+    object->free_space_cell_m = config_.amodal.cell_size_m;
   }
+  const double depth_m = prior->amodal_depth_m;
+  if (view != nullptr) {
+    completion.countFreeSpace(*view, object->box, depth_m, floor_height_m_, &object->free_space);
+  }
+  if (object->observations < config_.amodal.min_observations) return;
+  const AmodalCompletion::Decision decision =
+      completion.decide(object->box, depth_m, floor_height_m_, object->free_space);
+  if (std::getenv("MVOD_DEBUG_AMODAL") != nullptr && decision.axis >= 0) {
+    std::printf("amodal %d %s obs %d in_view %d/%d free %d/%d side %d\n", object->id,
+                object->class_name.c_str(), object->observations, decision.in_view[0],
+                decision.in_view[1], decision.seen_free[0], decision.seen_free[1], decision.side);
+  }
+  if (decision.side == 0) return;
+  object->observed_box = object->box;
+  object->box = AmodalCompletion::complete(object->box, decision, depth_m, floor_height_m_);
+  object->box_completed = true;
 }
 
 bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcessor& process) {
@@ -494,6 +501,20 @@ bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcess
     e.sdf_sum += f.sdf_sum;
     e.sdf_count = saturated(e.sdf_count, f.sdf_count);
   }
+  // The free space both saw around them (on one grid; otherwise into's alone), in key order.
+  if (from.free_space_cell_m == into.free_space_cell_m && into.free_space_cell_m > 0.0) {
+    std::vector<std::pair<std::uint64_t, FreeSpaceCount>> cells;
+    cells.reserve(from.free_space.size());
+    for (const auto& entry : from.free_space) {
+      cells.emplace_back(static_cast<std::uint64_t>(entry.first), entry.second);
+    }
+    radixSortByKey(&cells);
+    for (const auto& cell : cells) {
+      FreeSpaceCount& c = into.free_space[static_cast<std::int64_t>(cell.first)];
+      c.in_view = saturated(c.in_view, cell.second.in_view);
+      c.seen_free = saturated(c.seen_free, cell.second.seen_free);
+    }
+  }
   // from's class scores (its own class, for a map saved before them) into into's vote.
   std::map<std::string, double> from_scores = from.class_scores;
   if (from_scores.empty()) from_scores[from.class_name] = from.probability * from.observations;
@@ -510,7 +531,7 @@ bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcess
   into.first_seen_s = std::min(into.first_seen_s, from.first_seen_s);
   into.last_seen_s = std::max(into.last_seen_s, from.last_seen_s);
   remove(from_id);
-  rebox(&into, process);
+  rebox(&into, process, nullptr);
   return true;
 }
 

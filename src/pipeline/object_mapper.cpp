@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -108,6 +109,7 @@ void ObjectMapper::Config::usePaperMethod() {
   lccp.implementation = "pcl";
   intersection_filter.duplicate_ratio = 0.0;
   intersection_filter.container_support_ratio = 0.0;
+  database.amodal.enable = false;
 }
 
 namespace {
@@ -290,7 +292,9 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   };
   const auto depth_and_clouds = [&]() {
     // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
-    if (config_.database.fusion == "evidence" && config_.database.surface_band_m > 0.0 &&
+    // Also amodal completion's free space.
+    if (config_.database.fusion == "evidence" &&
+        (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
         !kept.empty()) {
       depth_view = std::make_shared<DepthView>();
       // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
@@ -368,6 +372,9 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   // each detection's votes in that order and boxes the objects that changed once, at the end of
   // the keyframe, in parallel.
   const bool defer_rebox = config_.database.fusion == "evidence";
+  // Amodal completion grounds the boxes it completes on the floor, when that is known.
+  database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
+                                            : std::numeric_limits<double>::quiet_NaN());
   for (size_t k = 0; k < kept.size(); ++k) {
     const Detection2D& detection = kept[k];
     const std::string what = label + ": " + detectionLabel(kept_index[k], detection);

@@ -154,7 +154,9 @@ Eigen::Matrix3d properRotation(const Eigen::Matrix3d& axes) {
 std::string labelText(const MapObject& object) {
   char probability[16];
   std::snprintf(probability, sizeof(probability), "%.2f", object.probability);
-  return object.class_name + " #" + std::to_string(object.id) + " " + probability;
+  // A completed box (amodal completion) says so: part of it was never seen.
+  return object.class_name + " #" + std::to_string(object.id) + " " + probability +
+         (object.box_completed ? " (completed)" : "");
 }
 
 }  // namespace
@@ -529,6 +531,7 @@ multiview_object_detection::Object objectToMsg(const MapObject& object) {
   msg.size.y = object.box.size_m.y();
   msg.size.z = object.box.size_m.z();
   msg.yaw = static_cast<float>(object.yaw_rad);
+  msg.box_completed = object.box_completed;
   msg.num_points = static_cast<int32_t>(object.segment_W.empty() ? object.points_W.size()
                                                                  : object.segment_W.size());
   msg.first_seen = timeFromSeconds(object.first_seen_s);
@@ -554,6 +557,8 @@ Status objectFromMsg(const multiview_object_detection::Object& msg, MapObject* o
   out.box.rotation = T_W_B.linear();
   out.box.size_m = size;
   out.yaw_rad = msg.yaw;
+  out.box_completed = msg.box_completed;
+  out.observed_box = out.box;  // the message carries no observed part: the box stands in
   out.first_seen_s = msg.first_seen.toSec();
   out.last_seen_s = msg.last_seen.toSec();
   *object = std::move(out);

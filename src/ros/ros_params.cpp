@@ -195,6 +195,14 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   readNumber(nh, "database/min_overlap_to_fuse", &m.database.min_overlap_to_fuse, e);
   readParam(nh, "database/same_class_overlap_voxels", &m.database.same_class_overlap_voxels, e);
   readNumber(nh, "database/surface_band_m", &m.database.surface_band_m, e);
+  readParam(nh, "database/amodal/enable", &m.database.amodal.enable, e);
+  readNumber(nh, "database/amodal/cell_size_m", &m.database.amodal.cell_size_m, e);
+  readNumber(nh, "database/amodal/max_thin_ratio", &m.database.amodal.max_thin_ratio, e);
+  readNumber(nh, "database/amodal/free_margin_m", &m.database.amodal.free_margin_m, e);
+  readNumber(nh, "database/amodal/max_free_share", &m.database.amodal.max_free_share, e);
+  readNumber(nh, "database/amodal/min_free_ratio", &m.database.amodal.min_free_ratio, e);
+  readParam(nh, "database/amodal/min_in_view", &m.database.amodal.min_in_view, e);
+  readParam(nh, "database/amodal/min_observations", &m.database.amodal.min_observations, e);
 
   readParam(nh, "prior_filter/enable", &m.prior_filter.enable, e);
   readParam(nh, "prior_filter/volume_min_ratio", &m.prior_filter.volume_min_ratio, e);

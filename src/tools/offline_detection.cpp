@@ -85,6 +85,8 @@ const char* const kUsage =
     "  --normal-estimation N  cells (default: single-view normals from cell moments) | radius\n"
     "                         (per point over the radius, the paper's)\n"
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
+    "  --no-amodal            no amodal completion (boxes are only what the views saw: a chair\n"
+    "                         under a table is its backrest)\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
@@ -116,6 +118,7 @@ struct Options {
   bool single_frame = false;
   bool paper = false;
   bool no_floor = false;
+  bool no_amodal = false;
   std::string selection;
   std::string fusion;
   std::string outlier_removal;
@@ -150,6 +153,8 @@ std::string parseArguments(int argc, char** argv, Options* options) {
       options->paper = true;
     } else if (arg == "--no-floor") {
       options->no_floor = true;
+    } else if (arg == "--no-amodal") {
+      options->no_amodal = true;
     } else if (arg == "--selection") {
       if (!value(&options->selection) ||
           (options->selection != "largest" && options->selection != "consistent")) {
@@ -463,6 +468,7 @@ int run(int argc, char** argv) {
     config.lccp.implementation = options.lccp_implementation;
   }
   if (options.no_floor) config.floor.enable = false;
+  if (options.no_amodal) config.database.amodal.enable = false;
   config.min_probability = options.min_probability;
   config.num_threads = options.threads;
   config.filter.enable = !options.no_filter;

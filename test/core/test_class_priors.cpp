@@ -188,6 +188,10 @@ TEST(ClassPriorsTest, EachErrorNamesTheEntryAndLeavesThePriorsUnchanged) {
       {"unknown entry key", "classes: {chair: {size: [0.5, 0.5, 0.9]}}", {"chair", "'size'"}},
       {"on_floor not a bool", "classes: {chair: {on_floor: maybe}}", {"chair.on_floor", "maybe"}},
       {"flat_top a list", "classes: {chair: {flat_top: [true]}}", {"chair.flat_top"}},
+      {"negative amodal depth",
+       "classes: {chair: {amodal_depth_m: -0.5}}",
+       {"chair.amodal_depth_m", "-0.5"}},
+      {"amodal depth a word", "classes: {chair: {amodal_depth_m: deep}}", {"chair.amodal_depth_m"}},
       {"not COCO", "classes: {table: {size_m: [1, 1, 1]}}", {"'table'", "not a COCO class"}},
       {"listed twice",
        "classes: {sofa: {fusion_distance_m: 1}, couch: {fusion_distance_m: 1}}",
@@ -303,7 +307,8 @@ TEST(ClassPriorsTest, ParsesHowAClassStands) {
   ClassPriors priors;
   ASSERT_TRUE(ClassPriors::parseYaml("classes:\n"
                                      "  dining table: {on_floor: true, flat_top: true}\n"
-                                     "  chair: {size_m: [0.55, 0.55, 0.9], on_floor: true}\n"
+                                     "  chair: {size_m: [0.55, 0.55, 0.9], on_floor: true, "
+                                     "amodal_depth_m: 0.5}\n"
                                      "  cup: {fusion_distance_m: 0.1, on_floor: false}\n"
                                      "  tv:\n",
                                      &priors)
@@ -315,6 +320,8 @@ TEST(ClassPriorsTest, ParsesHowAClassStands) {
   EXPECT_FALSE(priors.find("cup")->on_floor);
   EXPECT_FALSE(priors.find("tv")->on_floor);  // not given: false
   EXPECT_FALSE(priors.find("tv")->flat_top);
+  EXPECT_DOUBLE_EQ(priors.find("chair")->amodal_depth_m, 0.5);
+  EXPECT_EQ(priors.find("dining table")->amodal_depth_m, 0.0);  // not given: never completed
 }
 
 // The package's file: furniture stands on the floor, the dining table has a flat top, and small
@@ -327,6 +334,10 @@ TEST(ClassPriorsConfigFileTest, PackageConfigSaysHowFurnitureStands) {
     EXPECT_TRUE(priors.find(name)->on_floor) << name;
   }
   EXPECT_TRUE(priors.find("dining table")->flat_top);
+  // Chairs are completed (a chair's depth, seat to backrest); tables are grounded instead.
+  EXPECT_GT(priors.find("chair")->amodal_depth_m, 0.4);
+  EXPECT_LT(priors.find("chair")->amodal_depth_m, 0.7);
+  EXPECT_EQ(priors.find("dining table")->amodal_depth_m, 0.0);
   for (const char* name : {"cup", "book", "tv", "laptop", "bottle"}) {
     ASSERT_NE(priors.find(name), nullptr) << name;
     EXPECT_FALSE(priors.find(name)->on_floor) << name;

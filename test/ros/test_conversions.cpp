@@ -291,9 +291,11 @@ TEST(RosConversionsTest, PoseRoundTripAndInvalidPosesRejected) {
 // ---- Objects ----------------------------------------------------------------------------------
 
 TEST(RosConversionsTest, ObjectRoundTripKeepsBoxClassAndStamps) {
-  const MapObject object = makeObject(3, "chair", Eigen::Vector3d(1.0, -2.0, 0.45),
-                                      Eigen::Vector3d(0.5, 0.6, 0.9), 0.35);
+  MapObject object = makeObject(3, "chair", Eigen::Vector3d(1.0, -2.0, 0.45),
+                                Eigen::Vector3d(0.5, 0.6, 0.9), 0.35);
+  object.box_completed = true;
   const multiview_object_detection::Object msg = objectToMsg(object);
+  EXPECT_TRUE(msg.box_completed);
   EXPECT_EQ(msg.id, 3);
   EXPECT_EQ(msg.class_name, "chair");
   EXPECT_EQ(msg.class_id, cocoClassId("chair"));
@@ -311,6 +313,7 @@ TEST(RosConversionsTest, ObjectRoundTripKeepsBoxClassAndStamps) {
   EXPECT_EQ(back.class_name, object.class_name);
   EXPECT_NEAR(back.probability, object.probability, 1e-6);
   EXPECT_EQ(back.observations, object.observations);
+  EXPECT_TRUE(back.box_completed);
   EXPECT_TRUE(back.box.center_m.isApprox(object.box.center_m, 1e-12));
   EXPECT_TRUE(back.box.size_m.isApprox(object.box.size_m, 1e-12));
   EXPECT_TRUE(back.box.rotation.isApprox(object.box.rotation, 1e-9));
@@ -395,6 +398,12 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   EXPECT_EQ(label.id, 3);
   EXPECT_EQ(label.type, visualization_msgs::Marker::TEXT_VIEW_FACING);
   EXPECT_EQ(label.text, "chair #3 0.87");
+  std::vector<MapObject> completed = objects;
+  completed[0].box_completed = true;
+  std::set<int> published_completed;
+  EXPECT_EQ(
+      objectsToMarkers(completed, makeHeader("map", 1.0), &published_completed).markers[1].text,
+      "chair #3 0.87 (completed)");
   EXPECT_GT(label.pose.position.z, 0.9);  // above the box top
   // Classes get different colours.
   const std_msgs::ColorRGBA c_chair = markers.markers[0].color;

@@ -31,6 +31,10 @@ struct ClassPrior {
   // flat_top: its top is a support surface (a table), so nothing above or beside that surface is
   // part of it, and its box reaches the floor however little of its legs is seen.
   bool flat_top = false;
+  // amodal_depth_m: the horizontal depth of the whole object (a chair's, seat and backrest); a box
+  // much thinner than it (only a backrest seen above a table) is completed to it on the side the
+  // views never saw through (AmodalCompletion). 0: never completed.
+  double amodal_depth_m = 0.0;
 };
 
 class ClassPriors {

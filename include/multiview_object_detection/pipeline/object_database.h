@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -12,27 +13,12 @@
 #include <unordered_set>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/amodal_completion.h"
 #include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/depth_view.h"
 #include "multiview_object_detection/pipeline/oriented_box.h"
 
 namespace mvod {
-
-// Evidence fusion: a keyframe's depth image, for the projective signed distance of the voxels it
-// sees: the depth measured at a voxel's pixel minus the voxel's own depth, positive in front of the
-// surface the view saw (the distance a TSDF averages). At a depth edge (the 3 x 3 pixels around the
-// voxel's pixel not all valid, or spanning more than the truncation) the view abstains.
-struct DepthView {
-  cv::Mat depth_m;  // CV_32FC1, 0 = invalid
-  CameraIntrinsics K;
-  Eigen::Isometry3d T_D_W = Eigen::Isometry3d::Identity();  // world -> depth camera
-  // Truncation: further in front of the measured surface counts as this much (the view saw
-  // through the voxel); further behind it is occluded and not counted.
-  double truncation_m = 0.02;
-  double truncation_per_m2 = 8.55e-3;  // ... plus this x depth^2 (3 Kinect v1 depth steps)
-  // The truncated signed distance of p_W; false outside the image, behind the camera, where the
-  // depth is invalid, and where p_W lies beyond the truncation behind the surface.
-  bool signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const;
-};
 
 // Evidence fusion: the voxels a view votes on, on a grid of voxel_size_m. They depend on the view
 // only, so the single-view stage (in parallel) computes them and the ordered fusion does not.
@@ -102,6 +88,15 @@ struct MapObject {
   std::map<std::string, double> class_scores;
   OrientedBox box;
   double yaw_rad = 0.0;
+  // Amodal completion (evidence fusion, classes with ClassPrior::amodal_depth_m): what the views
+  // saw of the cells beside a thin box, and whether `box` was extended into its hidden side.
+  FreeSpaceMap free_space;
+  double free_space_cell_m = 0.0;  // the grid of `free_space` (0: none yet)
+  bool box_completed = false;
+  // With box_completed: the box of what the views saw, before completion. Eq. 6 matches new
+  // detections (which see what the earlier views saw) against it, not against the completed box.
+  OrientedBox observed_box;
+  const OrientedBox& seenBox() const { return box_completed ? observed_box : box; }
   int first_keyframe = 0;
   int last_keyframe = 0;
   double first_seen_s = 0.0;
@@ -153,6 +148,9 @@ class ObjectDatabase {
     // surface: the shell of noise that several views of one surface leave (several centimetres
     // at 3-4 m) thins towards the surface they agree on. Voxels no view measured pass. 0 = off.
     double surface_band_m = 0.02;
+    // Evidence fusion: boxes of classes with a known depth (ClassPrior::amodal_depth_m) extended
+    // into the side the views never saw through (a chair under a table, only its backrest seen).
+    AmodalCompletion::Config amodal;
     Status isValid() const;
     std::string print() const;
   };
@@ -171,6 +169,9 @@ class ObjectDatabase {
   // New settings for the next fusions; objects and ids are kept.
   void setConfig(const Config& config) { config_ = config; }
   const ClassPriors& priors() const { return priors_; }
+  // The floor's height along gravity's up (amodal completion grounds completed boxes on it); NaN:
+  // unknown (the default).
+  void setFloorHeight(double floor_height_m) { floor_height_m_ = floor_height_m; }
 
   // Eq. 6: nearest same-class object by box-centre distance; fuse if within the class threshold
   // Γ_C, else insert. On fusion the clouds are merged (Eq. 7), voxelised, re-processed by
@@ -221,11 +222,16 @@ class ObjectDatabase {
  private:
   int takeNextId();
   // Boxes an object's supported voxels (`process`) and rebuilds its cloud from its evidence.
-  void rebox(MapObject* object, const FusedCloudProcessor& process) const;
+  // view: the keyframe's depth (its free space around the object), or null.
+  void rebox(MapObject* object, const FusedCloudProcessor& process, const DepthView* view) const;
+  // Amodal completion of a freshly estimated box: the view's free space around it counted (view
+  // may be null), and the box extended when its counts decide a side.
+  void completeBox(MapObject* object, const DepthView* view) const;
 
   Config config_;
   ClassPriors priors_;
   std::map<int, MapObject> objects_;
+  double floor_height_m_ = std::numeric_limits<double>::quiet_NaN();
   int next_id_ = 1;
   int current_keyframe_ = -1;
   std::vector<int> inserted_this_keyframe_;

@@ -1,0 +1,441 @@
+// AmodalCompletion: a chair pushed under a table, seen only by its backrest above the table top,
+// completed to its depth on the side the views never saw through. Depth views ray-cast from a few
+// axis-aligned boxes on a floor.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/amodal_completion.h"
+#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
+
+namespace mvod {
+namespace {
+
+constexpr double kNoFloor = std::numeric_limits<double>::quiet_NaN();
+
+struct Aabb {
+  Eigen::Vector3d lo;
+  Eigen::Vector3d hi;
+};
+
+// World z up, floor z = 0. A 160 x 120 depth camera at `eye` looking at `target`.
+DepthView render(const std::vector<Aabb>& boxes, const Eigen::Vector3d& eye,
+                 const Eigen::Vector3d& target) {
+  DepthView view;
+  view.K.fx = view.K.fy = 120.0;
+  view.K.cx = 80.0;
+  view.K.cy = 60.0;
+  view.K.width = 160;
+  view.K.height = 120;
+  const Eigen::Vector3d forward = (target - eye).normalized();
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d down = forward.cross(right);
+  Eigen::Isometry3d T_W_D = Eigen::Isometry3d::Identity();
+  T_W_D.linear().col(0) = right;
+  T_W_D.linear().col(1) = down;
+  T_W_D.linear().col(2) = forward;
+  T_W_D.translation() = eye;
+  view.T_D_W = T_W_D.inverse();
+  view.depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(0.f));
+  for (int v = 0; v < 120; ++v) {
+    for (int u = 0; u < 160; ++u) {
+      // Along d_W, t is the depth (d's optical z is 1).
+      const Eigen::Vector3d d_W =
+          T_W_D.linear() * Eigen::Vector3d((u - 80.0) / 120.0, (v - 60.0) / 120.0, 1.0);
+      double t_min = d_W.z() < 0.0 ? -eye.z() / d_W.z() : std::numeric_limits<double>::infinity();
+      for (const Aabb& box : boxes) {
+        double t0 = 0.0;
+        double t1 = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3 && t0 <= t1; ++i) {
+          if (std::abs(d_W[i]) < 1e-12) {
+            if (eye[i] < box.lo[i] || eye[i] > box.hi[i]) t0 = t1 + 1.0;
+            continue;
+          }
+          double a = (box.lo[i] - eye[i]) / d_W[i];
+          double b = (box.hi[i] - eye[i]) / d_W[i];
+          if (a > b) std::swap(a, b);
+          t0 = std::max(t0, a);
+          t1 = std::min(t1, b);
+        }
+        if (t0 <= t1) t_min = std::min(t_min, t0);
+      }
+      if (t_min < 8.0) view.depth_m.at<float>(v, u) = static_cast<float>(t_min);
+    }
+  }
+  return view;
+}
+
+// s = +1: the table at y < 0.45, a chair pushed under it from +y (seat towards -y). s = -1: the
+// same mirrored in y.
+struct ChairScene {
+  std::vector<Aabb> boxes;
+  OrientedBox backrest_seen;  // what the views show of the chair: its backrest above the table
+  OrientedBox chair;          // the whole chair
+};
+
+Aabb mirrored(const Aabb& box, double s) {
+  if (s > 0.0) return box;
+  Aabb m = box;
+  m.lo.y() = -box.hi.y();
+  m.hi.y() = -box.lo.y();
+  return m;
+}
+
+ChairScene chairUnderTable(double s, bool with_table = true) {
+  ChairScene scene;
+  if (with_table) scene.boxes.push_back(mirrored({{-0.8, -0.45, 0.70}, {0.8, 0.45, 0.74}}, s));
+  scene.boxes.push_back(mirrored({{-0.23, 0.15, 0.42}, {0.23, 0.60, 0.47}}, s));  // seat
+  scene.boxes.push_back(mirrored({{-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}}, s));  // backrest
+  for (const double x : {-0.23, 0.20}) {
+    for (const double y : {0.15, 0.57}) {
+      scene.boxes.push_back(mirrored({{x, y, 0.0}, {x + 0.03, y + 0.03, 0.42}}, s));  // legs
+    }
+  }
+  scene.backrest_seen.center_m = Eigen::Vector3d(0.0, s * 0.575, 0.80);
+  scene.backrest_seen.size_m = Eigen::Vector3d(0.46, 0.05, 0.16);
+  scene.chair.center_m = Eigen::Vector3d(0.0, s * 0.375, 0.44);
+  scene.chair.size_m = Eigen::Vector3d(0.46, 0.45, 0.88);
+  return scene;
+}
+
+// Three views from across the table (its top hides the seat), two from beyond the table's ends,
+// which see the floor behind the backrest.
+std::vector<DepthView> views(const ChairScene& scene, double s) {
+  std::vector<DepthView> out;
+  for (const double x : {-0.6, 0.0, 0.6}) {
+    out.push_back(render(scene.boxes, {x, -s * 1.2, 1.5}, {0.0, s * 0.5, 0.5}));
+  }
+  for (const double x : {-1.6, 1.6}) {
+    out.push_back(render(scene.boxes, {x, s * 0.2, 1.4}, {0.0, s * 0.8, 0.3}));
+  }
+  return out;
+}
+
+AmodalCompletion::Config testConfig() { return AmodalCompletion::Config(); }
+
+TEST(DepthViewTest, VisibilitySaysWhetherTheViewSawThroughAPoint) {
+  DepthView view;
+  view.K = CameraIntrinsics{500.0, 500.0, 49.5, 49.5, 100, 100};
+  view.depth_m = cv::Mat(100, 100, CV_32FC1, cv::Scalar(2.0f));
+  view.depth_m.at<float>(50, 50) = 0.f;  // no depth at the pixel of (0, 0, z)
+  view.truncation_m = 0.02;
+  view.truncation_per_m2 = 0.0;
+  using V = DepthView::Visibility;
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.05f, 0.f, 1.0f), 0.05), V::kSeenFree);
+  // Within the margin plus the truncation in front of the surface: not seen through.
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 1.94f), 0.05), V::kNotSeenFree);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 1.92f), 0.05), V::kSeenFree);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 2.5f), 0.05), V::kNotSeenFree);  // hidden
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.f, 0.f, 1.f), 0.05), V::kNotInView);      // no depth
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(1.f, 0.f, 1.f), 0.05), V::kNotInView);      // outside
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, -1.f), 0.05), V::kNotInView);    // behind
+  view.depth_m.at<float>(50, 60) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 5.f), 0.05), V::kNotInView);  // NaN
+}
+
+TEST(AmodalCompletionTest, ThinAxisOnlyForThinBoxesWhenEnabled) {
+  AmodalCompletion completion(testConfig());
+  OrientedBox box;
+  box.size_m = Eigen::Vector3d(0.46, 0.05, 0.3);
+  EXPECT_EQ(completion.thinAxis(box, 0.55), 1);
+  box.size_m = Eigen::Vector3d(0.05, 0.46, 0.3);
+  EXPECT_EQ(completion.thinAxis(box, 0.55), 0);
+  box.size_m = Eigen::Vector3d(0.46, 0.40, 0.3);  // a chair seen whole
+  EXPECT_EQ(completion.thinAxis(box, 0.55), -1);
+  box.size_m = Eigen::Vector3d(0.46, 0.05, 0.3);
+  EXPECT_EQ(completion.thinAxis(box, 0.0), -1);  // the class has no depth
+  AmodalCompletion::Config off = testConfig();
+  off.enable = false;
+  EXPECT_EQ(AmodalCompletion(off).thinAxis(box, 0.55), -1);
+  box.size_m = Eigen::Vector3d(0.46, std::numeric_limits<double>::quiet_NaN(), 0.3);
+  EXPECT_EQ(completion.thinAxis(box, 0.55), -1);
+}
+
+TEST(AmodalCompletionTest, ConfigValidation) {
+  EXPECT_TRUE(testConfig().isValid().ok());
+  AmodalCompletion::Config c = testConfig();
+  c.cell_size_m = 0.0;
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.max_thin_ratio = 1.5;
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.min_free_ratio = 0.5;
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.max_free_share = -0.1;
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.min_in_view = 0;
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.free_margin_m = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(c.isValid().ok());
+  c = testConfig();
+  c.min_observations = 0;
+  EXPECT_FALSE(c.isValid().ok());
+}
+
+// The chair under the table, from both sides of the scene: completed towards the table, to the
+// chair's box.
+TEST(AmodalCompletionTest, ChairUnderATableIsCompletedTowardsTheTable) {
+  for (const double s : {1.0, -1.0}) {
+    SCOPED_TRACE(s > 0 ? "table at -y" : "table at +y");
+    const ChairScene scene = chairUnderTable(s);
+    const AmodalCompletion completion(testConfig());
+    FreeSpaceMap free_space;
+    for (const DepthView& view : views(scene, s)) {
+      completion.countFreeSpace(view, scene.backrest_seen, 0.45, 0.0, &free_space);
+    }
+    const AmodalCompletion::Decision decision =
+        completion.decide(scene.backrest_seen, 0.45, 0.0, free_space);
+    std::printf("[ amodal ] in view %d / %d, seen free %d / %d\n", decision.in_view[0],
+                decision.in_view[1], decision.seen_free[0], decision.seen_free[1]);
+    ASSERT_EQ(decision.axis, 1);
+    // Towards the table: -y for s = +1.
+    EXPECT_EQ(decision.side, s > 0 ? -1 : 1);
+    const OrientedBox box = AmodalCompletion::complete(scene.backrest_seen, decision, 0.45, 0.0);
+    EXPECT_NEAR(box.center_m.y(), scene.chair.center_m.y(), 0.01);
+    EXPECT_NEAR(box.center_m.z(), scene.chair.center_m.z(), 0.01);
+    EXPECT_NEAR(box.size_m.y(), scene.chair.size_m.y(), 0.01);
+    EXPECT_NEAR(box.size_m.z(), scene.chair.size_m.z(), 0.01);
+    EXPECT_NEAR(box.size_m.x(), scene.backrest_seen.size_m.x(), 1e-9);
+    // Without the floor: the same footprint, the height as seen.
+    const OrientedBox floating =
+        AmodalCompletion::complete(scene.backrest_seen, decision, 0.45, kNoFloor);
+    EXPECT_NEAR(floating.center_m.y(), scene.chair.center_m.y(), 0.01);
+    EXPECT_NEAR(floating.size_m.z(), scene.backrest_seen.size_m.z(), 1e-9);
+  }
+}
+
+// Nothing hides the chair's lower part (no table): the views see through both sides below the
+// backrest, so no side is hidden and the box stays what was seen.
+TEST(AmodalCompletionTest, NothingHiddenNothingCompleted) {
+  const ChairScene scene = chairUnderTable(1.0, /*with_table=*/false);
+  OrientedBox panel = scene.backrest_seen;  // a backrest-sized panel alone
+  const std::vector<Aabb> boxes = {{{-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}},
+                                   {{-0.23, 0.55, 0.0}, {-0.20, 0.58, 0.47}},
+                                   {{0.20, 0.55, 0.0}, {0.23, 0.58, 0.47}}};
+  ChairScene alone;
+  alone.boxes = boxes;
+  const AmodalCompletion completion(testConfig());
+  FreeSpaceMap free_space;
+  for (const DepthView& view : views(alone, 1.0)) {
+    completion.countFreeSpace(view, panel, 0.45, 0.0, &free_space);
+  }
+  const AmodalCompletion::Decision decision = completion.decide(panel, 0.45, 0.0, free_space);
+  EXPECT_EQ(decision.axis, 1);
+  EXPECT_GT(decision.freeShare(0), testConfig().max_free_share);
+  EXPECT_GT(decision.freeShare(1), testConfig().max_free_share);
+  EXPECT_EQ(decision.side, 0);
+  const OrientedBox box = AmodalCompletion::complete(panel, decision, 0.45, 0.0);
+  EXPECT_TRUE(box.center_m.isApprox(panel.center_m));
+  EXPECT_TRUE(box.size_m.isApprox(panel.size_m));
+}
+
+// Too little seen (no views; or only views from one side, which see nothing beyond the backrest
+// either): no completion.
+TEST(AmodalCompletionTest, UndecidedWithoutEvidenceOnBothSides) {
+  const ChairScene scene = chairUnderTable(1.0);
+  const AmodalCompletion completion(testConfig());
+  FreeSpaceMap free_space;
+  EXPECT_EQ(completion.decide(scene.backrest_seen, 0.45, 0.0, free_space).side, 0);
+  // Views of an empty room from far away: the cells are never in view.
+  const DepthView away = render({}, {0.0, 5.0, 1.2}, {0.0, 9.0, 1.2});
+  completion.countFreeSpace(away, scene.backrest_seen, 0.45, 0.0, &free_space);
+  const AmodalCompletion::Decision decision =
+      completion.decide(scene.backrest_seen, 0.45, 0.0, free_space);
+  EXPECT_EQ(decision.in_view[0] + decision.in_view[1], 0);
+  EXPECT_EQ(decision.side, 0);
+  // A box that is not thin is neither counted nor completed.
+  OrientedBox whole = scene.chair;
+  FreeSpaceMap untouched;
+  for (const DepthView& view : views(scene, 1.0)) {
+    completion.countFreeSpace(view, whole, 0.45, 0.0, &untouched);
+  }
+  EXPECT_TRUE(untouched.empty());
+  EXPECT_EQ(completion.decide(whole, 0.45, 0.0, untouched).axis, -1);
+}
+
+// The database: a chair class with amodal_depth_m, evidence fusion, each view's cut the backrest.
+class AmodalDatabaseTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ClassPrior chair;
+    chair.class_name = "chair";
+    chair.has_size = true;
+    chair.size_m = Eigen::Vector3d(0.46, 0.45, 0.88);
+    chair.fusion_distance_m = 0.3;
+    chair.amodal_depth_m = 0.45;
+    priors_.set(chair);
+  }
+
+  // The backrest's visible face (towards the table, -y) as the cut, with the scene's view.
+  static ObjectObservation backrestObservation(const ChairScene& scene, const DepthView& view,
+                                               int keyframe) {
+    ObjectObservation obs;
+    obs.class_name = "chair";
+    obs.class_id = 56;
+    obs.probability = 0.8;
+    obs.keyframe = keyframe;
+    for (double x = -0.225; x <= 0.225; x += 0.01) {
+      for (double z = 0.725; z <= 0.875; z += 0.01) {
+        obs.segment_W.push_back(Eigen::Vector3f(x, 0.555, z));
+        obs.segment_W.push_back(Eigen::Vector3f(x, 0.595, z));
+      }
+    }
+    obs.points_W = obs.segment_W;
+    obs.box = scene.backrest_seen;
+    obs.depth_view = std::make_shared<DepthView>(view);
+    return obs;
+  }
+
+  // Boxes the supported voxels axis-aligned (their min/max), as a stand-in for the box stage.
+  static FusedCloudProcessor boundsProcessor() {
+    return [](const std::string&, const PointCloud& points_W, const std::vector<Eigen::Vector3f>&,
+              PointCloud* segment_W, OrientedBox* box, double* yaw_rad) {
+      if (points_W.empty()) return false;
+      Eigen::Vector3f lo = points_W[0];
+      Eigen::Vector3f hi = points_W[0];
+      for (const auto& p : points_W) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      *segment_W = points_W;
+      box->center_m = (0.5 * (lo + hi)).cast<double>();
+      box->size_m = (hi - lo).cast<double>() + Eigen::Vector3d::Constant(0.01);
+      box->rotation = Eigen::Matrix3d::Identity();
+      *yaw_rad = 0.0;
+      return true;
+    };
+  }
+
+  ClassPriors priors_;
+};
+
+TEST_F(AmodalDatabaseTest, EvidenceFusionCompletesAndTheMapKeepsTheFreeSpace) {
+  const ChairScene scene = chairUnderTable(1.0);
+  const std::vector<DepthView> depth_views = views(scene, 1.0);
+  ObjectDatabase::Config config;
+  config.surface_band_m = 0.0;  // both faces of the backrest are the object (not tested here)
+  ObjectDatabase database(config, priors_);
+  database.setFloorHeight(0.0);
+  const FusedCloudProcessor process = boundsProcessor();
+  // Views from both sides first: one keyframe alone (min_observations) is not completed.
+  const std::vector<size_t> order = {3, 0, 1, 2, 4};
+  for (size_t k = 0; k < order.size(); ++k) {
+    database.fuseOrInsert(backrestObservation(scene, depth_views[order[k]], static_cast<int>(k)),
+                          process);
+    if (k == 0) {
+      ASSERT_EQ(database.size(), 1u);
+      EXPECT_FALSE(database.objects().begin()->second.box_completed);
+    }
+  }
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject& object = database.objects().begin()->second;
+  EXPECT_TRUE(object.box_completed);
+  EXPECT_FALSE(object.free_space.empty());
+  EXPECT_NEAR(object.box.center_m.y(), scene.chair.center_m.y(), 0.03);
+  EXPECT_NEAR(object.box.size_m.y(), 0.45, 1e-6);
+  EXPECT_NEAR(object.box.center_m.z() - 0.5 * object.box.size_m.z(), 0.0, 1e-6);  // on the floor
+  // Eq. 6 matches on what was seen: the backrest's box.
+  EXPECT_LT(object.observed_box.size_m.y(), 0.1);
+  EXPECT_NEAR(object.seenBox().center_m.y(), scene.backrest_seen.center_m.y(), 0.02);
+
+  // Saved and reloaded: the free space and the completion come back.
+  std::vector<MapObject> loaded;
+  MapSummary summary;
+  ASSERT_TRUE(objectsFromJson(objectsToJson(databaseObjects(database), MapSummary(), true), &loaded,
+                              &summary)
+                  .ok());
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_TRUE(loaded[0].box_completed);
+  EXPECT_TRUE(loaded[0].observed_box.center_m.isApprox(object.observed_box.center_m, 1e-6));
+  EXPECT_TRUE(loaded[0].observed_box.size_m.isApprox(object.observed_box.size_m, 1e-6));
+  EXPECT_EQ(loaded[0].free_space.size(), object.free_space.size());
+  EXPECT_EQ(loaded[0].free_space_cell_m, object.free_space_cell_m);
+  for (const auto& cell : object.free_space) {
+    const auto it = loaded[0].free_space.find(cell.first);
+    ASSERT_NE(it, loaded[0].free_space.end());
+    EXPECT_EQ(it->second.in_view, cell.second.in_view);
+    EXPECT_EQ(it->second.seen_free, cell.second.seen_free);
+  }
+  // Without clouds (the readable map) there is no free space, only the flag.
+  ASSERT_TRUE(objectsFromJson(objectsToJson(databaseObjects(database), MapSummary(), false),
+                              &loaded, &summary)
+                  .ok());
+  EXPECT_TRUE(loaded[0].box_completed);
+  EXPECT_TRUE(loaded[0].free_space.empty());
+
+  // Switched off, or the paper's fusion: the box is the backrest's.
+  for (const std::string what : {"off", "paper"}) {
+    ObjectDatabase::Config other = config;
+    if (what == "off") other.amodal.enable = false;
+    if (what == "paper") other.fusion = "paper";
+    ObjectDatabase plain(other, priors_);
+    plain.setFloorHeight(0.0);
+    for (size_t k = 0; k < depth_views.size(); ++k) {
+      plain.fuseOrInsert(backrestObservation(scene, depth_views[k], static_cast<int>(k)), process);
+    }
+    ASSERT_EQ(plain.size(), 1u) << what;
+    const MapObject& backrest = plain.objects().begin()->second;
+    EXPECT_FALSE(backrest.box_completed) << what;
+    EXPECT_LT(backrest.box.size_m.y(), 0.1) << what;
+  }
+}
+
+TEST(AmodalJsonTest, MalformedFreeSpaceIsAnErrorNamingTheField) {
+  MapObject chair;
+  chair.id = 1;
+  chair.class_name = "chair";
+  chair.class_id = 56;
+  chair.probability = 0.8;
+  chair.box.size_m = Eigen::Vector3d(0.4, 0.4, 0.8);
+  chair.points_W = {Eigen::Vector3f(0.f, 0.f, 0.f)};
+  const nlohmann::json good = nlohmann::json::parse(objectsToJson({chair}, MapSummary(), true));
+  const auto parse = [&good](const nlohmann::json& free_space, const nlohmann::json& completed,
+                             std::vector<MapObject>* objects) {
+    nlohmann::json doc = good;
+    doc["objects"][0]["free_space"] = free_space;
+    doc["objects"][0]["box_completed"] = completed;
+    MapSummary summary;
+    return objectsFromJson(doc.dump(), objects, &summary);
+  };
+  for (const char* bad :
+       {R"([1, 2])", R"({"cell_size_m": 0, "cells": []})",
+        R"({"cell_size_m": 0.05, "cells": [[0, 0, 0, 1]]})",
+        R"({"cell_size_m": 0.05, "cells": [[0, 0, 0, 1, 2]]})",
+        R"({"cell_size_m": 0.05, "cells": [[0, 0, 0, 70000, 2]]})",
+        R"({"cell_size_m": 0.05, "cells": [[0, 0, 0.5, 1, 0]]})",
+        R"({"cell_size_m": 0.05, "cells": [[18446744073709551615, 0, 0, 1, 0]]})"}) {
+    std::vector<MapObject> objects;
+    const Status status = parse(nlohmann::json::parse(bad), false, &objects);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("objects[0].free_space"), std::string::npos)
+        << status.message();
+  }
+  std::vector<MapObject> objects;
+  ASSERT_TRUE(parse(nlohmann::json::parse(R"({"cell_size_m": 0.05, "cells": [[1, -2, 3, 4, 1]]})"),
+                    true, &objects)
+                  .ok());
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_TRUE(objects[0].box_completed);
+  EXPECT_EQ(objects[0].free_space_cell_m, 0.05);
+  ASSERT_EQ(objects[0].free_space.size(), 1u);
+  EXPECT_EQ(objects[0].free_space.begin()->first, packVoxel(Eigen::Vector3i(1, -2, 3)));
+  EXPECT_EQ(objects[0].free_space.begin()->second.in_view, 4);
+  EXPECT_EQ(objects[0].free_space.begin()->second.seen_free, 1);
+  const Status flag =
+      parse(nlohmann::json::parse(R"({"cell_size_m": 0.05, "cells": []})"), 1, &objects);
+  EXPECT_FALSE(flag.ok());
+  EXPECT_NE(flag.message().find("box_completed"), std::string::npos) << flag.message();
+}
+
+}  // namespace
+}  // namespace mvod
