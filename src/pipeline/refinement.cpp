@@ -181,7 +181,9 @@ std::vector<int> IntersectionFilter::intersectingObjects(
   std::vector<double> volumes;
   for (const auto& entry : database.objects()) {
     objects.push_back(&entry.second);
-    volumes.push_back(usableVolume(entry.second.box));
+    // A completed box (amodal completion) reaches into what no view saw: a chair pushed under a
+    // table would lie mostly inside the table's box. Containment is judged on what was seen.
+    volumes.push_back(usableVolume(entry.second.seenBox()));
   }
   const size_t count = objects.size();
   const double threshold = config_.volume_ratio_threshold;
@@ -200,8 +202,8 @@ std::vector<int> IntersectionFilter::intersectingObjects(
     for (size_t tau = sigma + 1; tau < count; ++tau) {
       if (deleted[tau]) continue;
       Pair pair{tau, 0.0, 0.0};
-      volumeRatios(objects[sigma]->box, volumes[sigma], objects[tau]->box, volumes[tau], up,
-                   &pair.eta_sigma, &pair.eta_tau);
+      volumeRatios(objects[sigma]->seenBox(), volumes[sigma], objects[tau]->seenBox(), volumes[tau],
+                   up, &pair.eta_sigma, &pair.eta_tau);
       if (pair.eta_sigma > 0.0 || pair.eta_tau > 0.0) pairs.push_back(pair);
     }
     while (true) {

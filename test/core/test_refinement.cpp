@@ -291,6 +291,23 @@ TEST_F(IntersectionFilterTest, WellSupportedContainerStillDeletesWhatLiesInside)
             std::vector<int>{2});
 }
 
+TEST_F(IntersectionFilterTest, CompletedChairUnderATableIsJudgedOnWhatWasSeen) {
+  // A table (20 keyframes) and a chair pushed under it (9): its completed box (seat under the
+  // table top) lies 0.6 inside the table's; its observed part, the backrest beyond the table's
+  // edge, not at all.
+  MapObject table = makeObject(
+      1, "dining table", makeBox(Eigen::Vector3d(0.0, 0.0, 0.37), Eigen::Vector3d(1.5, 0.9, 0.74)));
+  table.observations = 20;
+  MapObject chair = makeObject(
+      2, "chair", makeBox(Eigen::Vector3d(0.3, 0.35, 0.42), Eigen::Vector3d(0.5, 0.55, 0.84)));
+  chair.observations = 9;
+  // Without completion, a box like that lies mostly inside the table's: deleted (Algorithm 1).
+  EXPECT_EQ(filter_.intersectingObjects(makeDatabase({table, chair}), kUp), std::vector<int>{2});
+  chair.box_completed = true;
+  chair.observed_box = makeBox(Eigen::Vector3d(0.3, 0.6, 0.6), Eigen::Vector3d(0.5, 0.05, 0.48));
+  EXPECT_TRUE(filter_.intersectingObjects(makeDatabase({table, chair}), kUp).empty());
+}
+
 TEST_F(IntersectionFilterTest, DeletedObjectCausesNoFurtherDeletion) {
   // X (id 1) = A. Y (id 2) pokes out of X: η_Y = 0.6 > η_X = 0.3, so X's step deletes Y. Z (id 3)
   // lies entirely inside the part of Y outside X: it only intersects the deleted Y and stays.
