@@ -1,6 +1,6 @@
 // AmodalCompletion: a chair pushed under a table, seen only by its backrest above the table top,
 // completed to its depth on the side the views never saw through. Depth views ray-cast from a few
-// axis-aligned boxes on a floor.
+// axis-aligned parts on a floor (part_scene.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,89 +12,53 @@
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/amodal_completion.h"
 #include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
+#include "part_scene.h"
 
 namespace mvod {
 namespace {
 
 constexpr double kNoFloor = std::numeric_limits<double>::quiet_NaN();
 
-struct Aabb {
-  Eigen::Vector3d lo;
-  Eigen::Vector3d hi;
-};
-
-// World z up, floor z = 0. A 160 x 120 depth camera at `eye` looking at `target`.
-DepthView render(const std::vector<Aabb>& boxes, const Eigen::Vector3d& eye,
+// One view of the scene as the database gets it: metric depth and the camera.
+DepthView render(const test::PartScene& scene, const Eigen::Vector3d& eye,
                  const Eigen::Vector3d& target) {
+  cv::Rect unused;
+  const RgbdFrame frame = scene.render(test::lookAt(eye, target), "", &unused);
   DepthView view;
-  view.K.fx = view.K.fy = 120.0;
-  view.K.cx = 80.0;
-  view.K.cy = 60.0;
-  view.K.width = 160;
-  view.K.height = 120;
-  const Eigen::Vector3d forward = (target - eye).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Isometry3d T_W_D = Eigen::Isometry3d::Identity();
-  T_W_D.linear().col(0) = right;
-  T_W_D.linear().col(1) = down;
-  T_W_D.linear().col(2) = forward;
-  T_W_D.translation() = eye;
-  view.T_D_W = T_W_D.inverse();
-  view.depth_m = cv::Mat(120, 160, CV_32FC1, cv::Scalar(0.f));
-  for (int v = 0; v < 120; ++v) {
-    for (int u = 0; u < 160; ++u) {
-      // Along d_W, t is the depth (d's optical z is 1).
-      const Eigen::Vector3d d_W =
-          T_W_D.linear() * Eigen::Vector3d((u - 80.0) / 120.0, (v - 60.0) / 120.0, 1.0);
-      double t_min = d_W.z() < 0.0 ? -eye.z() / d_W.z() : std::numeric_limits<double>::infinity();
-      for (const Aabb& box : boxes) {
-        double t0 = 0.0;
-        double t1 = std::numeric_limits<double>::infinity();
-        for (int i = 0; i < 3 && t0 <= t1; ++i) {
-          if (std::abs(d_W[i]) < 1e-12) {
-            if (eye[i] < box.lo[i] || eye[i] > box.hi[i]) t0 = t1 + 1.0;
-            continue;
-          }
-          double a = (box.lo[i] - eye[i]) / d_W[i];
-          double b = (box.hi[i] - eye[i]) / d_W[i];
-          if (a > b) std::swap(a, b);
-          t0 = std::max(t0, a);
-          t1 = std::min(t1, b);
-        }
-        if (t0 <= t1) t_min = std::min(t_min, t0);
-      }
-      if (t_min < 8.0) view.depth_m.at<float>(v, u) = static_cast<float>(t_min);
-    }
-  }
+  frame.depth.convertTo(view.depth_m, CV_32FC1, 0.001);
+  view.K = frame.K_depth;
+  view.T_D_W = frame.T_W_D.inverse();
   return view;
 }
 
 // s = +1: the table at y < 0.45, a chair pushed under it from +y (seat towards -y). s = -1: the
 // same mirrored in y.
 struct ChairScene {
-  std::vector<Aabb> boxes;
+  test::PartScene parts;
   OrientedBox backrest_seen;  // what the views show of the chair: its backrest above the table
   OrientedBox chair;          // the whole chair
 };
 
-Aabb mirrored(const Aabb& box, double s) {
-  if (s > 0.0) return box;
-  Aabb m = box;
-  m.lo.y() = -box.hi.y();
-  m.hi.y() = -box.lo.y();
-  return m;
+void add(const std::string& object, Eigen::Vector3d lo, Eigen::Vector3d hi, double s,
+         test::PartScene* scene) {
+  if (s < 0.0) {
+    std::swap(lo.y(), hi.y());
+    lo.y() = -lo.y();
+    hi.y() = -hi.y();
+  }
+  scene->parts.push_back(test::Part{object, lo, hi});
 }
 
 ChairScene chairUnderTable(double s, bool with_table = true) {
   ChairScene scene;
-  if (with_table) scene.boxes.push_back(mirrored({{-0.8, -0.45, 0.70}, {0.8, 0.45, 0.74}}, s));
-  scene.boxes.push_back(mirrored({{-0.23, 0.15, 0.42}, {0.23, 0.60, 0.47}}, s));  // seat
-  scene.boxes.push_back(mirrored({{-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}}, s));  // backrest
+  if (with_table) add("table", {-0.8, -0.45, 0.70}, {0.8, 0.45, 0.74}, s, &scene.parts);
+  add("chair", {-0.23, 0.15, 0.42}, {0.23, 0.60, 0.47}, s, &scene.parts);  // seat
+  add("chair", {-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}, s, &scene.parts);  // backrest
   for (const double x : {-0.23, 0.20}) {
     for (const double y : {0.15, 0.57}) {
-      scene.boxes.push_back(mirrored({{x, y, 0.0}, {x + 0.03, y + 0.03, 0.42}}, s));  // legs
+      add("chair", {x, y, 0.0}, {x + 0.03, y + 0.03, 0.42}, s, &scene.parts);  // legs
     }
   }
   scene.backrest_seen.center_m = Eigen::Vector3d(0.0, s * 0.575, 0.80);
@@ -106,13 +70,13 @@ ChairScene chairUnderTable(double s, bool with_table = true) {
 
 // Three views from across the table (its top hides the seat), two from beyond the table's ends,
 // which see the floor behind the backrest.
-std::vector<DepthView> views(const ChairScene& scene, double s) {
+std::vector<DepthView> views(const test::PartScene& scene, double s) {
   std::vector<DepthView> out;
   for (const double x : {-0.6, 0.0, 0.6}) {
-    out.push_back(render(scene.boxes, {x, -s * 1.2, 1.5}, {0.0, s * 0.5, 0.5}));
+    out.push_back(render(scene, {x, -s * 1.2, 1.5}, {0.0, s * 0.5, 0.5}));
   }
   for (const double x : {-1.6, 1.6}) {
-    out.push_back(render(scene.boxes, {x, s * 0.2, 1.4}, {0.0, s * 0.8, 0.3}));
+    out.push_back(render(scene, {x, s * 0.2, 1.4}, {0.0, s * 0.8, 0.3}));
   }
   return out;
 }
@@ -190,7 +154,7 @@ TEST(AmodalCompletionTest, ChairUnderATableIsCompletedTowardsTheTable) {
     const ChairScene scene = chairUnderTable(s);
     const AmodalCompletion completion(testConfig());
     FreeSpaceMap free_space;
-    for (const DepthView& view : views(scene, s)) {
+    for (const DepthView& view : views(scene.parts, s)) {
       completion.countFreeSpace(view, scene.backrest_seen, 0.45, 0.0, &free_space);
     }
     const AmodalCompletion::Decision decision =
@@ -217,13 +181,12 @@ TEST(AmodalCompletionTest, ChairUnderATableIsCompletedTowardsTheTable) {
 // Nothing hides the chair's lower part (no table): the views see through both sides below the
 // backrest, so no side is hidden and the box stays what was seen.
 TEST(AmodalCompletionTest, NothingHiddenNothingCompleted) {
-  const ChairScene scene = chairUnderTable(1.0, /*with_table=*/false);
-  OrientedBox panel = scene.backrest_seen;  // a backrest-sized panel alone
-  const std::vector<Aabb> boxes = {{{-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}},
-                                   {{-0.23, 0.55, 0.0}, {-0.20, 0.58, 0.47}},
-                                   {{0.20, 0.55, 0.0}, {0.23, 0.58, 0.47}}};
-  ChairScene alone;
-  alone.boxes = boxes;
+  const ChairScene scene = chairUnderTable(1.0);
+  const OrientedBox panel = scene.backrest_seen;
+  test::PartScene alone;  // a backrest-sized panel on two posts, nothing else
+  add("panel", {-0.23, 0.55, 0.47}, {0.23, 0.60, 0.88}, 1.0, &alone);
+  add("panel", {-0.23, 0.55, 0.0}, {-0.20, 0.58, 0.47}, 1.0, &alone);
+  add("panel", {0.20, 0.55, 0.0}, {0.23, 0.58, 0.47}, 1.0, &alone);
   const AmodalCompletion completion(testConfig());
   FreeSpaceMap free_space;
   for (const DepthView& view : views(alone, 1.0)) {
@@ -247,7 +210,7 @@ TEST(AmodalCompletionTest, UndecidedWithoutEvidenceOnBothSides) {
   FreeSpaceMap free_space;
   EXPECT_EQ(completion.decide(scene.backrest_seen, 0.45, 0.0, free_space).side, 0);
   // Views of an empty room from far away: the cells are never in view.
-  const DepthView away = render({}, {0.0, 5.0, 1.2}, {0.0, 9.0, 1.2});
+  const DepthView away = render(test::PartScene(), {0.0, 5.0, 1.2}, {0.0, 9.0, 1.2});
   completion.countFreeSpace(away, scene.backrest_seen, 0.45, 0.0, &free_space);
   const AmodalCompletion::Decision decision =
       completion.decide(scene.backrest_seen, 0.45, 0.0, free_space);
@@ -256,7 +219,7 @@ TEST(AmodalCompletionTest, UndecidedWithoutEvidenceOnBothSides) {
   // A box that is not thin is neither counted nor completed.
   OrientedBox whole = scene.chair;
   FreeSpaceMap untouched;
-  for (const DepthView& view : views(scene, 1.0)) {
+  for (const DepthView& view : views(scene.parts, 1.0)) {
     completion.countFreeSpace(view, whole, 0.45, 0.0, &untouched);
   }
   EXPECT_TRUE(untouched.empty());
@@ -321,7 +284,7 @@ class AmodalDatabaseTest : public ::testing::Test {
 
 TEST_F(AmodalDatabaseTest, EvidenceFusionCompletesAndTheMapKeepsTheFreeSpace) {
   const ChairScene scene = chairUnderTable(1.0);
-  const std::vector<DepthView> depth_views = views(scene, 1.0);
+  const std::vector<DepthView> depth_views = views(scene.parts, 1.0);
   ObjectDatabase::Config config;
   config.surface_band_m = 0.0;  // both faces of the backrest are the object (not tested here)
   ObjectDatabase database(config, priors_);
@@ -388,6 +351,66 @@ TEST_F(AmodalDatabaseTest, EvidenceFusionCompletesAndTheMapKeepsTheFreeSpace) {
     EXPECT_FALSE(backrest.box_completed) << what;
     EXPECT_LT(backrest.box.size_m.y(), 0.1) << what;
   }
+}
+
+// The whole pipeline on the chair under the table: box-only detections of the chair in five
+// keyframes (three across the table, two from beyond its ends). Each view's cut is the backrest
+// above the table top; the fused box is completed to the chair.
+TEST(AmodalMapperTest, ChairUnderATableFromBoxDetections) {
+  const ChairScene scene = chairUnderTable(1.0);
+  ClassPriors priors;
+  ClassPrior chair;
+  chair.class_name = "chair";
+  chair.has_size = true;
+  chair.size_m = Eigen::Vector3d(0.46, 0.45, 0.88);
+  chair.fusion_distance_m = 0.3;
+  chair.on_floor = true;
+  chair.amodal_depth_m = 0.45;
+  priors.set(chair);
+  const auto run = [&](bool amodal) {
+    ObjectMapper::Config config;
+    config.gravity_down_W = Eigen::Vector3d(0, 0, -1);
+    config.database.amodal.enable = amodal;
+    ObjectMapper mapper(config, priors);
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> cameras;
+    for (const double x : {-0.6, 0.0, 0.6}) {
+      cameras.push_back({{x, -1.2, 1.5}, {0.0, 0.5, 0.5}});
+    }
+    for (const double x : {-1.6, 1.6}) cameras.push_back({{x, 0.2, 1.4}, {0.0, 0.8, 0.3}});
+    for (size_t k = 0; k < cameras.size(); ++k) {
+      cv::Rect box;
+      RgbdFrame frame =
+          scene.parts.render(test::lookAt(cameras[k].first, cameras[k].second), "chair", &box);
+      frame.name = "frame-" + std::to_string(k);
+      frame.stamp_s = static_cast<double>(k);
+      Detection2D detection;
+      detection.class_name = "chair";
+      detection.class_id = cocoClassId("chair");
+      detection.score = 0.9f;
+      detection.box_px = box;
+      detection.mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
+      cv::rectangle(detection.mask, box, cv::Scalar(255), cv::FILLED);
+      KeyframeReport report;
+      EXPECT_TRUE(mapper.processKeyframe(frame, {detection}, &report).ok());
+    }
+    EXPECT_EQ(mapper.database().size(), 1u);
+    return mapper.database().size() == 1u ? mapper.database().objects().begin()->second
+                                          : MapObject();
+  };
+  const MapObject completed = run(true);
+  const MapObject seen = run(false);
+  const auto horizontal = [&scene](const OrientedBox& box) {
+    return (box.center_m - scene.chair.center_m).head<2>().norm();
+  };
+  std::printf(
+      "[ amodal ] mapper: completed centre %.3f m off, size %.2f %.2f %.2f; without %.3f m\n",
+      horizontal(completed.box), completed.box.size_m.x(), completed.box.size_m.y(),
+      completed.box.size_m.z(), horizontal(seen.box));
+  EXPECT_TRUE(completed.box_completed);
+  EXPECT_LT(horizontal(completed.box), 0.05);
+  EXPECT_NEAR(completed.box.center_m.z() - 0.5 * completed.box.size_m.z(), 0.0, 0.05);
+  EXPECT_FALSE(seen.box_completed);
+  EXPECT_GT(horizontal(seen.box), 0.15);
 }
 
 TEST(AmodalJsonTest, MalformedFreeSpaceIsAnErrorNamingTheField) {

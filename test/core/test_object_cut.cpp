@@ -8,24 +8,12 @@
 
 #include "box_scene.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "part_scene.h"
 
 namespace mvod {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Optical frame at `position` looking at `target` (x right, y down, z forward), world z up.
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-  T_W_C.linear().col(0) = x;
-  T_W_C.linear().col(1) = y;
-  T_W_C.linear().col(2) = z;
-  T_W_C.translation() = position;
-  return T_W_C;
-}
 
 // Mask R-CNN-like bleeding: the mask grown by `pixels` into the background.
 Detection2D bledDetection(const cv::Mat& mask, int pixels) {
@@ -89,7 +77,7 @@ class ObjectCutTest : public ::testing::Test {
   Eigen::Isometry3d arcPose(double angle_deg) const {
     const double a = (angle_deg - 90.0) * kPi / 180.0;
     const Eigen::Vector3d position(2.2 * std::cos(a), 2.2 * std::sin(a), 1.3);
-    return lookAt(position, scene_.box_center);
+    return test::lookAt(position, scene_.box_center);
   }
 
   // One keyframe through the mapper; the object's box (fails the test when there is none).

@@ -12,91 +12,18 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "part_scene.h"
 
 namespace mvod {
 namespace {
 
-struct Part {
-  std::string object;  // which object it belongs to ("" = background)
-  Eigen::Vector3d min_m;
-  Eigen::Vector3d max_m;  // axis-aligned, world z up, floor z = 0
-};
-
-// Ray-casts axis-aligned parts over a floor; the label image names the object of each pixel.
-struct PartScene {
-  std::vector<Part> parts;
-
-  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, int* part) const {
-    double best = d.z() < -1e-9 ? -o.z() / d.z() : std::numeric_limits<double>::infinity();
-    *part = -1;
-    for (size_t k = 0; k < parts.size(); ++k) {
-      double t_near = -std::numeric_limits<double>::infinity();
-      double t_far = std::numeric_limits<double>::infinity();
-      bool miss = false;
-      for (int i = 0; i < 3 && !miss; ++i) {
-        if (std::abs(d[i]) < 1e-12) {
-          miss = o[i] < parts[k].min_m[i] || o[i] > parts[k].max_m[i];
-          continue;
-        }
-        double t1 = (parts[k].min_m[i] - o[i]) / d[i];
-        double t2 = (parts[k].max_m[i] - o[i]) / d[i];
-        if (t1 > t2) std::swap(t1, t2);
-        t_near = std::max(t_near, t1);
-        t_far = std::min(t_far, t2);
-      }
-      if (!miss && t_near <= t_far && t_near > 0.0 && t_near < best) {
-        best = t_near;
-        *part = static_cast<int>(k);
-      }
-    }
-    return best;
-  }
-
-  // A 640x480 frame and the 2D box of `object`'s pixels.
-  RgbdFrame render(const Eigen::Isometry3d& T_W_D, const std::string& object, cv::Rect* box) const {
-    RgbdFrame frame;
-    frame.name = "frame-0";
-    frame.K_depth = CameraIntrinsics{520.0, 520.0, 319.5, 239.5, 640, 480};
-    frame.K_color = frame.K_depth;
-    frame.registered = true;
-    frame.T_W_D = T_W_D;
-    frame.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(0));
-    frame.color_bgr = cv::Mat(480, 640, CV_8UC3, cv::Scalar(90, 120, 150));
-    cv::Mat mask(480, 640, CV_8UC1, cv::Scalar(0));
-    for (int v = 0; v < 480; ++v) {
-      for (int u = 0; u < 640; ++u) {
-        const Eigen::Vector3d ray((u - 319.5) / 520.0, (v - 239.5) / 520.0, 1.0);
-        int part = -1;
-        const double t = cast(T_W_D.translation(), T_W_D.linear() * ray, &part);
-        if (!std::isfinite(t) || t > 8.0) continue;
-        frame.depth.at<uint16_t>(v, u) = static_cast<uint16_t>(std::lround(t * 1000.0));
-        if (part >= 0 && parts[part].object == object) mask.at<uint8_t>(v, u) = 255;
-      }
-    }
-    *box = cv::boundingRect(mask);
-    return frame;
-  }
-};
-
-// Optical frame at `position` looking at `target`, world z up.
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - position).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = position;
-  return T;
-}
-
 // A 1.4 x 0.8 m table (top 0.72-0.76 m) centred at the origin with a cup, a tissue box and a stack
 // of papers on it, and a chair pushed under its far side: legs, seat under the top, backrest rising
 // to 0.95 m just behind the table's far edge (y = 0.4).
-PartScene tableScene() {
-  PartScene scene;
+test::PartScene tableScene() {
+  test::PartScene scene;
   const auto add = [&scene](const std::string& object, Eigen::Vector3d lo, Eigen::Vector3d hi) {
-    scene.parts.push_back(Part{object, lo, hi});
+    scene.parts.push_back(test::Part{object, lo, hi});
   };
   add("table", {-0.7, -0.4, 0.72}, {0.7, 0.4, 0.76});
   for (const double x : {-0.65, 0.6}) {
@@ -131,7 +58,7 @@ class SupportSurfacesTest : public ::testing::Test {
     config_.gravity_down_W = Eigen::Vector3d(0, 0, -1);
     scene_ = tableScene();
     // In front of the table's near side, 1.5 m up, looking at the table top.
-    T_W_D_ = lookAt(Eigen::Vector3d(0.3, -1.6, 1.5), Eigen::Vector3d(0.1, 0.2, 0.6));
+    T_W_D_ = test::lookAt(Eigen::Vector3d(0.3, -1.6, 1.5), Eigen::Vector3d(0.1, 0.2, 0.6));
   }
 
   // One keyframe with one box-only detection; false when the detection gave no object.
@@ -177,7 +104,7 @@ class SupportSurfacesTest : public ::testing::Test {
   ClassPrior table_;
   ClassPrior chair_;
   ObjectMapper::Config config_;
-  PartScene scene_;
+  test::PartScene scene_;
   Eigen::Isometry3d T_W_D_;
 };
 
