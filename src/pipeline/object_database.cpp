@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <unordered_set>
@@ -460,11 +458,6 @@ void ObjectDatabase::completeBox(MapObject* object, const DepthView* view) const
   if (object->observations < config_.amodal.min_observations) return;
   const AmodalCompletion::Decision decision =
       completion.decide(object->box, depth_m, floor_height_m_, object->free_space);
-  if (std::getenv("MVOD_DEBUG_AMODAL") != nullptr && decision.axis >= 0) {
-    std::printf("amodal %d %s obs %d in_view %d/%d free %d/%d side %d\n", object->id,
-                object->class_name.c_str(), object->observations, decision.in_view[0],
-                decision.in_view[1], decision.seen_free[0], decision.seen_free[1], decision.side);
-  }
   if (decision.side == 0) return;
   object->observed_box = object->box;
   object->box = AmodalCompletion::complete(object->box, decision, depth_m, floor_height_m_);
