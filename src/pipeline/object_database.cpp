@@ -446,6 +446,8 @@ void ObjectDatabase::completeBox(MapObject* object, const DepthView* view) const
   if (!config_.amodal.enable || config_.fusion != "evidence") return;
   const ClassPrior* prior = priors_.find(object->class_name);
   if (prior == nullptr || !(prior->amodal_depth_m > 0.0)) return;
+  // Completion works in the box's frame, its third axis up.
+  if (!gravity_up_.isZero() && !(object->box.rotation.col(2).dot(gravity_up_) >= 0.999)) return;
   const AmodalCompletion completion(config_.amodal);
   if (object->free_space_cell_m != config_.amodal.cell_size_m) {
     object->free_space.clear();

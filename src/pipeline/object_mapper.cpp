@@ -375,6 +375,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   // Amodal completion grounds the boxes it completes on the floor, when that is known.
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
+  database_.setGravityUp(gravity().up);
   for (size_t k = 0; k < kept.size(); ++k) {
     const Detection2D& detection = kept[k];
     const std::string what = label + ": " + detectionLabel(kept_index[k], detection);

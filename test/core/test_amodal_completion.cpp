@@ -336,6 +336,19 @@ TEST_F(AmodalDatabaseTest, EvidenceFusionCompletesAndTheMapKeepsTheFreeSpace) {
   EXPECT_TRUE(loaded[0].box_completed);
   EXPECT_TRUE(loaded[0].free_space.empty());
 
+  // A box not along gravity (estimated without the gravity constraint) is left as it is.
+  {
+    ObjectDatabase tilted(config, priors_);
+    tilted.setFloorHeight(0.0);
+    tilted.setGravityUp(Eigen::Vector3d(0.0, 0.6, 0.8));
+    for (size_t k = 0; k < order.size(); ++k) {
+      tilted.fuseOrInsert(backrestObservation(scene, depth_views[order[k]], static_cast<int>(k)),
+                          process);
+    }
+    ASSERT_EQ(tilted.size(), 1u);
+    EXPECT_FALSE(tilted.objects().begin()->second.box_completed);
+  }
+
   // Switched off, or the paper's fusion: the box is the backrest's.
   for (const std::string what : {"off", "paper"}) {
     ObjectDatabase::Config other = config;

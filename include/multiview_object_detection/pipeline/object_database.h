@@ -172,6 +172,9 @@ class ObjectDatabase {
   // The floor's height along gravity's up (amodal completion grounds completed boxes on it); NaN:
   // unknown (the default).
   void setFloorHeight(double floor_height_m) { floor_height_m_ = floor_height_m; }
+  // Gravity's up (unit): amodal completion leaves boxes whose third axis is not along it (a box
+  // estimated without the gravity constraint). Zero (the default): every box's third axis is up.
+  void setGravityUp(const Eigen::Vector3d& up) { gravity_up_ = up; }
 
   // Eq. 6: nearest same-class object by box-centre distance; fuse if within the class threshold
   // Γ_C, else insert. On fusion the clouds are merged (Eq. 7), voxelised, re-processed by
@@ -232,6 +235,7 @@ class ObjectDatabase {
   ClassPriors priors_;
   std::map<int, MapObject> objects_;
   double floor_height_m_ = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector3d gravity_up_ = Eigen::Vector3d::Zero();
   int next_id_ = 1;
   int current_keyframe_ = -1;
   std::vector<int> inserted_this_keyframe_;
