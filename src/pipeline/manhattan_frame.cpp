@@ -203,8 +203,11 @@ std::vector<Eigen::Vector3f> normalsAt(const PointCloud& points, const std::vect
 // moments of the cells whose centres lie within the radius of its cell's centre (33 cells), PCA
 // as in normalsAt. Queries in one cell share its normal, so the cost is that of the occupied cells,
 // whatever the radius.
+// threads: the occupied cells split over this many threads (each cell's normal is independent:
+// the same result).
 std::vector<Eigen::Vector3f> normalsOnCells(const PointCloud& points,
-                                            const std::vector<int>& queries, double radius_m) {
+                                            const std::vector<int>& queries, double radius_m,
+                                            int threads = 1) {
   std::vector<Eigen::Vector3f> normals(queries.size(), nanNormal());
   if (!(std::isfinite(radius_m) && radius_m > 0.0)) return normals;
   const double cell_m = 0.5 * radius_m;
@@ -255,16 +258,21 @@ std::vector<Eigen::Vector3f> normalsOnCells(const PointCloud& points,
     }
   }
   radixSortByKey(&order);
-  Eigen::Vector3f normal = nanNormal();
+  std::vector<std::size_t> group_begin;  // where each occupied cell's queries start in `order`
   for (std::size_t o = 0; o < order.size(); ++o) {
-    if (o == 0 || order[o].first != order[o - 1].first) {
-      cellOf(points[queries[order[o].second]], &cell);
+    if (o == 0 || order[o].first != order[o - 1].first) group_begin.push_back(o);
+  }
+  group_begin.push_back(order.size());
+  const auto estimate = [&](std::size_t first_group, std::size_t last_group) {
+    Eigen::Vector3i query_cell;
+    for (std::size_t g = first_group; g < last_group; ++g) {
+      cellOf(points[queries[order[group_begin[g]].second]], &query_cell);
       PointMoments around;
       for (const Eigen::Vector3i& offset : kOffsets) {
-        const auto it = cells.find(keyOf(cell + offset));
+        const auto it = cells.find(keyOf(query_cell + offset));
         if (it != cells.end()) around.add(it->second);
       }
-      normal = nanNormal();
+      Eigen::Vector3f normal = nanNormal();
       if (around.n >= 3.0) {
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
         solver.computeDirect(around.covariance());
@@ -275,9 +283,13 @@ std::vector<Eigen::Vector3f> normalsOnCells(const PointCloud& points,
           if (n.allFinite() && n.norm() > 0.5) normal = n.normalized().cast<float>();
         }
       }
+      for (std::size_t o = group_begin[g]; o < group_begin[g + 1]; ++o) {
+        normals[order[o].second] = normal;
+      }
     }
-    normals[order[o].second] = normal;
-  }
+  };
+  // Below a few hundred cells a thread costs more than it saves.
+  parallelRanges(group_begin.size() - 1, threads, 512, estimate);
   return normals;
 }
 
@@ -333,26 +345,51 @@ struct YawArc {
   double half_width = 0.0;  // < pi/4 for an arc
 };
 
-YawArc yawArcOf(const Eigen::Vector3d& n, const Eigen::Vector3d& up, const Eigen::Vector3d& x_h,
-                const Eigen::Vector3d& y_h, double cos_delta) {
+// A unit normal's horizontal geometry in a gravity frame, computed once and shared by Eq. 3's yaw
+// sweep, the structure test and the polish (each used to redo the trigonometry per normal).
+struct HorizontalNormal {
+  bool vertical = false;  // within δ of ±up: an inlier at every yaw, and not horizontal
+  double h = 0.0;         // length of the horizontal part (not computed for vertical normals)
+  double theta = 0.0;     // its angle from x_h (computed only where h >= cos δ)
   YawArc arc;
-  if (std::abs(n.dot(up)) >= cos_delta) {  // within δ of ±up: an inlier at every yaw
+};
+
+HorizontalNormal horizontalNormalOf(const Eigen::Vector3d& n, const Eigen::Vector3d& up,
+                                    const Eigen::Vector3d& x_h, const Eigen::Vector3d& y_h,
+                                    double cos_delta) {
+  HorizontalNormal result;
+  YawArc& arc = result.arc;
+  if (std::abs(n.dot(up)) >= cos_delta) {
+    result.vertical = true;
     arc.kind = YawArc::kAlways;
-    return arc;
+    return result;
   }
   const double hx = n.dot(x_h);
   const double hy = n.dot(y_h);
-  const double h = std::hypot(hx, hy);
+  result.h = std::hypot(hx, hy);
   // angle(n, axis at yaw psi) <= δ  <=>  h cos(theta - psi) >= cos δ.
-  if (h < cos_delta) return arc;
-  arc.half_width = std::acos(std::min(1.0, cos_delta / h));
+  if (result.h < cos_delta) return result;
+  result.theta = std::atan2(hy, hx);
+  arc.half_width = std::acos(std::min(1.0, cos_delta / result.h));
   if (2.0 * arc.half_width >= kHalfPi) {  // only for δ >= 45°
     arc.kind = YawArc::kAlways;
-    return arc;
+    return result;
   }
   arc.kind = YawArc::kArc;
-  arc.start = foldQuarter(std::atan2(hy, hx) - arc.half_width);
-  return arc;
+  arc.start = foldQuarter(result.theta - arc.half_width);
+  return result;
+}
+
+std::vector<HorizontalNormal> horizontalNormals(const std::vector<Eigen::Vector3d>& normals,
+                                                const Eigen::Vector3d& up,
+                                                const Eigen::Vector3d& x_h,
+                                                const Eigen::Vector3d& y_h, double cos_delta) {
+  std::vector<HorizontalNormal> result;
+  result.reserve(normals.size());
+  for (const Eigen::Vector3d& n : normals) {
+    result.push_back(horizontalNormalOf(n, up, x_h, y_h, cos_delta));
+  }
+  return result;
 }
 
 struct YawSweepResult {
@@ -363,34 +400,43 @@ struct YawSweepResult {
 // Exact maximiser of the gravity-constrained Eq. 3 over yaw: each normal is an inlier on a closed
 // arc of yaw (mod 90°); a sweep over the sorted arc end points visits every piece of the
 // piecewise-constant count. Among the maximal pieces the widest wins and its middle is returned.
-YawSweepResult sweepYaw(const std::vector<Eigen::Vector3d>& normals, const Eigen::Vector3d& up,
-                        const Eigen::Vector3d& x_h, const Eigen::Vector3d& y_h, double cos_delta) {
-  std::vector<std::pair<double, int>> events;  // (angle, +1 start / -1 end)
-  events.reserve(2 * normals.size());
+YawSweepResult sweepArcs(const std::vector<HorizontalNormal>& normals) {
+  std::vector<double> starts, ends;
+  starts.reserve(normals.size());
+  ends.reserve(normals.size());
   int base = 0;  // count at psi = 0: normals inlier everywhere plus arcs that wrap past pi/2
-  for (const Eigen::Vector3d& n : normals) {
-    const YawArc arc = yawArcOf(n, up, x_h, y_h, cos_delta);
+  for (const HorizontalNormal& n : normals) {
+    const YawArc& arc = n.arc;
     if (arc.kind == YawArc::kAlways) {
       ++base;
     } else if (arc.kind == YawArc::kArc) {
       const double end = arc.start + 2.0 * arc.half_width;
-      events.emplace_back(arc.start, +1);
+      starts.push_back(arc.start);
       if (end < kHalfPi) {
-        events.emplace_back(end, -1);
+        ends.push_back(end);
       } else {  // wraps: [start, pi/2) and [0, end - pi/2]
         ++base;
-        events.emplace_back(end - kHalfPi, -1);
+        ends.push_back(end - kHalfPi);
       }
     }
   }
   YawSweepResult result;
   result.inliers = base;
-  if (events.empty()) return result;  // constant count: any yaw, take 0
-  // Closed arcs: at equal angles, starts come before ends.
-  std::sort(events.begin(), events.end(),
-            [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
-              return a.first < b.first || (a.first == b.first && a.second > b.second);
-            });
+  if (starts.empty()) return result;  // constant count: any yaw, take 0
+  // The end points in order; closed arcs: at equal angles, starts come before ends. Two sorts of
+  // plain angles and a merge give the order of one sort of (angle, kind) pairs.
+  std::sort(starts.begin(), starts.end());
+  std::sort(ends.begin(), ends.end());
+  std::vector<std::pair<double, int>> events;  // (angle, +1 start / -1 end)
+  events.reserve(starts.size() + ends.size());
+  std::size_t i_start = 0, i_end = 0;
+  while (i_start < starts.size() || i_end < ends.size()) {
+    if (i_end == ends.size() || (i_start < starts.size() && starts[i_start] <= ends[i_end])) {
+      events.emplace_back(starts[i_start++], +1);
+    } else {
+      events.emplace_back(ends[i_end++], -1);
+    }
+  }
 
   // The count on the first piece [0, events[0]] and on the last piece [events.back(), pi/2) is
   // `base` (every arc that starts also ends); these two pieces are one across the wrap.
@@ -413,6 +459,11 @@ YawSweepResult sweepYaw(const std::vector<Eigen::Vector3d>& normals, const Eigen
   result.psi = foldQuarter(best_psi);
   result.inliers = best;
   return result;
+}
+
+YawSweepResult sweepYaw(const std::vector<Eigen::Vector3d>& normals, const Eigen::Vector3d& up,
+                        const Eigen::Vector3d& x_h, const Eigen::Vector3d& y_h, double cos_delta) {
+  return sweepArcs(horizontalNormals(normals, up, x_h, y_h, cos_delta));
 }
 
 bool isInlier(const Eigen::Vector3d& n, const Eigen::Matrix3d& R, double cos_delta) {
@@ -462,19 +513,15 @@ Eigen::Matrix3d polishFrame(const std::vector<Eigen::Vector3d>& normals, const E
 // The same polish for a gravity-aligned frame: the yaw moves to the mean (folded) horizontal angle
 // of the normals that are inliers of a horizontal axis, repeated a few times (a flat-kernel mean
 // shift).
-double polishYaw(const std::vector<Eigen::Vector3d>& normals, const GravityFrame& gravity,
-                 double yaw_rad, double cos_delta) {
+double polishYaw(const std::vector<HorizontalNormal>& normals, double yaw_rad, double cos_delta) {
   double psi = yaw_rad;
   for (int iteration = 0; iteration < kPolishIterations; ++iteration) {
     double sum = 0.0;
     int count = 0;
-    for (const Eigen::Vector3d& n : normals) {
-      const double hx = n.dot(gravity.x_h);
-      const double hy = n.dot(gravity.y_h);
-      const double h = std::hypot(hx, hy);
-      if (std::abs(n.dot(gravity.up)) >= cos_delta || h < cos_delta) continue;
-      const double offset = foldYaw(std::atan2(hy, hx) - psi);
-      if (h * std::cos(offset) < cos_delta) continue;
+    for (const HorizontalNormal& n : normals) {
+      if (n.vertical || n.h < cos_delta) continue;
+      const double offset = foldYaw(n.theta - psi);
+      if (n.h * std::cos(offset) < cos_delta) continue;
       sum += offset;
       ++count;
     }
@@ -488,13 +535,12 @@ double polishYaw(const std::vector<Eigen::Vector3d>& normals, const GravityFrame
 
 // True if, at this yaw, the horizontal inliers stand out from their average over all yaws (see
 // kMinPeakToMeanRatio): the Manhattan yaw is then meaningful.
-bool hasHorizontalStructure(const std::vector<Eigen::Vector3d>& normals,
-                            const GravityFrame& gravity, double yaw_rad, double cos_delta) {
+bool hasHorizontalStructure(const std::vector<HorizontalNormal>& normals, double yaw_rad) {
   const double psi = foldQuarter(yaw_rad);
   double total_arc = 0.0;
   int inliers = 0;
-  for (const Eigen::Vector3d& n : normals) {
-    const YawArc arc = yawArcOf(n, gravity.up, gravity.x_h, gravity.y_h, cos_delta);
+  for (const HorizontalNormal& n : normals) {
+    const YawArc& arc = n.arc;
     if (arc.kind != YawArc::kArc) continue;
     total_arc += 2.0 * arc.half_width;
     const double offset = foldQuarter(psi - arc.start);
@@ -808,7 +854,7 @@ Status BoxEstimator::estimate(const PointCloud& points_W, const GravityFrame& gr
   const int max_neighbours = static_cast<int>(std::min(400.0, std::ceil(30.0 * area_ratio)));
   const std::vector<Eigen::Vector3f> normals =
       config_.normal_estimation == "cells"
-          ? normalsOnCells(points, queries, radius_m)
+          ? normalsOnCells(points, queries, radius_m, config_.num_threads)
           : normalsAt(points, queries, radius_m, max_neighbours, config_.num_threads);
   if (normals_W != nullptr) {
     for (size_t q = 0; q < queries.size(); ++q) (*normals_W)[source[queries[q]]] = normals[q];
@@ -880,11 +926,14 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
   const std::vector<Eigen::Vector3f>& eq3_normals = with_outline.empty() ? normals : with_outline;
   const std::vector<Eigen::Vector3d> unit_normals =
       prepareNormals(eq3_normals, mf_config.max_normals);
+  // Their horizontal geometry in the gravity frame, once for the sweep, the test and the polish.
+  const std::vector<HorizontalNormal> horizontal =
+      horizontalNormals(unit_normals, gravity.up, gravity.x_h, gravity.y_h, cos_delta);
   ManhattanFrameEstimator::Result mf;
   double yaw_rad = 0.0;
   if (mf_config.gravity_constrained) {
-    mf = manhattan_.estimateYaw(eq3_normals, gravity);
-    yaw_rad = mf.yaw_rad;
+    // ManhattanFrameEstimator::estimateYaw on the same normals.
+    yaw_rad = foldYaw(sweepArcs(horizontal).psi);
   } else {
     // Sec. 3.3 "R converted to R'": the unconstrained frame's most horizontal axis, projected on
     // the floor plane, gives the yaw of the gravity-aligned frame.
@@ -898,9 +947,9 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
     }
     yaw_rad = foldYaw(gravity.yawOf(mf.R_W_MF.col(most_horizontal)));
   }
-  if (hasHorizontalStructure(unit_normals, gravity, yaw_rad, cos_delta)) {
+  if (hasHorizontalStructure(horizontal, yaw_rad)) {
     // Eq. 3's count is flat over a few degrees around its maximum: polish on the inliers.
-    yaw_rad = polishYaw(unit_normals, gravity, yaw_rad, cos_delta);
+    yaw_rad = polishYaw(horizontal, yaw_rad, cos_delta);
     if (config_.footprint_yaw_area_ratio > 0.0) {
       // A yaw that rests on a few normals (cups on a table top, the edge of a chair back) can be
       // far off; its box then covers much more floor than the points need. The footprint's

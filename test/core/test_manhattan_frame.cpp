@@ -439,26 +439,30 @@ TEST(ManhattanBox, NormalRadiusGrowsWithTheViewsDepthSteps) {
   std::cout << "median normal error: fixed radius " << fixed << " deg, grown " << grown
             << " deg; yaw error " << fixed_yaw_error << " / " << grown_yaw_error << " deg\n";
 
-  // The normals split over threads: the same normals and box, bit for bit.
-  OrientedBox box_1;
-  std::vector<Eigen::Vector3f> normals_1;
-  ASSERT_TRUE(estimator.estimate(points, gravity, &box_1, nullptr, &normals_1, 4.0).ok());
-  for (const int threads : {2, 3}) {
-    BoxEstimator::Config config = radius_config;
-    config.num_threads = threads;
-    OrientedBox box_n;
-    std::vector<Eigen::Vector3f> normals_n;
+  // The normals split over threads (per point, and per cell): the same normals and box, bit for
+  // bit.
+  for (const BoxEstimator::Config& base : {radius_config, BoxEstimator::Config()}) {
+    OrientedBox box_1;
+    std::vector<Eigen::Vector3f> normals_1;
     ASSERT_TRUE(
-        BoxEstimator(config).estimate(points, gravity, &box_n, nullptr, &normals_n, 4.0).ok());
-    ASSERT_EQ(normals_n.size(), normals_1.size());
-    for (size_t i = 0; i < normals_1.size(); ++i) {
-      ASSERT_TRUE(normals_n[i] == normals_1[i] ||
-                  (!normals_n[i].allFinite() && !normals_1[i].allFinite()))
-          << "point " << i << ", " << threads << " threads";
+        BoxEstimator(base).estimate(points, gravity, &box_1, nullptr, &normals_1, 4.0).ok());
+    for (const int threads : {2, 3}) {
+      BoxEstimator::Config config = base;
+      config.num_threads = threads;
+      OrientedBox box_n;
+      std::vector<Eigen::Vector3f> normals_n;
+      ASSERT_TRUE(
+          BoxEstimator(config).estimate(points, gravity, &box_n, nullptr, &normals_n, 4.0).ok());
+      ASSERT_EQ(normals_n.size(), normals_1.size());
+      for (size_t i = 0; i < normals_1.size(); ++i) {
+        ASSERT_TRUE(normals_n[i] == normals_1[i] ||
+                    (!normals_n[i].allFinite() && !normals_1[i].allFinite()))
+            << base.normal_estimation << ", point " << i << ", " << threads << " threads";
+      }
+      EXPECT_EQ(box_n.center_m, box_1.center_m);
+      EXPECT_EQ(box_n.size_m, box_1.size_m);
+      EXPECT_EQ(box_n.rotation, box_1.rotation);
     }
-    EXPECT_EQ(box_n.center_m, box_1.center_m);
-    EXPECT_EQ(box_n.size_m, box_1.size_m);
-    EXPECT_EQ(box_n.rotation, box_1.rotation);
   }
 }
 
