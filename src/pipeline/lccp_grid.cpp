@@ -34,23 +34,31 @@ std::int64_t keyZ(std::uint64_t key) {
 }
 
 // Morton code (x, y, z bits interleaved from the top, x first): an octree's depth-first order.
+// Bit b of x goes to bit 3b + 2 of the code, of y to 3b + 1, of z to 3b (the low 21 bits of each),
+// spread and gathered with shifts and masks rather than bit by bit.
+std::uint64_t spreadBits(std::int64_t value) {
+  std::uint64_t v = static_cast<std::uint64_t>(value) & 0x1fffffULL;
+  v = (v | (v << 32)) & 0x1f00000000ffffULL;
+  v = (v | (v << 16)) & 0x1f0000ff0000ffULL;
+  v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
+  v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
+  v = (v | (v << 2)) & 0x1249249249249249ULL;
+  return v;
+}
+std::int64_t gatherBits(std::uint64_t code) {
+  std::uint64_t v = code & 0x1249249249249249ULL;
+  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3ULL;
+  v = (v ^ (v >> 4)) & 0x100f00f00f00f00fULL;
+  v = (v ^ (v >> 8)) & 0x1f0000ff0000ffULL;
+  v = (v ^ (v >> 16)) & 0x1f00000000ffffULL;
+  v = (v ^ (v >> 32)) & 0x1fffffULL;
+  return static_cast<std::int64_t>(v);
+}
 std::uint64_t morton(std::int64_t x, std::int64_t y, std::int64_t z) {
-  std::uint64_t code = 0;
-  for (int bit = kKeyBits - 1; bit >= 0; --bit) {
-    code = (code << 3) | (static_cast<std::uint64_t>((x >> bit) & 1) << 2) |
-           (static_cast<std::uint64_t>((y >> bit) & 1) << 1) |
-           static_cast<std::uint64_t>((z >> bit) & 1);
-  }
-  return code;
+  return (spreadBits(x) << 2) | (spreadBits(y) << 1) | spreadBits(z);
 }
 std::uint64_t unMorton(std::uint64_t code) {
-  std::int64_t x = 0, y = 0, z = 0;
-  for (int bit = kKeyBits - 1; bit >= 0; --bit) {
-    x = (x << 1) | static_cast<std::int64_t>((code >> (3 * bit + 2)) & 1);
-    y = (y << 1) | static_cast<std::int64_t>((code >> (3 * bit + 1)) & 1);
-    z = (z << 1) | static_cast<std::int64_t>((code >> (3 * bit)) & 1);
-  }
-  return packKey(x, y, z);
+  return packKey(gatherBits(code >> 2), gatherBits(code >> 1), gatherBits(code));
 }
 
 // The origin of an octree of leaf size `resolution` over [lower, upper] whose bounds are given
@@ -297,22 +305,32 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   // 2. Voxel normals. PCL fits each to its voxel, its neighbours and their neighbours, counted with
   // multiplicity: moments(v) + sum over neighbours n of (moments(n) + neighbourhood moments(n)).
   const Eigen::Vector3d origin = centroid.front().cast<double>();  // for the moments' precision
+  // Each voxel's moments depend on its own neighbourhood only: split over the threads.
+  constexpr std::size_t kMinVoxelsPerThread = 2048;
+  const std::size_t voxel_count = static_cast<std::size_t>(num_voxels);
   std::vector<PointMoments> own(num_voxels), around(num_voxels);
   for (int v = 0; v < num_voxels; ++v) own[v].add(centroid[v].cast<double>() - origin);
-  for (int v = 0; v < num_voxels; ++v) {
-    for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k)
-      around[v].add(own[neighbours[k]]);
-  }
+  parallelRanges(voxel_count, config_.num_threads, kMinVoxelsPerThread,
+                 [&](std::size_t first, std::size_t last) {
+                   for (std::size_t v = first; v < last; ++v) {
+                     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k)
+                       around[v].add(own[neighbours[k]]);
+                   }
+                 });
   std::vector<Eigen::Vector3f> normal(num_voxels);
-  for (int v = 0; v < num_voxels; ++v) {
-    PointMoments total = own[v];
-    for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k) {
-      total.add(own[neighbours[k]]);
-      total.add(around[neighbours[k]]);
-    }
-    normal[v] = planeNormal(total);
-    if (centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];  // towards the frame's origin
-  }
+  parallelRanges(voxel_count, config_.num_threads, kMinVoxelsPerThread,
+                 [&](std::size_t first, std::size_t last) {
+                   for (std::size_t v = first; v < last; ++v) {
+                     PointMoments total = own[v];
+                     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k) {
+                       total.add(own[neighbours[k]]);
+                       total.add(around[neighbours[k]]);
+                     }
+                     normal[v] = planeNormal(total);
+                     // Towards the frame's origin.
+                     if (centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];
+                   }
+                 });
 
   // 3. Seeds: per occupied cell of a seed_resolution_m grid over the voxel centroids (real space),
   // the voxel nearest to the cell's centre; kept where enough voxels lie within half a seed. The

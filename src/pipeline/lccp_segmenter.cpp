@@ -134,6 +134,10 @@ Status LccpSegmenter::Config::isValid() const {
     return Status::Error("min_segment_size must be >= 0 (got " + std::to_string(min_segment_size) +
                          ")");
   }
+  if (num_threads < 1 || num_threads > 256) {
+    return Status::Error("num_threads must be in [1, 256] (got " + std::to_string(num_threads) +
+                         ")");
+  }
   if (implementation != "voxel_grid" && implementation != "pcl") {
     return Status::Error("implementation must be voxel_grid or pcl (got '" + implementation + "')");
   }

@@ -283,6 +283,11 @@ TEST(LccpSegmenterConfig, Validation) {
   bad.min_segment_size = -1;
   EXPECT_FALSE(bad.isValid().ok());
   bad = config;
+  bad.num_threads = 0;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad.num_threads = 257;
+  EXPECT_FALSE(bad.isValid().ok());
+  bad = config;
   bad.normal_importance = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(bad.isValid().ok());
   bad = config;
@@ -473,6 +478,21 @@ TEST(LccpGridSupervoxels, GraphIsWellFormedAndDeterministic) {
   ASSERT_EQ(again.edges.size(), graph.edges.size());
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     EXPECT_EQ(again.edges[k].convex, graph.edges[k].convex);
+  }
+  // The voxel normals split over threads: the same graph, bit for bit (the cloud has enough voxels
+  // for each thread to get a share).
+  for (const int threads : {2, 3}) {
+    LccpSegmenter::Config config;
+    config.num_threads = threads;
+    LccpSegmenter::SupervoxelGraph threaded;
+    ASSERT_TRUE(LccpSegmenter(config).gridSupervoxels(cloud.points_C, true, &threaded).ok());
+    EXPECT_EQ(threaded.point_supervoxel, graph.point_supervoxel) << threads << " threads";
+    EXPECT_EQ(threaded.normals, graph.normals) << threads << " threads";
+    EXPECT_EQ(threaded.centroids, graph.centroids) << threads << " threads";
+    ASSERT_EQ(threaded.edges.size(), graph.edges.size());
+    for (std::size_t k = 0; k < graph.edges.size(); ++k) {
+      EXPECT_EQ(threaded.edges[k].convex, graph.edges[k].convex);
+    }
   }
   // Nothing usable: an error, not an empty success.
   EXPECT_FALSE(

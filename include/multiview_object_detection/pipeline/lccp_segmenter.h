@@ -37,6 +37,10 @@ class LccpSegmenter {
     bool use_extended_convexity = false;
     bool use_sanity_criterion = true;
     int min_points = 30;  // fewer input points: no segmentation, cloud passes through
+    // Threads for one cloud's voxel normals ("voxel_grid"; each voxel's is independent): the mapper
+    // sets its pool's size here, so a large detection does not leave a core idle. The result does
+    // not depend on it.
+    int num_threads = 1;
     Status isValid() const;
     std::string print() const;
   };
