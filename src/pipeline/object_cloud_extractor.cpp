@@ -201,6 +201,18 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     return agreeing >= min_neighbours;
   };
 
+  // True if some detection's mask covers colour pixel (uc, vc): the consistency test (four more
+  // depth reads) runs only there, not on the rest of the boxes' union.
+  auto inSomeMask = [&](int uc, int vc) {
+    if (!any_box.contains(cv::Point(uc, vc))) return false;
+    for (const MaskLookup& m : masks) {
+      if (m.box.contains(cv::Point(uc, vc)) &&
+          m.mask.ptr<uint8_t>(vc - m.origin.y)[uc - m.origin.x] != 0) {
+        return true;
+      }
+    }
+    return false;
+  };
   // Adds p_D to every detection whose mask covers colour pixel (uc, vc).
   auto assign = [&](int uc, int vc, const Eigen::Vector3f& p_D) {
     if (!any_box.contains(cv::Point(uc, vc))) return;
@@ -221,7 +233,7 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     for (int v = v0; v < any_box.br().y; v += stride) {
       for (int u = u0; u < any_box.br().x; u += stride) {
         const double z = depthMetres(depth, u, v, min_m, max_m);
-        if (!std::isfinite(z) || !consistent(u, v, z)) continue;
+        if (!std::isfinite(z) || !inSomeMask(u, v) || !consistent(u, v, z)) continue;
         const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
                                   static_cast<float>((v - K_d.cy) * z / K_d.fy),
                                   static_cast<float>(z));
@@ -241,7 +253,7 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel;
       // Behind the colour camera or outside its image: in no mask.
-      if (colorPixelOf(frame, p_D, &pixel) && any_box.contains(pixel) && consistent(u, v, z)) {
+      if (colorPixelOf(frame, p_D, &pixel) && inSomeMask(pixel.x, pixel.y) && consistent(u, v, z)) {
         assign(pixel.x, pixel.y, p_D.cast<float>());
       }
     }
