@@ -280,7 +280,9 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     if (!near_cells.empty()) {
       std::vector<int> near(num_segments, 0);
       std::vector<int> on_plane(num_segments, 0);
-      std::vector<int> touched;
+      std::vector<int> touched;  // the segments near the last point's cell
+      std::int64_t touched_key = 0;
+      bool touched_valid = false;
       int ring_points = 0;  // the view's points in the ring
       const FrameView& view = *input.view;
       for (size_t k = 0; k < view.points_D.size(); ++k) {
@@ -290,15 +292,20 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
         ++ring_points;
         const Eigen::Vector3f& p = view.points_D[k];
         const std::int64_t key = voxelKeyOf(p, near_cell_m);
-        touched.clear();
-        for (int dx = -1; dx <= 1; ++dx) {
-          for (int dy = -1; dy <= 1; ++dy) {
-            for (int dz = -1; dz <= 1; ++dz) {
-              const auto it = near_cells.find(offsetVoxelKey(key, dx, dy, dz));
-              if (it == near_cells.end()) continue;
-              for (const int s : it->second) {
-                if (std::find(touched.begin(), touched.end(), s) == touched.end()) {
-                  touched.push_back(s);
+        // Neighbouring pixels mostly share a cell: its 27 lookups are done once per run of them.
+        if (!touched_valid || key != touched_key) {
+          touched_valid = true;
+          touched_key = key;
+          touched.clear();
+          for (int dx = -1; dx <= 1; ++dx) {
+            for (int dy = -1; dy <= 1; ++dy) {
+              for (int dz = -1; dz <= 1; ++dz) {
+                const auto it = near_cells.find(offsetVoxelKey(key, dx, dy, dz));
+                if (it == near_cells.end()) continue;
+                for (const int s : it->second) {
+                  if (std::find(touched.begin(), touched.end(), s) == touched.end()) {
+                    touched.push_back(s);
+                  }
                 }
               }
             }
