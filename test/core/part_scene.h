@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/detection.h"
 #include "multiview_object_detection/pipeline/rgbd_frame.h"
 
 namespace mvod {
@@ -89,6 +91,20 @@ inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& position, const Eigen::Ve
   T.linear().col(2) = z;
   T.translation() = position;
   return T;
+}
+
+// A box detector's detection (FastestDet, YOLO): its mask is the filled box, the detectors'
+// contract for detections without masks.
+inline Detection2D boxOnlyDetection(const std::string& class_name, const cv::Rect& box_px,
+                                    const cv::Size& image_size, float score = 0.9f) {
+  Detection2D detection;
+  detection.class_name = class_name;
+  detection.class_id = cocoClassId(class_name);
+  detection.score = score;
+  detection.box_px = box_px;
+  detection.mask = cv::Mat::zeros(image_size, CV_8UC1);
+  cv::rectangle(detection.mask, box_px, cv::Scalar(255), cv::FILLED);
+  return detection;
 }
 
 }  // namespace test

@@ -24,14 +24,9 @@ Detection2D bledDetection(const cv::Mat& mask, int pixels) {
   return test::detectionFromMask(bled, "chair", 0.9f);
 }
 
-// A box-only detection (FastestDet, YOLO): the mask is the filled bounding box (Detection2D's
-// contract for detectors without masks).
+// A box-only detection of the object's mask (its bounding box), or of the given box.
 Detection2D boxOnlyDetection(const cv::Mat& mask, cv::Rect box = cv::Rect()) {
-  Detection2D detection = test::detectionFromMask(mask, "chair", 0.9f);
-  if (!box.empty()) detection.box_px = box;
-  detection.mask = cv::Mat::zeros(mask.size(), CV_8UC1);
-  cv::rectangle(detection.mask, detection.box_px, cv::Scalar(255), cv::FILLED);
-  return detection;
+  return test::boxOnlyDetection("chair", box.empty() ? cv::boundingRect(mask) : box, mask.size());
 }
 
 struct BoxError {

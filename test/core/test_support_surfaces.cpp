@@ -67,14 +67,7 @@ class SupportSurfacesTest : public ::testing::Test {
     ClassPriors priors;
     priors.set(prior);
     ObjectMapper mapper(config, priors);
-    Detection2D detection;
-    detection.class_name = prior.class_name;
-    detection.class_id = cocoClassId(prior.class_name);
-    detection.score = 0.9f;
-    detection.box_px = box;
-    // A box detector's mask is its box (the detectors' contract for detections without masks).
-    detection.mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
-    cv::rectangle(detection.mask, box, cv::Scalar(255), cv::FILLED);
+    const Detection2D detection = test::boxOnlyDetection(prior.class_name, box, frame.depth.size());
     KeyframeReport report;
     EXPECT_TRUE(mapper.processKeyframe(frame, {detection}, &report).ok());
     for (const std::string& warning : report.warnings) std::printf("  %s\n", warning.c_str());
