@@ -7,6 +7,7 @@
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
@@ -101,6 +102,65 @@ TEST(DepthViewTest, VisibilitySaysWhetherTheViewSawThroughAPoint) {
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, -1.f), 0.05), V::kNotInView);    // behind
   view.depth_m.at<float>(50, 60) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 5.f), 0.05), V::kNotInView);  // NaN
+}
+
+// The 3 x 3 depth ranges computed once per view (prepareNeighbourhoods) give the signed distances
+// of the nine-pixel test, bit for bit: at depth edges, beside invalid and NaN pixels, at the image
+// border, and after depth_m changes size (the stale ranges are then ignored).
+TEST(DepthViewTest, PreparedNeighbourhoodsGiveTheSameSignedDistances) {
+  DepthView plain;
+  plain.K = CameraIntrinsics{60.0, 60.0, 39.5, 29.5, 80, 60};
+  plain.depth_m = cv::Mat(60, 80, CV_32FC1);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> depth(1.0f, 1.02f);
+  for (int v = 0; v < 60; ++v) {
+    for (int u = 0; u < 80; ++u) {
+      // Steps of 0.5 m at u = 40 and of 0.3 m at v = 30 (silhouettes across and along the rows),
+      // noise, bumps of about the truncation, a few holes and NaNs.
+      float d = depth(rng) + (u >= 40 ? 0.5f : 0.0f) + (v >= 30 ? 0.3f : 0.0f);
+      if ((u * 5 + v * 17) % 43 == 0) d += 0.07f;
+      if ((u * 7 + v * 13) % 61 == 0) d = 0.f;
+      if ((u * 11 + v * 3) % 97 == 0) d = std::numeric_limits<float>::quiet_NaN();
+      plain.depth_m.at<float>(v, u) = d;
+    }
+  }
+  plain.truncation_m = 0.05;
+  plain.truncation_per_m2 = 0.01;
+  DepthView prepared = plain;
+  prepared.depth_m = plain.depth_m.clone();
+  prepared.prepareNeighbourhoods();
+  ASSERT_EQ(prepared.lowest_3x3_m.size(), prepared.depth_m.size());
+  const auto compare = [](const DepthView& a, const DepthView& b) {
+    std::uniform_real_distribution<float> uv(-0.05f, 1.05f);
+    std::uniform_real_distribution<float> z(0.8f, 1.8f);
+    std::mt19937 points_rng(9);
+    int answered = 0, abstained = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const float zi = z(points_rng);
+      const Eigen::Vector3f p((uv(points_rng) * 80.f - 39.5f) * zi / 60.f,
+                              (uv(points_rng) * 60.f - 29.5f) * zi / 60.f, zi);
+      float sdf_a = -7.f, sdf_b = -7.f;
+      const bool ok_a = a.signedDistance(p, &sdf_a);
+      const bool ok_b = b.signedDistance(p, &sdf_b);
+      EXPECT_EQ(ok_a, ok_b) << "point " << i;
+      EXPECT_EQ(sdf_a, sdf_b) << "point " << i;
+      ++(ok_a ? answered : abstained);
+    }
+    // Both outcomes occur often: the comparison covers the edges, holes and the border.
+    EXPECT_GT(answered, 2000);
+    EXPECT_GT(abstained, 2000);
+  };
+  compare(plain, prepared);
+  // depth_m replaced by one of another size: the stale ranges must not be read.
+  prepared.depth_m = cv::Mat(30, 40, CV_32FC1, cv::Scalar(1.2f));
+  plain.depth_m = prepared.depth_m.clone();
+  std::uniform_real_distribution<float> z(0.8f, 1.8f);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3f p(0.01f * (i % 20) - 0.1f, 0.005f * (i % 10), z(rng));
+    float sdf_a = -7.f, sdf_b = -7.f;
+    EXPECT_EQ(plain.signedDistance(p, &sdf_a), prepared.signedDistance(p, &sdf_b));
+    EXPECT_EQ(sdf_a, sdf_b);
+  }
 }
 
 TEST(AmodalCompletionTest, ThinAxisOnlyForThinBoxesWhenEnabled) {
@@ -396,13 +456,7 @@ TEST(AmodalMapperTest, ChairUnderATableFromBoxDetections) {
           scene.parts.render(test::lookAt(cameras[k].first, cameras[k].second), "chair", &box);
       frame.name = "frame-" + std::to_string(k);
       frame.stamp_s = static_cast<double>(k);
-      Detection2D detection;
-      detection.class_name = "chair";
-      detection.class_id = cocoClassId("chair");
-      detection.score = 0.9f;
-      detection.box_px = box;
-      detection.mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
-      cv::rectangle(detection.mask, box, cv::Scalar(255), cv::FILLED);
+      const Detection2D detection = test::boxOnlyDetection("chair", box, frame.depth.size());
       KeyframeReport report;
       EXPECT_TRUE(mapper.processKeyframe(frame, {detection}, &report).ok());
     }

@@ -26,6 +26,14 @@ struct DepthView {
   // depth is invalid, and where p_W lies beyond the truncation behind the surface.
   bool signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const;
 
+  // Optional, for views that test many points: the lowest and highest depth of each pixel's 3 x 3
+  // neighbourhood (clamped at the border; lowest 0 where one of them is invalid), so that
+  // signedDistance reads two pixels instead of nine. Computed by prepareNeighbourhoods() from
+  // depth_m (call it again after changing depth_m); the same results with or without it.
+  cv::Mat lowest_3x3_m;
+  cv::Mat highest_3x3_m;
+  void prepareNeighbourhoods();
+
   enum class Visibility { kNotInView, kSeenFree, kNotSeenFree };
   // Whether the view saw through p_W: its pixel's depth lies more than margin_m plus the
   // truncation at p_W's depth beyond it (kSeenFree), or not (kNotSeenFree: in front of or at the
