@@ -135,6 +135,12 @@ PointCloudFilter::Config filterConfig(const ObjectMapper::Config& config) {
   return filter;
 }
 
+LccpSegmenter::Config lccpConfig(const ObjectMapper::Config& config) {
+  LccpSegmenter::Config lccp = config.lccp;
+  lccp.num_threads = poolSize(config);
+  return lccp;
+}
+
 BoxEstimator::Config boxConfig(const ObjectMapper::Config& config) {
   BoxEstimator::Config box = config.box;
   box.num_threads = poolSize(config);
@@ -147,7 +153,7 @@ ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
     : config_(config),
       extractor_(extractorConfig(config)),
       filter_(filterConfig(config)),
-      lccp_(config.lccp),
+      lccp_(lccpConfig(config)),
       selector_(config.selection),
       floor_(config.floor),
       box_estimator_(boxConfig(config)),
@@ -162,7 +168,7 @@ Status ObjectMapper::updateConfig(const Config& config) {
   config_ = config;
   extractor_ = ObjectCloudExtractor(extractorConfig(config));
   filter_ = PointCloudFilter(filterConfig(config));
-  lccp_ = LccpSegmenter(config.lccp);
+  lccp_ = LccpSegmenter(lccpConfig(config));
   selector_ = SegmentSelector(config.selection);
   const FloorEstimator previous_floor = floor_;
   floor_ = FloorEstimator(config.floor);
@@ -308,6 +314,8 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
           row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
         }
       }
+      // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
+      depth_view->prepareNeighbourhoods();
       depth_view->K = frame.K_depth;
       depth_view->T_D_W = frame.T_W_D.inverse();
       // The band, plus three depth steps: what lies further behind the measured surface is hidden.
