@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <sstream>
-#include <unordered_set>
 
 #include "multiview_object_detection/pipeline/point_cloud_filter.h"
 #include "multiview_object_detection/pipeline/radix_sort.h"
@@ -52,13 +52,25 @@ std::string ObjectDatabase::Config::print() const {
 
 namespace {
 
-std::unordered_set<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
-  std::unordered_set<std::int64_t> keys;
-  for (const Eigen::Vector3f& p : points_W) keys.insert(voxelKeyOf(p, voxel_size_m));
+// The distinct voxel keys of points_W, ascending (packed keys are non-negative: their order as
+// unsigned is their order), radix-sorted instead of hashed.
+std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
+  std::vector<std::pair<std::uint64_t, bool>> keyed;
+  keyed.reserve(points_W.size());
+  for (const Eigen::Vector3f& p : points_W) {
+    keyed.emplace_back(static_cast<std::uint64_t>(voxelKeyOf(p, voxel_size_m)), false);
+  }
+  radixSortByKey(&keyed);
+  std::vector<std::int64_t> keys;
+  keys.reserve(keyed.size());
+  for (const auto& entry : keyed) {
+    const std::int64_t key = static_cast<std::int64_t>(entry.first);
+    if (keys.empty() || keys.back() != key) keys.push_back(key);
+  }
   return keys;
 }
 
-void countInside(const std::unordered_set<std::int64_t>& inside, EvidenceMap* evidence) {
+void countInside(const std::vector<std::int64_t>& inside, EvidenceMap* evidence) {
   for (const std::int64_t key : inside) {
     VoxelEvidence& e = (*evidence)[key];
     if (e.inside < UINT16_MAX) ++e.inside;
@@ -77,28 +89,27 @@ void addNormals(const ObjectObservation& observation, double voxel_size_m, Evide
 }
 
 // This view's signed distance of every voxel of the object it sees (the view's cost: the
-// object's voxels, one projection each), over the hash buckets [first_bucket, last_bucket): each
-// voxel lies in one bucket, so disjoint bucket ranges can run in parallel with the same result.
+// object's voxels, one projection each), over the entries [first, last): each voxel is one entry,
+// so disjoint ranges can run in parallel with the same result.
 void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence,
-                        std::size_t first_bucket, std::size_t last_bucket) {
-  for (std::size_t bucket = first_bucket; bucket < last_bucket; ++bucket) {
-    for (auto it = evidence->begin(bucket); it != evidence->end(bucket); ++it) {
-      VoxelEvidence& e = it->second;
-      if (e.sdf_count == UINT16_MAX) continue;
-      const Eigen::Vector3f centre =
-          ((unpackVoxel(it->first).cast<double>().array() + 0.5) * voxel_size_m)
-              .matrix()
-              .cast<float>();
-      float sdf_m = 0.f;
-      if (!view.signedDistance(centre, &sdf_m)) continue;
-      e.sdf_sum += sdf_m;
-      ++e.sdf_count;
-    }
+                        std::size_t first, std::size_t last) {
+  for (std::size_t position = first; position < last; ++position) {
+    EvidenceMap::value_type& entry = evidence->entry(position);
+    VoxelEvidence& e = entry.second;
+    if (e.sdf_count == UINT16_MAX) continue;
+    const Eigen::Vector3f centre =
+        ((unpackVoxel(entry.first).cast<double>().array() + 0.5) * voxel_size_m)
+            .matrix()
+            .cast<float>();
+    float sdf_m = 0.f;
+    if (!view.signedDistance(centre, &sdf_m)) continue;
+    e.sdf_sum += sdf_m;
+    ++e.sdf_count;
   }
 }
 
 void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence) {
-  addSignedDistances(view, voxel_size_m, evidence, 0, evidence->bucket_count());
+  addSignedDistances(view, voxel_size_m, evidence, 0, evidence->size());
 }
 
 // Evidence fusion's class vote: `score` more for `class_name`; the object takes the class with the
@@ -123,11 +134,9 @@ FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
   FusionKeys keys;
   keys.voxel_size_m = voxel_size_m;
   keys.cut = voxelKeys(segment_W, voxel_size_m);
-  std::unordered_set<std::int64_t> outside;
-  for (const Eigen::Vector3f& p : seen_W) {
-    const std::int64_t key = voxelKeyOf(p, voxel_size_m);
-    if (keys.cut.count(key) == 0 && outside.insert(key).second) keys.outside.push_back(key);
-  }
+  const std::vector<std::int64_t> seen = voxelKeys(seen_W, voxel_size_m);
+  std::set_difference(seen.begin(), seen.end(), keys.cut.begin(), keys.cut.end(),
+                      std::back_inserter(keys.outside));
   return keys;
 }
 
@@ -210,8 +219,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     keys = std::make_shared<const FusionKeys>(
         makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
   }
-  const std::unordered_set<std::int64_t> no_keys;
-  const std::unordered_set<std::int64_t>& cut = evidence ? keys->cut : no_keys;
+  const std::vector<std::int64_t> no_keys;
+  const std::vector<std::int64_t>& cut = evidence ? keys->cut : no_keys;
   bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
   if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
     // Not near a same-class object: the object (any class) whose supported voxels hold most of
@@ -389,26 +398,26 @@ int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads
     views.push_back(view != pending_depth_views_.end() ? view->second.get() : nullptr);
   }
   pending_rebox_.clear();
-  // The keyframe's signed distances first, in chunks of hash buckets of every object: one large
-  // object (a bed, ~10^5 voxels) would otherwise keep one core busy while the other idles.
-  struct BucketChunk {
+  // The keyframe's signed distances first, in chunks of voxels of every object: one large object
+  // (a bed, ~10^5 voxels) would otherwise keep one core busy while the other idles.
+  struct VoxelChunk {
     std::size_t object;
-    std::size_t first_bucket;
-    std::size_t last_bucket;
+    std::size_t first;
+    std::size_t last;
   };
-  constexpr std::size_t kBucketsPerChunk = 4096;
-  std::vector<BucketChunk> chunks;
+  constexpr std::size_t kVoxelsPerChunk = 4096;
+  std::vector<VoxelChunk> chunks;
   for (std::size_t k = 0; k < pending.size(); ++k) {
     if (views[k] == nullptr || !(config_.surface_band_m > 0.0)) continue;
-    const std::size_t buckets = pending[k]->evidence.bucket_count();
-    for (std::size_t first = 0; first < buckets; first += kBucketsPerChunk) {
-      chunks.push_back({k, first, std::min(buckets, first + kBucketsPerChunk)});
+    const std::size_t voxels = pending[k]->evidence.size();
+    for (std::size_t first = 0; first < voxels; first += kVoxelsPerChunk) {
+      chunks.push_back({k, first, std::min(voxels, first + kVoxelsPerChunk)});
     }
   }
   parallelForEach(chunks.size(), threads, [&](std::size_t c) {
-    const BucketChunk& chunk = chunks[c];
+    const VoxelChunk& chunk = chunks[c];
     addSignedDistances(*views[chunk.object], config_.fusion_voxel_size_m,
-                       &pending[chunk.object]->evidence, chunk.first_bucket, chunk.last_bucket);
+                       &pending[chunk.object]->evidence, chunk.first, chunk.last);
   });
   // Then each object's box, largest first, each thread taking the next object as it finishes.
   // Each job reads and writes its own object only (the map itself does not change meanwhile).

@@ -9,13 +9,12 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
-#include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/amodal_completion.h"
 #include "multiview_object_detection/pipeline/class_priors.h"
 #include "multiview_object_detection/pipeline/depth_view.h"
+#include "multiview_object_detection/pipeline/evidence_map.h"
 #include "multiview_object_detection/pipeline/oriented_box.h"
 
 namespace mvod {
@@ -24,8 +23,8 @@ namespace mvod {
 // only, so the single-view stage (in parallel) computes them and the ordered fusion does not.
 struct FusionKeys {
   double voxel_size_m = 0.0;
-  std::unordered_set<std::int64_t> cut;  // the voxels of the cut (segment_W)
-  std::vector<std::int64_t> outside;     // the voxels of seen_W not in the cut, each once
+  std::vector<std::int64_t> cut;      // the voxels of the cut (segment_W), ascending, each once
+  std::vector<std::int64_t> outside;  // the voxels of seen_W not in the cut, ascending, each once
 };
 // Built from the cut and the points seen around it (ObjectObservation::segment_W and seen_W).
 FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
@@ -54,23 +53,6 @@ struct ObjectObservation {
   int keyframe = 0;
   double stamp_s = 0.0;
 };
-
-// Evidence fusion: how often a voxel of the object's grid was inside a view's cut, and how often a
-// view saw surface there but left it out of its cut.
-// normal_sum adds the cut's normals in the voxel (each turned towards its camera), so that the
-// fused box's Manhattan yaw comes from the voxels' normals without a neighbour search over the
-// object.
-// sdf_sum / sdf_count: the mean truncated projective signed distance of the views that saw the
-// voxel (DepthView): near 0 on the surface the views measured, larger in front of it where one
-// noisy view left a voxel that the others saw through.
-struct VoxelEvidence {
-  std::uint16_t inside = 0;
-  std::uint16_t outside = 0;
-  Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
-  std::uint16_t sdf_count = 0;
-  float sdf_sum = 0.f;
-};
-using EvidenceMap = std::unordered_map<std::int64_t, VoxelEvidence>;
 
 struct MapObject {
   int id = 0;  // α, never reused
