@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "multiview_object_detection/pipeline/flat_hash_map.h"
 #include "multiview_object_detection/pipeline/point_moments.h"
 #include "multiview_object_detection/pipeline/radix_sort.h"
 
@@ -232,7 +233,7 @@ std::vector<Eigen::Vector3f> normalsOnCells(const PointCloud& points,
            (static_cast<std::uint64_t>(c.y() + kHalf) << 21) |
            static_cast<std::uint64_t>(c.z() + kHalf);
   };
-  std::unordered_map<std::uint64_t, PointMoments> cells;
+  FlatHashMap<std::uint64_t, PointMoments> cells;
   cells.reserve(points.size() / 2 + 1);
   Eigen::Vector3i cell;
   for (const Eigen::Vector3f& p : points) {

@@ -10,9 +10,8 @@
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
-#include <unordered_map>
-#include <unordered_set>
 
+#include "multiview_object_detection/pipeline/flat_hash_map.h"
 #include "multiview_object_detection/pipeline/morphology.h"
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
@@ -24,7 +23,7 @@ constexpr double kPiOver18 = 3.14159265358979323846 / 18.0;
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // The cells of one cloud: cell -> the segments with points in it (few per cell).
-using CellSegments = std::unordered_map<std::int64_t, std::vector<int>>;
+using CellSegments = FlatHashMap<std::int64_t, std::vector<int>>;
 
 void addToCell(CellSegments* cells, std::int64_t key, int segment) {
   std::vector<int>& list = (*cells)[key];
