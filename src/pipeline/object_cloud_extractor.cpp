@@ -201,17 +201,18 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     return agreeing >= min_neighbours;
   };
 
-  // True if some detection's mask covers colour pixel (uc, vc): the consistency test (four more
-  // depth reads) runs only there, not on the rest of the boxes' union.
+  // The union of the masks over the boxes' union, once: the consistency test (four more depth
+  // reads) and the per-detection look-ups then run only on pixels some mask covers.
+  cv::Mat covered(any_box.size(), CV_8UC1, cv::Scalar(0));
+  for (const MaskLookup& m : masks) {
+    if (m.box.empty()) continue;
+    const cv::Mat source = m.mask(m.box - m.origin);
+    cv::Mat target = covered(m.box - any_box.tl());
+    cv::bitwise_or(target, source, target);
+  }
   auto inSomeMask = [&](int uc, int vc) {
-    if (!any_box.contains(cv::Point(uc, vc))) return false;
-    for (const MaskLookup& m : masks) {
-      if (m.box.contains(cv::Point(uc, vc)) &&
-          m.mask.ptr<uint8_t>(vc - m.origin.y)[uc - m.origin.x] != 0) {
-        return true;
-      }
-    }
-    return false;
+    return any_box.contains(cv::Point(uc, vc)) &&
+           covered.ptr<uint8_t>(vc - any_box.y)[uc - any_box.x] != 0;
   };
   // Adds p_D to every detection whose mask covers colour pixel (uc, vc).
   auto assign = [&](int uc, int vc, const Eigen::Vector3f& p_D) {
