@@ -14,6 +14,7 @@
 #include "multiview_object_detection/pipeline/flat_hash_map.h"
 #include "multiview_object_detection/pipeline/morphology.h"
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
+#include "multiview_object_detection/pipeline/radix_sort.h"
 #include "multiview_object_detection/pipeline/voxel_key.h"
 
 namespace mvod {
@@ -441,20 +442,41 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
 
   // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
-  CellSegments cells;
+  // The (cell, segment) pairs radix-sorted and made unique (packed keys are non-negative, so their
+  // order as unsigned is theirs); each occupied cell is then a range of segments, found by key.
+  std::vector<std::pair<std::uint64_t, int>> cell_segment;
+  cell_segment.reserve(points.size());
   for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s])
-      addToCell(&cells, voxelKeyOf(points[i], config_.adjacency_distance_m), s);
+    for (const int i : segments[s]) {
+      cell_segment.emplace_back(
+          static_cast<std::uint64_t>(voxelKeyOf(points[i], config_.adjacency_distance_m)), s);
+    }
   }
+  radixSortByKey(&cell_segment);  // stable: a cell's segments stay in ascending order
+  cell_segment.erase(std::unique(cell_segment.begin(), cell_segment.end()), cell_segment.end());
+  std::vector<std::size_t> cell_begin;
+  FlatHashMap<std::uint64_t, int> cell_of_key;  // key -> index into cell_begin
+  for (std::size_t k = 0; k < cell_segment.size(); ++k) {
+    if (k == 0 || cell_segment[k].first != cell_segment[k - 1].first) {
+      cell_of_key[cell_segment[k].first] = static_cast<int>(cell_begin.size());
+      cell_begin.push_back(k);
+    }
+  }
+  cell_begin.push_back(cell_segment.size());
   std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
-  for (const auto& cell : cells) {
+  for (std::size_t c = 0; c + 1 < cell_begin.size(); ++c) {
+    const std::int64_t key = static_cast<std::int64_t>(cell_segment[cell_begin[c]].first);
     for (int dx = -1; dx <= 1; ++dx) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells.find(offsetVoxelKey(cell.first, dx, dy, dz));
-          if (it == cells.end()) continue;
-          for (const int a : cell.second) {
-            for (const int b : it->second) adjacent[a][b] = 1;
+          const auto it =
+              cell_of_key.find(static_cast<std::uint64_t>(offsetVoxelKey(key, dx, dy, dz)));
+          if (it == cell_of_key.end()) continue;
+          const std::size_t d = static_cast<std::size_t>(it->second);
+          for (std::size_t a = cell_begin[c]; a < cell_begin[c + 1]; ++a) {
+            for (std::size_t b = cell_begin[d]; b < cell_begin[d + 1]; ++b) {
+              adjacent[cell_segment[a].second][cell_segment[b].second] = 1;
+            }
           }
         }
       }
