@@ -479,19 +479,31 @@ TEST(LccpGridSupervoxels, GraphIsWellFormedAndDeterministic) {
   for (std::size_t k = 0; k < graph.edges.size(); ++k) {
     EXPECT_EQ(again.edges[k].convex, graph.edges[k].convex);
   }
-  // The voxel normals split over threads: the same graph, bit for bit (the cloud has enough voxels
-  // for each thread to get a share).
+  // The voxel normals split over threads: the same graph, bit for bit. The threads take at least
+  // 2048 voxels each, so this needs a larger cloud than the scene's view: a wavy 3 m x 3 m surface
+  // 2 m in front of the camera, 1 cm apart (~10^4 voxels of the log-depth grid).
+  PointCloud wavy;
+  for (int i = 0; i < 300; ++i) {
+    for (int j = 0; j < 300; ++j) {
+      const float x = -1.5f + 0.01f * i;
+      const float y = -1.5f + 0.01f * j;
+      wavy.emplace_back(x, y, 2.0f + 0.2f * std::sin(3.0f * x) * std::cos(2.0f * y));
+    }
+  }
+  LccpSegmenter::SupervoxelGraph one_thread;
+  ASSERT_TRUE(segmenter.gridSupervoxels(wavy, true, &one_thread).ok());
+  ASSERT_GT(one_thread.centroids.size(), 50u);
   for (const int threads : {2, 3}) {
     LccpSegmenter::Config config;
     config.num_threads = threads;
     LccpSegmenter::SupervoxelGraph threaded;
-    ASSERT_TRUE(LccpSegmenter(config).gridSupervoxels(cloud.points_C, true, &threaded).ok());
-    EXPECT_EQ(threaded.point_supervoxel, graph.point_supervoxel) << threads << " threads";
-    EXPECT_EQ(threaded.normals, graph.normals) << threads << " threads";
-    EXPECT_EQ(threaded.centroids, graph.centroids) << threads << " threads";
-    ASSERT_EQ(threaded.edges.size(), graph.edges.size());
-    for (std::size_t k = 0; k < graph.edges.size(); ++k) {
-      EXPECT_EQ(threaded.edges[k].convex, graph.edges[k].convex);
+    ASSERT_TRUE(LccpSegmenter(config).gridSupervoxels(wavy, true, &threaded).ok());
+    EXPECT_EQ(threaded.point_supervoxel, one_thread.point_supervoxel) << threads << " threads";
+    EXPECT_EQ(threaded.normals, one_thread.normals) << threads << " threads";
+    EXPECT_EQ(threaded.centroids, one_thread.centroids) << threads << " threads";
+    ASSERT_EQ(threaded.edges.size(), one_thread.edges.size());
+    for (std::size_t k = 0; k < one_thread.edges.size(); ++k) {
+      EXPECT_EQ(threaded.edges[k].convex, one_thread.edges[k].convex);
     }
   }
   // Nothing usable: an error, not an empty success.
