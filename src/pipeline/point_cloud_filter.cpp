@@ -9,11 +9,15 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
 #include <unordered_set>
+
+#include "multiview_object_detection/pipeline/flat_hash_map.h"
+#include "multiview_object_detection/pipeline/radix_sort.h"
 
 namespace mvod {
 namespace {
@@ -114,9 +118,86 @@ PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_g
   return removeOutliers(voxelize(points_W, config_.voxel_leaf_size_m));
 }
 
+namespace {
+
+// A voxel's points summed in input order.
+struct VoxelSum {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t count = 0;
+};
+
+// Voxel indices below this (in magnitude) pack into 21 bits per axis: 10 km at 1 cm.
+constexpr std::int64_t kPackedVoxelRange = std::int64_t{1} << 20;
+constexpr int kPackedVoxelBits = 21;
+
+// The voxel grid by sorting the points' 64-bit indices: for clouds whose indices do not pack.
+PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m);
+
+}  // namespace
+
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
   if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
+  // Each voxel found by its packed index in a flat hash map (no sort of the points), summing its
+  // points in input order; neighbouring points (pixels of one image row) mostly share a voxel, so
+  // the last one is kept at hand.
+  const double inv_leaf = 1.0 / leaf_size_m;
+  FlatHashMap<std::uint64_t, VoxelSum> voxels;
+  voxels.reserve(points.size() / 4 + 16);
+  std::uint64_t last_key = 0;
+  VoxelSum* last = nullptr;  // valid until the next insertion, which replaces it
+  for (const Eigen::Vector3f& p : points) {
+    if (!p.allFinite()) continue;
+    std::uint64_t key = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
+      if (!(std::abs(index) < kPackedVoxelRange)) return voxelizeBySorting(points, leaf_size_m);
+      key = (key << kPackedVoxelBits) |
+            static_cast<std::uint64_t>(static_cast<std::int64_t>(index) + kPackedVoxelRange);
+    }
+    if (last == nullptr || key != last_key) {
+      last = &voxels[key];
+      last_key = key;
+    }
+    last->sum += p.cast<double>();
+    ++last->count;
+  }
+  PointCloud out;
+  if (voxels.empty()) return out;
 
+  // Output in ascending (x, y, z) voxel order, a deterministic order that does not depend on the
+  // hash: the voxels' positions in their bounding grid are sortable integers (radix sort).
+  constexpr std::uint64_t kField = (std::uint64_t{1} << kPackedVoxelBits) - 1;
+  std::array<std::uint64_t, 3> lo = {kField, kField, kField};
+  std::array<std::uint64_t, 3> hi = {0, 0, 0};
+  for (const auto& voxel : voxels) {
+    for (int d = 0; d < 3; ++d) {
+      const std::uint64_t index = (voxel.first >> (kPackedVoxelBits * (2 - d))) & kField;
+      lo[d] = std::min(lo[d], index);
+      hi[d] = std::max(hi[d], index);
+    }
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
+  order.reserve(voxels.size());
+  for (std::size_t v = 0; v < voxels.size(); ++v) {
+    const std::uint64_t key = voxels.entry(v).first;
+    const std::uint64_t x = ((key >> (2 * kPackedVoxelBits)) & kField) - lo[0];
+    const std::uint64_t y = ((key >> kPackedVoxelBits) & kField) - lo[1];
+    const std::uint64_t z = (key & kField) - lo[2];
+    order.emplace_back((x * (hi[1] - lo[1] + 1) + y) * (hi[2] - lo[2] + 1) + z,
+                       static_cast<std::uint32_t>(v));
+  }
+  radixSortByKey(&order);
+  out.reserve(order.size());
+  for (const auto& ordered : order) {
+    const VoxelSum& voxel = voxels.entry(ordered.second).second;
+    out.emplace_back((voxel.sum / static_cast<double>(voxel.count)).cast<float>());
+  }
+  return out;
+}
+
+namespace {
+
+PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m) {
   // 64-bit integer voxel index per point, without PCL's 32-bit index limit for large extents.
   using Key = std::array<std::int64_t, 3>;
   std::vector<Key> keys;
@@ -221,8 +302,6 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
   }
   return out;
 }
-
-namespace {
 
 // keep[i] |= the cell of finite[i] (grid of cell_m, anchored at the origin) has at least
 // min_neighbours occupied cells among its 26 neighbours.
@@ -342,6 +421,79 @@ SortedOffsets sortedOffsets(int radius_cells) {
   return sorted;
 }
 
+// The 5 x 5 x 5 cells around a cell hold every offset of squared length 1 to 8 (92 offsets; no
+// offset has squared length 7), grouped in shells of one squared length: 1, 2, 3, 4, 5, 6, 8. A
+// row of the cube along x (dy, dz fixed) is five bits; row_counts[class][bits] holds how many of
+// them are occupied per shell, as kCountBits-bit fields (shell s at bit kCountBits * s), so the
+// counts of a cube are the sum of its 25 rows' entries. The class is the row's dy^2 + dz^2.
+struct CubeShells {
+  static constexpr int kRows = 25;
+  static constexpr int kShells = 7;
+  static constexpr int kMaxSquared = 8;
+  static constexpr int kCountBits = 6;  // a shell holds at most 24 offsets
+  static constexpr std::uint64_t kCountMask = (std::uint64_t{1} << kCountBits) - 1;
+  static constexpr int kClasses = 6;
+  std::array<int, kRows> row_dy;
+  std::array<int, kRows> row_dz;
+  std::array<int, kRows> row_class;
+  std::array<std::array<std::uint64_t, 32>, kClasses> row_counts;
+  std::array<float, kShells> shell_length;  // as sortedOffsets computes it
+};
+
+// Bits q .. q + 4 of a bitset (bit q % 64 of word q / 64), the next word readable.
+inline std::uint64_t fiveBits(const std::vector<std::uint64_t>& bits, std::uint64_t q) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  // Little-endian words are a little-endian byte string: eight bytes from q's byte hold them.
+  std::uint64_t eight_bytes;
+  std::memcpy(&eight_bytes, reinterpret_cast<const unsigned char*>(bits.data()) + q / 8,
+              sizeof(eight_bytes));
+  return (eight_bytes >> (q % 8)) & std::uint64_t{0x1f};
+#else
+  // Across a word boundary: the second word shifted by 64 - shift, in two steps so that shift 0
+  // stays defined.
+  const std::uint64_t word = q / 64;
+  const unsigned shift = static_cast<unsigned>(q % 64);
+  return ((bits[word] >> shift) | ((bits[word + 1] << 1) << (63 - shift))) & std::uint64_t{0x1f};
+#endif
+}
+
+const CubeShells& cubeShells() {
+  static const CubeShells table = [] {
+    CubeShells cube;
+    constexpr std::array<int, 9> kShellOf = {-1, 0, 1, 2, 3, 4, 5, -1, 6};   // by squared length
+    constexpr std::array<int, 9> kClassOf = {0, 1, 2, -1, 3, 4, -1, -1, 5};  // by dy^2 + dz^2
+    constexpr std::array<int, CubeShells::kClasses> kClassSquared = {0, 1, 2, 4, 5, 8};
+    for (int squared = 1; squared <= CubeShells::kMaxSquared; ++squared) {
+      if (kShellOf[squared] >= 0) {
+        cube.shell_length[kShellOf[squared]] = std::sqrt(static_cast<float>(squared));
+      }
+    }
+    int r = 0;
+    for (int dz = -2; dz <= 2; ++dz) {
+      for (int dy = -2; dy <= 2; ++dy, ++r) {
+        cube.row_dy[r] = dy;
+        cube.row_dz[r] = dz;
+        cube.row_class[r] = kClassOf[dy * dy + dz * dz];
+      }
+    }
+    for (int c = 0; c < CubeShells::kClasses; ++c) {
+      for (int row = 0; row < 32; ++row) {
+        std::uint64_t counts = 0;
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int squared = kClassSquared[c] + dx * dx;
+          if (!((row >> (dx + 2)) & 1) || squared == 0 || squared > CubeShells::kMaxSquared) {
+            continue;
+          }
+          counts += std::uint64_t{1} << (CubeShells::kCountBits * kShellOf[squared]);
+        }
+        cube.row_counts[c][row] = counts;
+      }
+    }
+    return cube;
+  }();
+  return table;
+}
+
 }  // namespace
 
 PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const PointCloud& points,
@@ -354,6 +506,35 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const Point
       !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) {
     return finite;
   }
+  std::vector<float> mean_distance;
+  if (!voxelCentreMeanDistances(finite, mean_k, leaf_size_m, threads, &mean_distance)) {
+    return removeStatisticalOutliersOnGrid(finite, mean_k, stddev_mul, leaf_size_m, threads);
+  }
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance) {
+    sum += distance;
+    sq_sum += static_cast<double>(distance) * distance;
+  }
+  const double count_d = static_cast<double>(n);
+  const double mean = sum / count_d;
+  const double variance = std::max(0.0, (sq_sum - sum * sum / count_d) / (count_d - 1.0));
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
+  }
+  return out;
+}
+
+bool PointCloudFilter::voxelCentreMeanDistances(const PointCloud& finite, int mean_k,
+                                                double leaf_size_m, int threads,
+                                                std::vector<float>* mean_distance_m) {
+  const std::size_t n = finite.size();
+  if (mean_k < 1 || !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return false;
+  mean_distance_m->clear();
+  if (n == 0) return true;
   // The mean_k nearest voxels of a surface lie within about sqrt(mean_k) cells; a point with fewer
   // occupied voxels within twice that counts the missing ones at that distance (an outlier
   // anyway).
@@ -382,9 +563,7 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const Point
   for (int d = 0; d < 3; ++d) {
     num_cells *= static_cast<double>(hi[d]) - static_cast<double>(lo[d]) + 1.0 + 2.0 * radius;
   }
-  if (!(num_cells <= 256.0 * 1024 * 1024)) {
-    return removeStatisticalOutliersOnGrid(finite, mean_k, stddev_mul, leaf_size_m, threads);
-  }
+  if (!(num_cells <= 256.0 * 1024 * 1024)) return false;
   const Eigen::Array3i dims = hi - lo + 1 + 2 * radius;
   std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
   const std::int64_t stride_y = dims[0];
@@ -397,22 +576,54 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const Point
     const std::int64_t b = bit_of(c);
     bits[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
   }
+  // One spare word: a row of the cube is read from the word it starts in and the next.
+  bits.push_back(0);
   std::vector<std::int64_t> deltas(table.offsets.size());
   for (std::size_t k = 0; k < deltas.size(); ++k) {
     const Eigen::Array3i& o = table.offsets[k];
     deltas[k] = o[2] * stride_z + o[1] * stride_y + o[0];
   }
+  const CubeShells& cube = cubeShells();
+  // The cube's shells only where the table holds them all (not for mean_k 1, radius 2).
+  const bool use_cube = radius * radius >= CubeShells::kMaxSquared;
+  std::size_t beyond_cube = 0;  // the table's first offset outside the cube's shells
+  while (use_cube && beyond_cube < table.offsets.size() &&
+         table.offsets[beyond_cube].square().sum() <= CubeShells::kMaxSquared) {
+    ++beyond_cube;
+  }
+  std::array<std::int64_t, CubeShells::kRows> row_start;  // bit of each row's first cell
+  for (int r = 0; r < CubeShells::kRows; ++r) {
+    row_start[r] = cube.row_dz[r] * stride_z + cube.row_dy[r] * stride_y - 2;
+  }
   const float missing = static_cast<float>(radius + 1);
-  std::vector<float> mean_distance(n);
+  std::vector<float>& mean_distance = *mean_distance_m;
+  mean_distance.assign(n, 0.f);
   parallelRanges(n, threads, 4096, [&](std::size_t first, std::size_t last) {
     for (std::size_t i = first; i < last; ++i) {
       const std::int64_t b = bit_of(cells[i]);
+      // The occupied cells of the 5 x 5 x 5 cube around the voxel, counted per shell: five bits
+      // per row of the cube, and a table turns them into counts at the row's squared lengths.
+      std::uint64_t counts = 0;
+      for (int r = 0; use_cube && r < CubeShells::kRows; ++r) {
+        const std::uint64_t q = static_cast<std::uint64_t>(b + row_start[r]);
+        counts += cube.row_counts[cube.row_class[r]][fiveBits(bits, q)];
+      }
+      // The nearest occupied cells shell by shell: all of a shell's offsets have its length, so
+      // adding it once per occupied cell is the scan's sum, bit for bit, in the scan's order.
       int found = 0;
       float sum = 0.f;
+      for (int s = 0; s < CubeShells::kShells && found < mean_k; ++s) {
+        const int in_shell =
+            static_cast<int>((counts >> (CubeShells::kCountBits * s)) & CubeShells::kCountMask);
+        const int take = std::min(in_shell, mean_k - found);
+        for (int t = 0; t < take; ++t) sum += cube.shell_length[s];
+        found += take;
+      }
+      // Beyond the cube (a surface's edge, a sparse view): the table's offsets in order.
       // Branch-free: whether a neighbour cell is occupied is close to a coin flip on a surface's
       // edge, which a branch mispredicts half the time. Adding 0 for an empty cell leaves the sum's
       // bits as they were (it is never -0), so the sum is that of the occupied cells in order.
-      for (std::size_t k = 0; k < deltas.size() && found < mean_k; ++k) {
+      for (std::size_t k = beyond_cube; k < deltas.size() && found < mean_k; ++k) {
         const std::size_t q = static_cast<std::size_t>(b + deltas[k]);
         const std::uint64_t occupied = (bits[q / 64] >> (q % 64)) & 1u;
         sum += table.lengths[k] * static_cast<float>(occupied);
@@ -422,22 +633,7 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const Point
       mean_distance[i] = static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
     }
   });
-  double sum = 0.0;
-  double sq_sum = 0.0;
-  for (const float distance : mean_distance) {
-    sum += distance;
-    sq_sum += static_cast<double>(distance) * distance;
-  }
-  const double count_d = static_cast<double>(n);
-  const double mean = sum / count_d;
-  const double variance = std::max(0.0, (sq_sum - sum * sum / count_d) / (count_d - 1.0));
-  const double threshold = mean + stddev_mul * std::sqrt(variance);
-  PointCloud out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
-  }
-  return out;
+  return true;
 }
 
 PointCloud PointCloudFilter::passThroughDepth(const PointCloud& points_C, double min_depth_m,

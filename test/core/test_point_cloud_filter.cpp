@@ -230,6 +230,96 @@ TEST(PointCloudFilterOutliers, GridSearchGivesPclsResultExactly) {
   }
 }
 
+// The statistic on voxel centres, straight from its definition: for each cell, the lengths (in
+// cells) to every other occupied cell within the search radius, sorted, the first mean_k summed
+// in float; missing neighbours count radius + 1. A brute-force search: for small clouds.
+std::vector<float> voxelCentreDistancesReference(const PointCloud& points, int mean_k,
+                                                 double leaf_size_m) {
+  const int radius = std::max(2, static_cast<int>(std::ceil(2.0 * std::sqrt(mean_k))));
+  std::vector<std::array<std::int64_t, 3>> cells;
+  for (const Eigen::Vector3f& p : points) {
+    std::array<std::int64_t, 3> c;
+    for (int d = 0; d < 3; ++d) {
+      c[d] = static_cast<std::int64_t>(std::floor(static_cast<double>(p[d]) / leaf_size_m));
+    }
+    cells.push_back(c);
+  }
+  // Candidates by x cell, so that each point looks only at the slab within the radius.
+  std::vector<size_t> by_x(points.size());
+  for (size_t i = 0; i < by_x.size(); ++i) by_x[i] = i;
+  std::sort(by_x.begin(), by_x.end(),
+            [&](size_t a, size_t b) { return cells[a][0] < cells[b][0]; });
+  const auto x_below = [&](std::int64_t x) {
+    return std::partition_point(by_x.begin(), by_x.end(),
+                                [&](size_t j) { return cells[j][0] < x; });
+  };
+  std::vector<float> mean_distance(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    std::vector<std::int64_t> squared;
+    const auto last = x_below(cells[i][0] + radius + 1);
+    for (auto it = x_below(cells[i][0] - radius); it != last; ++it) {
+      const size_t j = *it;
+      std::int64_t s = 0;
+      for (int d = 0; d < 3; ++d) s += (cells[j][d] - cells[i][d]) * (cells[j][d] - cells[i][d]);
+      if (s > 0 && s <= radius * radius) squared.push_back(s);
+    }
+    std::sort(squared.begin(), squared.end());
+    float sum = 0.f;
+    int found = 0;
+    for (; found < mean_k && found < static_cast<int>(squared.size()); ++found) {
+      sum += std::sqrt(static_cast<float>(squared[found]));
+    }
+    sum += static_cast<float>(mean_k - found) * static_cast<float>(radius + 1);
+    mean_distance[i] = static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
+  }
+  return mean_distance;
+}
+
+TEST(PointCloudFilterOutliers, VoxelCentresStatisticIsItsDefinition) {
+  // A tilted plane with a ragged edge, a thin rod, a sparse row and scattered specks, voxelised:
+  // inside a surface the nearest cells lie in the 5 x 5 x 5 cube around a cell, at an edge or on
+  // the rod beyond it. Each point's mean distance is the definition's, bit for bit, for small and
+  // large mean_k (1 uses no cube), and on 1 to 3 threads.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> uniform(-1.f, 1.f);
+  std::normal_distribution<float> noise(0.f, 0.003f);
+  PointCloud raw;
+  for (int i = 0; i < 80000; ++i) {
+    const float x = 0.6f * uniform(rng);
+    const float y = 0.4f * uniform(rng);
+    if (x > 0.4f && y > 0.1f * std::sin(20.f * x)) continue;  // ragged edge
+    raw.emplace_back(x, y, 0.4f * x + 0.25f * y + noise(rng));
+  }
+  for (int i = 0; i < 60; ++i) raw.emplace_back(0.65f, -0.3f + 0.01f * i, 0.1f);  // rod
+  for (int i = 0; i < 15; ++i) raw.emplace_back(-0.3f + 0.04f * i, 0.45f, 0.f);   // sparse row
+  for (int i = 0; i < 40; ++i) {
+    raw.emplace_back(0.7f * uniform(rng), 0.5f * uniform(rng), 0.3f * uniform(rng));  // specks
+  }
+  const double leaf = 0.01;
+  const PointCloud voxelized = PointCloudFilter::voxelize(raw, leaf);
+  ASSERT_GT(voxelized.size(), 3u * 4096u);  // three threads' shares of the queries (4096 each)
+  for (const int k : {1, 2, 5, 20, 40}) {
+    const std::vector<float> expected = voxelCentreDistancesReference(voxelized, k, leaf);
+    for (const int threads : {1, 2, 3}) {
+      std::vector<float> distances;
+      ASSERT_TRUE(
+          PointCloudFilter::voxelCentreMeanDistances(voxelized, k, leaf, threads, &distances));
+      ASSERT_EQ(distances.size(), expected.size());
+      for (size_t i = 0; i < expected.size(); ++i) {
+        ASSERT_EQ(distances[i], expected[i]) << "k " << k << " point " << i;
+      }
+    }
+  }
+  // Too wide for the occupancy grid: nothing computed (the filter then searches exactly).
+  PointCloud spread = voxelized;
+  spread.emplace_back(300.f, -300.f, 300.f);
+  std::vector<float> distances;
+  EXPECT_FALSE(PointCloudFilter::voxelCentreMeanDistances(spread, 20, leaf, 1, &distances));
+  EXPECT_FALSE(PointCloudFilter::voxelCentreMeanDistances(voxelized, 0, leaf, 1, &distances));
+  EXPECT_TRUE(PointCloudFilter::voxelCentreMeanDistances({}, 20, leaf, 1, &distances));
+  EXPECT_TRUE(distances.empty());
+}
+
 TEST(PointCloudFilterOutliers, VoxelCentresStatisticsCloseToPcls) {
   // The same voxelised surfaces and outliers as above: on voxel centres, the statistic keeps and
   // drops nearly the same points as PCL's exact k nearest, and every scattered outlier goes.

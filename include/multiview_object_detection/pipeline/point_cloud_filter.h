@@ -80,6 +80,12 @@ class PointCloudFilter {
   static PointCloud removeStatisticalOutliersOnVoxelCentres(const PointCloud& points, int mean_k,
                                                             double stddev_mul, double leaf_size_m,
                                                             int threads = 1);
+  // The statistic of removeStatisticalOutliersOnVoxelCentres: each point's mean distance (m) to
+  // its mean_k nearest occupied voxel centres, from finite points. False (nothing computed) where
+  // the cloud spans too many cells for its occupancy grid, or for a bad mean_k or leaf.
+  static bool voxelCentreMeanDistances(const PointCloud& finite_points, int mean_k,
+                                       double leaf_size_m, int threads,
+                                       std::vector<float>* mean_distance_m);
   static PointCloud removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
                                                     double stddev_mul, double cell_m,
                                                     int threads = 1);
