@@ -227,19 +227,56 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
   };
 
   if (frame.registered) {
-    // Same pixel grid: only depth pixels inside some mask's box matter. The stride grid stays
-    // anchored at (0, 0), as in backProjectDepth.
+    // Same pixel grid: only depth pixels inside some mask matter. The stride grid stays anchored
+    // at (0, 0), as in backProjectDepth. The depths in metres of the rows at v - stride, v and
+    // v + stride over the masks' columns (and one stride either side) are read once per row into
+    // buffers, NaN where invalid or outside the image, so the test of the four neighbours reads
+    // them without bounds checks: the same values and tests as depthMetres' per pixel.
     const int u0 = (any_box.x + stride - 1) / stride * stride;
     const int v0 = (any_box.y + stride - 1) / stride * stride;
+    const int u_end = any_box.br().x;
+    const int first_column = u0 - stride;  // buffer index 0
+    const int width = u_end + stride - first_column + 1;
+    std::vector<double> rows(3 * static_cast<size_t>(width));
+    const auto fillRow = [&](int v, double* row) {
+      for (int k = 0; k < width; ++k) {
+        const int u = first_column + k;
+        row[k] = (v < 0 || v >= depth.rows || u < 0 || u >= depth.cols)
+                     ? std::nan("")
+                     : depthMetres(depth, u, v, min_m, max_m);
+      }
+    };
+    double* above = rows.data();
+    double* here = above + width;
+    double* below = here + width;
+    fillRow(v0 - stride, above);
+    fillRow(v0, here);
+    const double tolerance_base_m = config_.consistency_tolerance_m;
+    const double tolerance_per_m2 = 3.0 * config_.depth_step_per_m2;
     for (int v = v0; v < any_box.br().y; v += stride) {
-      for (int u = u0; u < any_box.br().x; u += stride) {
-        const double z = depthMetres(depth, u, v, min_m, max_m);
-        if (!std::isfinite(z) || !inSomeMask(u, v) || !consistent(u, v, z)) continue;
+      fillRow(v + stride, below);
+      const uint8_t* covered_row = covered.ptr<uint8_t>(v - any_box.y);
+      for (int u = u0; u < u_end; u += stride) {
+        if (covered_row[u - any_box.x] == 0) continue;
+        const int k = u - first_column;
+        const double z = here[k];
+        if (!std::isfinite(z)) continue;
+        if (min_neighbours > 0) {
+          const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
+          // false for NaN
+          const int agreeing = (std::abs(here[k + stride] - z) <= tolerance_m) +
+                               (std::abs(here[k - stride] - z) <= tolerance_m) +
+                               (std::abs(below[k] - z) <= tolerance_m) +
+                               (std::abs(above[k] - z) <= tolerance_m);
+          if (agreeing < min_neighbours) continue;
+        }
         const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
                                   static_cast<float>((v - K_d.cy) * z / K_d.fy),
                                   static_cast<float>(z));
         assign(u, v, p_D);
       }
+      std::swap(above, here);
+      std::swap(here, below);
     }
     return Status::Ok();
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 
@@ -195,6 +196,95 @@ TEST(ObjectCloudExtractorTest, RegisteredOverlappingMasksAndStride) {
       EXPECT_GT(clouds[0].size(), 150u);
     }
   }
+}
+
+TEST(ObjectCloudExtractorTest, RegisteredDepthEdgeTestIsTheBruteForceOne) {
+  // Random depth with holes, saturated and out-of-range values and steps, masks over the image's
+  // borders and each other, every stride and neighbour count, millimetres and metres: the clouds
+  // are the brute-force per-pixel definition's, bit for bit (depth in metres as a double, the
+  // four neighbours at the stride inside the image within tolerance + 3 depth steps).
+  const int width = 47;
+  const int height = 35;
+  const CameraIntrinsics K{55.0, 57.0, 23.2, 16.8, width, height};
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> millimetres(900, 1100);
+  std::uniform_int_distribution<int> kind(0, 19);
+  cv::Mat depth_mm(height, width, CV_16UC1);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int k = kind(rng);
+      depth_mm.at<uint16_t>(v, u) = static_cast<uint16_t>(k == 0   ? 0
+                                                          : k == 1 ? 65535
+                                                          : k == 2 ? 50
+                                                          : k < 5  ? 2000
+                                                                   : millimetres(rng));
+    }
+  }
+  cv::Mat depth_m;
+  depth_mm.convertTo(depth_m, CV_32FC1, 0.001);
+  depth_m.setTo(kNaNf, depth_mm == 0);
+  depth_m.setTo(0.f, depth_mm == 65535);
+  cv::Mat mask_a = cv::Mat::zeros(height, width, CV_8UC1);
+  cv::Mat mask_b = cv::Mat::zeros(height, width, CV_8UC1);
+  cv::rectangle(mask_a, cv::Rect(0, 3, 30, 32), cv::Scalar(255),
+                cv::FILLED);  // left and bottom borders
+  cv::circle(mask_b, cv::Point(35, 10), 14, cv::Scalar(255), cv::FILLED);  // top and right borders
+  const cv::Mat* masks[2] = {&mask_a, &mask_b};
+  size_t dropped_by_edges = 0;
+  for (const cv::Mat& depth : {depth_mm, depth_m}) {
+    const RgbdFrame frame = makeRegisteredFrame(depth, K);
+    const auto metres = [&](int u, int v) {
+      if (u < 0 || v < 0 || u >= width || v >= height) return std::nan("");
+      double z;
+      if (depth.type() == CV_16UC1) {
+        const int mm = depth.at<uint16_t>(v, u);
+        if (mm == 0 || mm == 65535) return std::nan("");
+        z = 0.001 * mm;
+      } else {
+        z = depth.at<float>(v, u);
+        if (!std::isfinite(z) || z <= 0.0) return std::nan("");
+      }
+      return z < 0.1 || z > 10.0 ? std::nan("") : z;
+    };
+    for (const int stride : {1, 2, 3}) {
+      for (const int min_neighbours : {0, 1, 2, 3, 4}) {
+        ObjectCloudExtractor::Config config;
+        config.pixel_stride = stride;
+        config.min_consistent_neighbours = min_neighbours;
+        std::vector<PointCloud> clouds;
+        ASSERT_TRUE(ObjectCloudExtractor(config)
+                        .extract(frame, {maskDetection(mask_a), maskDetection(mask_b)}, &clouds)
+                        .ok());
+        for (int k = 0; k < 2; ++k) {
+          PointCloud expected;
+          for (int v = 0; v < height; v += stride) {
+            for (int u = 0; u < width; u += stride) {
+              const double z = metres(u, v);
+              if (masks[k]->at<uint8_t>(v, u) == 0 || !std::isfinite(z)) continue;
+              const double tolerance_m =
+                  config.consistency_tolerance_m + 3.0 * config.depth_step_per_m2 * z * z;
+              int agreeing = 0;
+              for (const cv::Point d : {cv::Point(stride, 0), cv::Point(-stride, 0),
+                                        cv::Point(0, stride), cv::Point(0, -stride)}) {
+                agreeing += std::abs(metres(u + d.x, v + d.y) - z) <= tolerance_m;
+              }
+              if (agreeing < min_neighbours) {
+                ++dropped_by_edges;
+                continue;
+              }
+              expected.emplace_back(static_cast<float>((u - K.cx) * z / K.fx),
+                                    static_cast<float>((v - K.cy) * z / K.fy),
+                                    static_cast<float>(z));
+            }
+          }
+          ASSERT_EQ(clouds[k].size(), expected.size())
+              << "stride " << stride << " min_neighbours " << min_neighbours << " mask " << k;
+          for (size_t i = 0; i < expected.size(); ++i) ASSERT_EQ(clouds[k][i], expected[i]);
+        }
+      }
+    }
+  }
+  EXPECT_GT(dropped_by_edges, 500u);
 }
 
 // Two cameras (7-Scenes, Kinect without registration): colour at another resolution and focal
