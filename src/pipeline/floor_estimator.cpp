@@ -61,17 +61,28 @@ bool FloorEstimator::addFrame(const PointCloud& points_W, const GravityFrame& gr
     if (p.allFinite()) heights.push_back(gravity.up.dot(p.cast<double>()));
   }
   if (heights.empty()) return false;
-  std::sort(heights.begin(), heights.end());
   const size_t n = heights.size();
   const size_t needed = std::max<size_t>(static_cast<size_t>(config_.min_layer_points),
                                          static_cast<size_t>(config_.min_layer_fraction * n));
   const size_t max_below = static_cast<size_t>(config_.max_below_fraction * n);
+  // The window below starts at one of the lowest max_below + 1 heights and reaches at most
+  // layer_thickness_m above it: only the heights up to there need sorting (a prefix of the sorted
+  // order, with a margin for rounding), not the whole view.
+  size_t sorted_end = n;
+  if (max_below + 1 < n) {
+    std::nth_element(heights.begin(), heights.begin() + max_below, heights.end());
+    const double reach_m = heights[max_below] + config_.layer_thickness_m + 1e-6;
+    sorted_end = static_cast<size_t>(std::partition(heights.begin(), heights.end(),
+                                                    [reach_m](double h) { return h <= reach_m; }) -
+                                     heights.begin());
+  }
+  std::sort(heights.begin(), heights.begin() + sorted_end);
   // Slide a window of layer_thickness_m up from the lowest point: the first window that holds
   // enough points, with few below it, is the floor layer.
   size_t hi = 0;
   for (size_t lo = 0; lo <= max_below && lo < n; ++lo) {
     hi = std::max(hi, lo);
-    while (hi < n && heights[hi] - heights[lo] <= config_.layer_thickness_m) ++hi;
+    while (hi < sorted_end && heights[hi] - heights[lo] <= config_.layer_thickness_m) ++hi;
     if (hi - lo < needed) continue;
     // The floor surface: the median of the layer (its noise is symmetric about the surface).
     const double height_m = heights[lo + (hi - lo) / 2];
