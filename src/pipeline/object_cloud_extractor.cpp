@@ -1,6 +1,8 @@
 #include "multiview_object_detection/pipeline/object_cloud_extractor.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -92,6 +94,31 @@ float ObjectCloudExtractor::depthAt(const cv::Mat& depth, int u, int v, double m
   if (!supportedDepth(depth) || u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) return kNaN;
   const double z = depthMetres(depth, u, v, min_depth_m, max_depth_m);
   return std::isfinite(z) ? static_cast<float>(z) : kNaN;
+}
+
+void ObjectCloudExtractor::depthRowAt(const cv::Mat& depth, int v, int u0, int stride, int count,
+                                      double min_depth_m, double max_depth_m, float* out) {
+  if (!supportedDepth(depth) || v < 0 || v >= depth.rows || u0 < 0 || stride < 1 ||
+      (count > 0 && u0 + static_cast<std::int64_t>(count - 1) * stride >= depth.cols)) {
+    std::fill(out, out + std::max(0, count), kNaN);
+    return;
+  }
+  // depthMetres with the type's branch out of the loop.
+  const auto ranged = [min_depth_m, max_depth_m](double z) {
+    return z < min_depth_m || z > max_depth_m ? kNaN : static_cast<float>(z);
+  };
+  if (depth.type() == CV_16UC1) {
+    const uint16_t* row = depth.ptr<uint16_t>(v) + u0;
+    for (int k = 0; k < count; ++k, row += stride) {
+      out[k] = *row == 0 || *row == 65535 ? kNaN : ranged(0.001 * *row);
+    }
+  } else {
+    const float* row = depth.ptr<float>(v) + u0;
+    for (int k = 0; k < count; ++k, row += stride) {
+      const double z = *row;
+      out[k] = !std::isfinite(z) || z <= 0.0 ? kNaN : ranged(z);
+    }
+  }
 }
 
 PointCloud ObjectCloudExtractor::backProjectDepth(const cv::Mat& depth, const CameraIntrinsics& K,

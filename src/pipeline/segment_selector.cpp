@@ -151,9 +151,17 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
   const cv::Mat& depth = frame.depth;
   const CameraIntrinsics& K_d = frame.K_depth;
   if (depth.empty() || !K_d.isValid() || !frame.K_color.isValid() || stride < 1) return view;
+  const int columns = (depth.cols + stride - 1) / stride;
+  const std::size_t pixels = static_cast<std::size_t>((depth.rows + stride - 1) / stride) * columns;
+  view.points_D.reserve(pixels);
+  view.points_W.reserve(pixels);
+  view.pixels_color.reserve(pixels);
+  std::vector<float> row_m(columns);
   for (int v = 0; v < depth.rows; v += stride) {
+    ObjectCloudExtractor::depthRowAt(depth, v, 0, stride, columns, min_depth_m, max_depth_m,
+                                     row_m.data());
     for (int u = 0; u < depth.cols; u += stride) {
-      const float z = ObjectCloudExtractor::depthAt(depth, u, v, min_depth_m, max_depth_m);
+      const float z = row_m[u / stride];
       if (!std::isfinite(z)) continue;
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel(u, v);

@@ -287,6 +287,51 @@ TEST(ObjectCloudExtractorTest, RegisteredDepthEdgeTestIsTheBruteForceOne) {
   EXPECT_GT(dropped_by_edges, 500u);
 }
 
+TEST(ObjectCloudExtractorTest, DepthRowsAreDepthAtPerPixel) {
+  // Millimetres with 0 and 65535, metres with NaN, infinity, zero and negatives, values beyond the
+  // valid range: a row at a time gives depthAt's value of every pixel, bit for bit; a row that
+  // leaves the image is all NaN.
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> mm(0, 12000);
+  cv::Mat depth_mm(9, 31, CV_16UC1);
+  for (int v = 0; v < depth_mm.rows; ++v) {
+    for (int u = 0; u < depth_mm.cols; ++u) {
+      const int value = mm(rng);
+      depth_mm.at<uint16_t>(v, u) = static_cast<uint16_t>(value > 11000    ? 65535
+                                                          : value % 7 == 0 ? 0
+                                                                           : value);
+    }
+  }
+  cv::Mat depth_m;
+  depth_mm.convertTo(depth_m, CV_32FC1, 0.001);
+  depth_m.at<float>(1, 2) = kNaNf;
+  depth_m.at<float>(2, 3) = std::numeric_limits<float>::infinity();
+  depth_m.at<float>(3, 4) = -1.f;
+  for (const cv::Mat& depth : {depth_mm, depth_m}) {
+    for (int v = 0; v < depth.rows; ++v) {
+      for (const int stride : {1, 2, 3}) {
+        for (const int u0 : {0, 1, 4}) {
+          const int count = (depth.cols - u0 + stride - 1) / stride;
+          std::vector<float> row(count);
+          ObjectCloudExtractor::depthRowAt(depth, v, u0, stride, count, 0.5, 9.0, row.data());
+          for (int k = 0; k < count; ++k) {
+            const float expected =
+                ObjectCloudExtractor::depthAt(depth, u0 + k * stride, v, 0.5, 9.0);
+            if (std::isnan(expected)) {
+              ASSERT_TRUE(std::isnan(row[k])) << v << " " << u0 + k * stride;
+            } else {
+              ASSERT_EQ(row[k], expected) << v << " " << u0 + k * stride;
+            }
+          }
+        }
+      }
+    }
+    std::vector<float> beyond(4, 1.f);
+    ObjectCloudExtractor::depthRowAt(depth, 0, depth.cols - 3, 1, 4, 0.5, 9.0, beyond.data());
+    for (const float z : beyond) EXPECT_TRUE(std::isnan(z));
+  }
+}
+
 // Two cameras (7-Scenes, Kinect without registration): colour at another resolution and focal
 // length, offset by T_C_D. The extractor must select exactly the depth points whose projection into
 // the colour image lands in the mask.

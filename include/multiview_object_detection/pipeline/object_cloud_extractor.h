@@ -45,6 +45,10 @@ class ObjectCloudExtractor {
                                      double min_depth_m, double max_depth_m);
   // Depth in metres at (u, v), or NaN when invalid (0, 65535, NaN, out of range).
   static float depthAt(const cv::Mat& depth, int u, int v, double min_depth_m, double max_depth_m);
+  // depthAt of `count` pixels of row v, from column u0 every `stride` columns, into out (all inside
+  // the image): one pass per row instead of a look-up per pixel.
+  static void depthRowAt(const cv::Mat& depth, int v, int u0, int stride, int count,
+                         double min_depth_m, double max_depth_m, float* out);
 
  private:
   Config config_;
