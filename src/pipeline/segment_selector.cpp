@@ -367,13 +367,43 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
   directions.push_back(up);
   std::vector<Extent> extents(num_segments);
-  for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s]) {
-      const Eigen::Vector3f& p_W = points_W[i];
+  {
+    // Four directions at a time (a fifth group holds the 19th and a zero direction): per lane the
+    // same float operations as directions[k].dot(p_W) (Eigen's order, x + (y + z)), std::min and
+    // std::max, so the same extents to the bit.
+    typedef float Lanes __attribute__((vector_size(16)));
+    constexpr int kGroups = (kDirections + 1 + 3) / 4;
+    Lanes dx[kGroups], dy[kGroups], dz[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      for (int l = 0; l < 4; ++l) {
+        const int k = 4 * g + l;
+        const Eigen::Vector3f d = k <= kDirections ? directions[k] : Eigen::Vector3f::Zero();
+        dx[g][l] = d.x();
+        dy[g][l] = d.y();
+        dz[g][l] = d.z();
+      }
+    }
+    const float inf = std::numeric_limits<float>::infinity();
+    for (int s = 0; s < num_segments; ++s) {
+      Lanes lower[kGroups], upper[kGroups];
+      for (int g = 0; g < kGroups; ++g) {
+        lower[g] = Lanes{inf, inf, inf, inf};
+        upper[g] = -lower[g];
+      }
+      for (const int i : segments[s]) {
+        const Eigen::Vector3f& p_W = points_W[i];
+        const float x = p_W.x();
+        const float y = p_W.y();
+        const float z = p_W.z();
+        for (int g = 0; g < kGroups; ++g) {
+          const Lanes q = dx[g] * x + (dy[g] * y + dz[g] * z);
+          lower[g] = q < lower[g] ? q : lower[g];
+          upper[g] = upper[g] < q ? q : upper[g];
+        }
+      }
       for (int k = 0; k <= kDirections; ++k) {
-        const float q = directions[k].dot(p_W);
-        extents[s].lower[k] = std::min(extents[s].lower[k], q);
-        extents[s].upper[k] = std::max(extents[s].upper[k], q);
+        extents[s].lower[k] = lower[k / 4][k % 4];
+        extents[s].upper[k] = upper[k / 4][k % 4];
       }
     }
   }
