@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <utility>
 
 namespace mvod {
 namespace {
@@ -36,6 +37,26 @@ Status checkSection(const std::string& section, const Status& status) {
 std::string frameLabel(const RgbdFrame& frame) {
   return frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
 }
+
+// A thread that is joined when it goes out of scope (every early return of its owner).
+class JoiningThread {
+ public:
+  JoiningThread() = default;
+  JoiningThread(const JoiningThread&) = delete;
+  JoiningThread& operator=(const JoiningThread&) = delete;
+  ~JoiningThread() { join(); }
+  template <typename Job>
+  void start(Job&& job) {
+    join();
+    thread_ = std::thread(std::forward<Job>(job));
+  }
+  void join() {
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::thread thread_;
+};
 
 std::string detectionLabel(size_t index, const Detection2D& detection) {
   std::ostringstream out;
@@ -513,6 +534,20 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   StageTimes& stage = times != nullptr ? *times : local_times;
   const GravityFrame gravity_frame = gravity();
 
+  // The selection's image work (the detection's mask, core and ring) does not depend on the
+  // cloud: for a large detection, when the mapper has more than one thread, it runs on a thread of
+  // its own beside the filter and LCCP (the same masks select() would compute).
+  SegmentSelector::DetectionMasks masks;
+  const bool masks_beside = config_.selection.consistent() && context.detection != nullptr &&
+                            context.frame != nullptr && threadCount() > 1 &&
+                            points_D.size() >= kMinPointsForMasksThread;
+  JoiningThread masks_thread;
+  if (masks_beside) {
+    masks_thread.start([this, &masks, &context] {
+      masks = selector_.detectionMasks(*context.detection, context.frame->color_bgr.size());
+    });
+  }
+
   // Sec. 3.2: pass-through, voxel grid and outlier removal in the camera frame; before them the
   // floor cut: points just above the floor are floor, whatever the mask says.
   Clock::time_point t = Clock::now();
@@ -566,6 +601,10 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
                               ? database_.priors().find(context.detection->class_name)
                               : nullptr;
   selection_input.gravity = gravity_frame;
+  if (masks_beside) {
+    masks_thread.join();
+    selection_input.masks = &masks;
+  }
   SegmentSelector::Result selection;
   const Status selected = selector_.select(selection_input, &selection);
   stage.lccp_ms += msSince(t);

@@ -174,39 +174,26 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
   return view;
 }
 
-Status SegmentSelector::select(const Input& input, Result* result) const {
-  if (result == nullptr || input.points_D == nullptr || input.segments == nullptr) {
-    return Status::Error("SegmentSelector::select: missing input");
-  }
-  *result = Result();
-  const PointCloud& points = *input.points_D;
-  const std::vector<std::vector<int>>& segments = *input.segments;
-  if (segments.empty() || segments[0].empty()) return Status::Error("no segment to select");
-  if (!config_.consistent() || input.detection == nullptr || input.frame == nullptr) {
-    // Eq. 2: the largest segment.
-    result->indices = segments[0];
-    std::sort(result->indices.begin(), result->indices.end());
-    result->kept_segments = 1;
-    return Status::Ok();
-  }
-  const Detection2D& detection = *input.detection;
-  const RgbdFrame& frame = *input.frame;
-  const cv::Size image_size = frame.color_bgr.size();
+SegmentSelector::DetectionMasks SegmentSelector::detectionMasks(const Detection2D& detection,
+                                                                const cv::Size& image_size) const {
+  DetectionMasks masks;
   const cv::Rect image_rect(cv::Point(0, 0), image_size);
-
-  // ---- The detection in colour pixels: its mask (a box-only detection fills its box), its core
-  // and the ring just outside it, all on a crop around the box.
   const cv::Rect box = detection.box_px & image_rect;
-  if (box.empty()) return Status::Error("the detection's box lies outside the image");
+  if (box.empty()) {
+    masks.status = Status::Error("the detection's box lies outside the image");
+    return masks;
+  }
   if (box.area() > config_.max_box_image_fraction * image_rect.area()) {
-    return Status::Error("the box covers the whole image (" +
-                         std::to_string(100 * box.area() / image_rect.area()) +
-                         " %): no background to cut the object from");
+    masks.status = Status::Error("the box covers the whole image (" +
+                                 std::to_string(100 * box.area() / image_rect.area()) +
+                                 " %): no background to cut the object from");
+    return masks;
   }
   const int ring = config_.ring_px;
   const cv::Rect crop = cv::Rect(box.x - ring - 1, box.y - ring - 1, box.width + 2 * ring + 2,
                                  box.height + 2 * ring + 2) &
                         image_rect;
+  masks.crop = crop;
   cv::Mat mask(crop.size(), CV_8UC1, cv::Scalar(0));
   const cv::Rect box_in_crop = box - crop.tl();
   bool box_only = true;
@@ -236,6 +223,35 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   cv::dilate(mask, ring_mask,
              cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * ring + 1, 2 * ring + 1)));
   ring_mask.setTo(0, mask);
+  masks.mask = mask;
+  masks.core = core;
+  masks.ring = ring_mask;
+  return masks;
+}
+
+Status SegmentSelector::select(const Input& input, Result* result) const {
+  if (result == nullptr || input.points_D == nullptr || input.segments == nullptr) {
+    return Status::Error("SegmentSelector::select: missing input");
+  }
+  *result = Result();
+  const PointCloud& points = *input.points_D;
+  const std::vector<std::vector<int>>& segments = *input.segments;
+  if (segments.empty() || segments[0].empty()) return Status::Error("no segment to select");
+  if (!config_.consistent() || input.detection == nullptr || input.frame == nullptr) {
+    // Eq. 2: the largest segment.
+    result->indices = segments[0];
+    std::sort(result->indices.begin(), result->indices.end());
+    result->kept_segments = 1;
+    return Status::Ok();
+  }
+  const RgbdFrame& frame = *input.frame;
+  DetectionMasks computed;
+  if (input.masks == nullptr) computed = detectionMasks(*input.detection, frame.color_bgr.size());
+  const DetectionMasks& masks = input.masks != nullptr ? *input.masks : computed;
+  if (!masks.status) return masks.status;
+  const cv::Rect& crop = masks.crop;
+  const cv::Mat& core = masks.core;
+  const cv::Mat& ring_mask = masks.ring;
 
   // ---- Per point: in the core? World coordinates for the size limit.
   std::vector<char> in_core(points.size(), 0);

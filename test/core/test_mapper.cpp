@@ -144,6 +144,10 @@ TEST_F(ObjectMapperTest, OneThreadAndManyThreadsGiveIdenticalMaps) {
     wall(cv::Rect(40, 20, 120, 60)).setTo(255);
     wall.setTo(0, mask);
     if (cv::countNonZero(wall) > 100) detections.push_back(detectionFromMask(wall, "tv", 0.8f));
+    // The box-only detection is large enough for its selection masks to be computed on a thread
+    // of their own beside its filter and LCCP (with more than one thread).
+    EXPECT_GT(static_cast<size_t>(cv::countNonZero(box_only.mask)),
+              ObjectMapper::kMinPointsForMasksThread);
     keyframes.emplace_back(frame, detections);
   }
   std::vector<std::vector<MapObject>> maps;

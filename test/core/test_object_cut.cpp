@@ -157,6 +157,55 @@ TEST_F(ObjectCutTest, EvidenceFusionOverALoopOfBledViews) {
   }
 }
 
+TEST_F(ObjectCutTest, SelectionMasksGivenOrComputedGiveTheSameCut) {
+  // The selection's masks computed beforehand (as the mapper does beside the filter and LCCP for
+  // a large detection) select the same points as select() computing them itself, for a mask and a
+  // box-only detection; the core lies in the mask and the ring outside it; a box outside or over
+  // the whole image is refused there.
+  cv::Mat mask;
+  const RgbdFrame frame = test::renderFrame(scene_, arcPose(20.0), 0, &mask);
+  const SegmentSelector selector(config_.selection);
+  const PointCloudFilter filter(config_.filter);
+  const LccpSegmenter lccp(config_.lccp);
+  for (const Detection2D& detection : {bledDetection(mask, 6), boxOnlyDetection(mask)}) {
+    std::vector<PointCloud> clouds;
+    ASSERT_TRUE(ObjectCloudExtractor(config_.extractor).extract(frame, {detection}, &clouds).ok());
+    const PointCloud filtered = filter.filterCameraFrame(clouds[0]);
+    LccpSegmenter::Result segmentation;
+    ASSERT_TRUE(lccp.segment(filtered, true, &segmentation).ok());
+    ASSERT_GT(segmentation.segments.size(), 1u);
+    SegmentSelector::Input input;
+    input.points_D = &filtered;
+    input.segments = &segmentation.segments;
+    input.detection = &detection;
+    input.frame = &frame;
+    input.prior = priors_.find("chair");
+    input.gravity = GravityFrame(config_.gravity_down_W);
+    SegmentSelector::Result computed;
+    ASSERT_TRUE(selector.select(input, &computed).ok());
+    const SegmentSelector::DetectionMasks masks =
+        selector.detectionMasks(detection, frame.color_bgr.size());
+    ASSERT_TRUE(masks.status.ok());
+    EXPECT_EQ(cv::countNonZero(masks.core & ~masks.mask), 0);
+    EXPECT_EQ(cv::countNonZero(masks.ring & masks.mask), 0);
+    EXPECT_GT(cv::countNonZero(masks.core), 0);
+    EXPECT_GT(cv::countNonZero(masks.ring), 0);
+    input.masks = &masks;
+    SegmentSelector::Result given;
+    ASSERT_TRUE(selector.select(input, &given).ok());
+    EXPECT_EQ(given.indices, computed.indices);
+    EXPECT_EQ(given.kept_segments, computed.kept_segments);
+    EXPECT_EQ(given.bounding_segments, computed.bounding_segments);
+    EXPECT_LT(computed.indices.size(), filtered.size());  // something was cut away
+  }
+  Detection2D outside = boxOnlyDetection(mask);
+  outside.box_px = cv::Rect(-50, -50, 20, 20);
+  EXPECT_FALSE(selector.detectionMasks(outside, frame.color_bgr.size()).status.ok());
+  Detection2D everything = boxOnlyDetection(mask, cv::Rect(0, 0, 640, 480));
+  const Status whole = selector.detectionMasks(everything, frame.color_bgr.size()).status;
+  EXPECT_NE(whole.message().find("whole image"), std::string::npos) << whole.message();
+}
+
 TEST_F(ObjectCutTest, DetectionOfOnlyFloorAndWallIsSkippedWithAWarning) {
   cv::Mat mask;
   const RgbdFrame frame = test::renderFrame(scene_, arcPose(0.0), 7, &mask);

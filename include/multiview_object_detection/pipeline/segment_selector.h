@@ -97,6 +97,19 @@ class SegmentSelector {
   static FrameView makeFrameView(const RgbdFrame& frame, int stride, double min_depth_m,
                                  double max_depth_m);
 
+  // The detection in colour pixels, on a crop around its box: its mask (a box-only detection
+  // fills its box), its core and the ring just outside it. What select() needs of the image; it
+  // does not depend on the cloud, so a caller with a spare thread computes it beside the filter
+  // and LCCP (detectionMasks) and passes it in Input::masks.
+  struct DetectionMasks {
+    Status status;  // an error: the box lies outside the image, or covers (nearly) all of it
+    cv::Rect crop;  // colour pixels
+    cv::Mat mask;   // CV_8UC1 on the crop, 0 / non-zero
+    cv::Mat core;   // the mask's core (the central share of a box-only detection's box)
+    cv::Mat ring;   // the mask dilated by ring_px, less the mask
+  };
+  DetectionMasks detectionMasks(const Detection2D& detection, const cv::Size& image_size) const;
+
   struct Input {
     const PointCloud* points_D = nullptr;  // the detection's cloud, depth-camera frame
     const std::vector<std::vector<int>>* segments = nullptr;  // indices into points_D
@@ -105,6 +118,9 @@ class SegmentSelector {
     const FrameView* view = nullptr;    // null: no bounding-surface test
     const ClassPrior* prior = nullptr;  // null or without size: no size limit
     GravityFrame gravity;
+    // detectionMasks(*detection, the colour image's size), when computed already; null: select()
+    // computes them.
+    const DetectionMasks* masks = nullptr;
   };
   struct Result {
     std::vector<int> indices;  // into points_D, ascending
