@@ -16,9 +16,6 @@
 #include <sstream>
 #include <unordered_set>
 
-#include "multiview_object_detection/pipeline/flat_hash_map.h"
-#include "multiview_object_detection/pipeline/radix_sort.h"
-
 namespace mvod {
 namespace {
 
@@ -120,77 +117,95 @@ PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_g
 
 namespace {
 
-// A voxel's points summed in input order.
-struct VoxelSum {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  std::size_t count = 0;
-};
-
-// Voxel indices below this (in magnitude) pack into 21 bits per axis: 10 km at 1 cm.
-constexpr std::int64_t kPackedVoxelRange = std::int64_t{1} << 20;
-constexpr int kPackedVoxelBits = 21;
-
-// The voxel grid by sorting the points' 64-bit indices: for clouds whose indices do not pack.
+// The voxel grid by sorting the points' 64-bit indices: for any cloud (extents beyond 32-bit
+// grid positions too).
 PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m);
 
 }  // namespace
 
 PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
   if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
-  // Each voxel found by its packed index in a flat hash map (no sort of the points), summing its
-  // points in input order; neighbouring points (pixels of one image row) mostly share a voxel, so
-  // the last one is kept at hand.
+  // The common case, a cloud of fewer than 2^32 points whose voxels' positions in their bounding
+  // grid fit in 32 bits: each point's position and its index packed into one 64-bit word, radix
+  // sorted on the position's digits only (stable, so a voxel's points stay in input order). Half
+  // the memory traffic of sorting positions and indices apart, and no hash table.
+  constexpr double kMaxIndex = 2.0e9;  // |index| below this fits a 32-bit int
   const double inv_leaf = 1.0 / leaf_size_m;
-  FlatHashMap<std::uint64_t, VoxelSum> voxels;
-  voxels.reserve(points.size() / 4 + 16);
-  std::uint64_t last_key = 0;
-  VoxelSum* last = nullptr;  // valid until the next insertion, which replaces it
-  for (const Eigen::Vector3f& p : points) {
+  const std::size_t n = points.size();
+  if (n >= std::numeric_limits<std::uint32_t>::max()) return voxelizeBySorting(points, leaf_size_m);
+  std::vector<std::array<std::int32_t, 3>> cells;
+  std::vector<std::uint32_t> source;  // the finite points' indices
+  cells.reserve(n);
+  source.reserve(n);
+  std::array<std::int32_t, 3> lo = {std::numeric_limits<std::int32_t>::max(),
+                                    std::numeric_limits<std::int32_t>::max(),
+                                    std::numeric_limits<std::int32_t>::max()};
+  std::array<std::int32_t, 3> hi = {std::numeric_limits<std::int32_t>::min(),
+                                    std::numeric_limits<std::int32_t>::min(),
+                                    std::numeric_limits<std::int32_t>::min()};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = points[i];
     if (!p.allFinite()) continue;
-    std::uint64_t key = 0;
+    std::array<std::int32_t, 3> cell;
     for (int d = 0; d < 3; ++d) {
       const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
-      if (!(std::abs(index) < kPackedVoxelRange)) return voxelizeBySorting(points, leaf_size_m);
-      key = (key << kPackedVoxelBits) |
-            static_cast<std::uint64_t>(static_cast<std::int64_t>(index) + kPackedVoxelRange);
+      if (!(std::abs(index) < kMaxIndex)) return voxelizeBySorting(points, leaf_size_m);
+      cell[d] = static_cast<std::int32_t>(index);
+      lo[d] = std::min(lo[d], cell[d]);
+      hi[d] = std::max(hi[d], cell[d]);
     }
-    if (last == nullptr || key != last_key) {
-      last = &voxels[key];
-      last_key = key;
-    }
-    last->sum += p.cast<double>();
-    ++last->count;
+    cells.push_back(cell);
+    source.push_back(static_cast<std::uint32_t>(i));
   }
   PointCloud out;
-  if (voxels.empty()) return out;
-
-  // Output in ascending (x, y, z) voxel order, a deterministic order that does not depend on the
-  // hash: the voxels' positions in their bounding grid are sortable integers (radix sort).
-  constexpr std::uint64_t kField = (std::uint64_t{1} << kPackedVoxelBits) - 1;
-  std::array<std::uint64_t, 3> lo = {kField, kField, kField};
-  std::array<std::uint64_t, 3> hi = {0, 0, 0};
-  for (const auto& voxel : voxels) {
-    for (int d = 0; d < 3; ++d) {
-      const std::uint64_t index = (voxel.first >> (kPackedVoxelBits * (2 - d))) & kField;
-      lo[d] = std::min(lo[d], index);
-      hi[d] = std::max(hi[d], index);
+  if (cells.empty()) return out;
+  std::array<std::uint64_t, 3> dims;
+  double grid_cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    dims[d] = static_cast<std::uint64_t>(static_cast<std::int64_t>(hi[d]) - lo[d]) + 1;
+    grid_cells *= static_cast<double>(dims[d]);
+  }
+  if (!(grid_cells < 4.0e9)) return voxelizeBySorting(points, leaf_size_m);
+  // (position in the grid, x major) << 32 | the point's index.
+  const std::size_t m = cells.size();
+  std::vector<std::uint64_t> keyed(m);
+  std::uint64_t max_position = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::uint64_t x = static_cast<std::uint64_t>(cells[k][0] - lo[0]);
+    const std::uint64_t y = static_cast<std::uint64_t>(cells[k][1] - lo[1]);
+    const std::uint64_t z = static_cast<std::uint64_t>(cells[k][2] - lo[2]);
+    const std::uint64_t position = (x * dims[1] + y) * dims[2] + z;
+    max_position = std::max(max_position, position);
+    keyed[k] = (position << 32) | source[k];
+  }
+  constexpr int kDigitBits = 11;
+  constexpr std::uint64_t kDigitMask = (std::uint64_t{1} << kDigitBits) - 1;
+  std::vector<std::uint64_t> buffer(m);
+  std::vector<std::uint32_t> count(std::size_t{1} << kDigitBits);
+  for (int shift = 32; shift < 64 && (max_position >> (shift - 32)) != 0; shift += kDigitBits) {
+    std::fill(count.begin(), count.end(), 0u);
+    for (const std::uint64_t key : keyed) ++count[(key >> shift) & kDigitMask];
+    std::uint32_t total = 0;
+    for (std::uint32_t& c : count) {
+      const std::uint32_t here = c;
+      c = total;
+      total += here;
     }
+    for (const std::uint64_t key : keyed) buffer[count[(key >> shift) & kDigitMask]++] = key;
+    keyed.swap(buffer);
   }
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
-  order.reserve(voxels.size());
-  for (std::size_t v = 0; v < voxels.size(); ++v) {
-    const std::uint64_t key = voxels.entry(v).first;
-    const std::uint64_t x = ((key >> (2 * kPackedVoxelBits)) & kField) - lo[0];
-    const std::uint64_t y = ((key >> kPackedVoxelBits) & kField) - lo[1];
-    const std::uint64_t z = (key & kField) - lo[2];
-    order.emplace_back((x * (hi[1] - lo[1] + 1) + y) * (hi[2] - lo[2] + 1) + z,
-                       static_cast<std::uint32_t>(v));
-  }
-  radixSortByKey(&order);
-  out.reserve(order.size());
-  for (const auto& ordered : order) {
-    const VoxelSum& voxel = voxels.entry(ordered.second).second;
-    out.emplace_back((voxel.sum / static_cast<double>(voxel.count)).cast<float>());
+  out.reserve(m / 2);
+  std::size_t begin = 0;
+  while (begin < m) {
+    const std::uint64_t position = keyed[begin] >> 32;
+    std::size_t end = begin;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    while (end < m && (keyed[end] >> 32) == position) {
+      sum += points[keyed[end] & 0xffffffffu].cast<double>();
+      ++end;
+    }
+    out.emplace_back((sum / static_cast<double>(end - begin)).cast<float>());
+    begin = end;
   }
   return out;
 }
