@@ -15,9 +15,11 @@ namespace mvod {
 TEST(RadixSort, StableAndInStdSortsOrder) {
   std::mt19937_64 rng(5);
   // Packed voxel keys around the origin (negative fields fill the high bits), many duplicates;
-  // full 64-bit keys; and keys that share all but their lowest bits.
+  // full 64-bit keys; keys that share all but their lowest bits; an object's packed keys away from
+  // the origin (a few low bits of each field vary); and bits that vary only at both ends.
   std::uniform_int_distribution<int> cell(-300, 300);
-  for (int trial = 0; trial < 3; ++trial) {
+  std::uniform_int_distribution<int> near(1000, 1200);
+  for (int trial = 0; trial < 5; ++trial) {
     std::vector<std::pair<std::uint64_t, int>> items;
     for (int i = 0; i < 50000; ++i) {
       std::uint64_t key = 0;
@@ -26,8 +28,13 @@ TEST(RadixSort, StableAndInStdSortsOrder) {
             packVoxel(Eigen::Vector3i(cell(rng) / 10, cell(rng), cell(rng))));
       } else if (trial == 1) {
         key = rng();
-      } else {
+      } else if (trial == 2) {
         key = (std::uint64_t{0xABCDEF} << 40) | (rng() & 0x3FF);
+      } else if (trial == 3) {
+        key = static_cast<std::uint64_t>(
+            packVoxel(Eigen::Vector3i(near(rng), near(rng) / 4, near(rng))));
+      } else {
+        key = (rng() & 0xF) | ((rng() & 0xF) << 60) | (std::uint64_t{1} << 30);
       }
       items.emplace_back(key, i);
     }

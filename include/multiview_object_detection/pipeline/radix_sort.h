@@ -1,5 +1,5 @@
-// Stable LSD radix sort of (64-bit key, value) pairs: O(n) per 11-bit digit, and digits that every
-// key shares (the high bits of packed voxel keys, mostly) cost one counting pass and no move.
+// Stable LSD radix sort of (64-bit key, value) pairs: O(n) per 11-bit digit, and only digits that
+// hold bits in which the keys differ (not the high bits of packed voxel keys, mostly).
 #pragma once
 
 #include <array>
@@ -27,8 +27,11 @@ void radixSortByKey(std::vector<std::pair<std::uint64_t, Value>>* items) {
   const std::uint64_t varying = any_set & ~all_set;  // bits that differ between keys
   std::vector<std::pair<std::uint64_t, Value>> buffer(n);
   std::array<std::size_t, kBuckets> count;
+  // Each digit starts at the lowest varying bit not yet covered: packed voxel keys vary in a few
+  // low bits of each 21-bit field, so three digits cover them where aligned digits take five.
   for (int shift = 0; shift < 64; shift += kDigitBits) {
-    if (((varying >> shift) & (kBuckets - 1)) == 0) continue;  // the same digit everywhere
+    while (shift < 64 && ((varying >> shift) & 1u) == 0) ++shift;
+    if (shift >= 64) break;
     count.fill(0);
     for (const auto& item : *items) ++count[(item.first >> shift) & (kBuckets - 1)];
     std::size_t total = 0;
