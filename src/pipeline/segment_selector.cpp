@@ -616,6 +616,9 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
                -config_.top_clearance_m;
   };
   const float top_clearance_m = static_cast<float>(config_.top_clearance_m);
+  // The kept points marked, then collected in ascending order (segments do not share points).
+  std::vector<char> take(points.size(), 0);
+  std::size_t taken = 0;
   std::vector<char> dropped;  // above the top, or beside it
   for (int s = 0; s < num_segments; ++s) {
     if (!kept[s]) continue;
@@ -639,11 +642,15 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
         ++result->above_top_points;
         continue;
       }
-      result->indices.push_back(segments[s][k]);
+      taken += take[segments[s][k]] == 0;
+      take[segments[s][k]] = 1;
     }
   }
-  if (result->indices.empty()) return Status::Error("nothing left below the object's top surface");
-  std::sort(result->indices.begin(), result->indices.end());
+  if (taken == 0) return Status::Error("nothing left below the object's top surface");
+  result->indices.reserve(taken);
+  for (std::size_t i = 0; i < take.size(); ++i) {
+    if (take[i]) result->indices.push_back(static_cast<int>(i));
+  }
   return Status::Ok();
 }
 
