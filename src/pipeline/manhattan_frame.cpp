@@ -326,7 +326,7 @@ std::vector<T> strided(const std::vector<T>& items, int max_count) {
 
 // Folds an angle into [0, pi/2).
 double foldQuarter(double angle) {
-  double a = std::fmod(angle, kHalfPi);
+  double a = fmodSmall(angle, kHalfPi);
   if (a < 0.0) a += kHalfPi;
   if (a >= kHalfPi) a -= kHalfPi;
   return a;

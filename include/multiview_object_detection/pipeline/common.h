@@ -70,6 +70,20 @@ void parallelRanges(std::size_t count, int threads, std::size_t min_per_thread,
 // first. The jobs must be independent (their result must not depend on the thread that ran them).
 void parallelForEach(std::size_t count, int threads, const std::function<void(std::size_t)>& job);
 
+// std::fmod(x, y) for y > 0, bit for bit, without the library call where |x| < 16 y (angles
+// folded into a quarter turn): the multiples 8y, 4y, 2y, y are exact, and each subtraction from a
+// remainder between one and two of them is exact (Sterbenz), so the result is the exact remainder
+// that fmod returns, with x's sign.
+inline double fmodSmall(double x, double y) {
+  const double magnitude = std::abs(x);
+  if (!(magnitude < 16.0 * y) || !(y > 0.0)) return std::fmod(x, y);
+  double r = magnitude;
+  for (double multiple = 8.0 * y; multiple >= y; multiple *= 0.5) {
+    if (r >= multiple) r -= multiple;
+  }
+  return std::copysign(r, x);
+}
+
 // True if every element of the matrix is finite and its rotation part is orthonormal within tol.
 bool isValidPose(const Eigen::Isometry3d& T, double tol = 1e-3);
 
