@@ -426,8 +426,8 @@ YawSweepResult sweepArcs(const std::vector<HorizontalNormal>& normals) {
   if (starts.empty()) return result;  // constant count: any yaw, take 0
   // The end points in order; closed arcs: at equal angles, starts come before ends. Two sorts of
   // plain angles and a merge give the order of one sort of (angle, kind) pairs.
-  std::sort(starts.begin(), starts.end());
-  std::sort(ends.begin(), ends.end());
+  sortNonNegative(&starts);
+  sortNonNegative(&ends);
   std::vector<std::pair<double, int>> events;  // (angle, +1 start / -1 end)
   events.reserve(starts.size() + ends.size());
   std::size_t i_start = 0, i_end = 0;

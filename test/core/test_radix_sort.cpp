@@ -2,7 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -46,6 +49,32 @@ TEST(RadixSort, StableAndInStdSortsOrder) {
   std::vector<std::pair<std::uint64_t, int>> empty;
   radixSortByKey(&empty);
   EXPECT_TRUE(empty.empty());
+}
+
+TEST(RadixSort, NonNegativeDoublesInStdSortsOrder) {
+  // Angles of a quarter turn with duplicates and zeros, tiny and huge values, subnormals: the
+  // bits std::sort gives. With a negative value, -0.0 or an infinity the std::sort fallback.
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> angle(0.0, 1.5707963267948966);
+  for (int trial = 0; trial < 5; ++trial) {
+    std::vector<double> values;
+    for (int i = 0; i < 5000; ++i) {
+      double v = angle(rng);
+      if (trial == 1) v = std::ldexp(v, static_cast<int>(rng() % 2000) - 1000);
+      if (trial == 2 && i % 7 == 0) v = values.empty() ? 0.0 : values[i / 2];  // duplicates
+      if (trial == 2 && i % 11 == 0) v = 0.0;
+      if (trial == 2 && i % 13 == 0) v = std::numeric_limits<double>::denorm_min() * (i % 5);
+      if (trial == 3 && i == 77) v = -0.0;
+      if (trial == 4 && i == 99) v = std::numeric_limits<double>::infinity();
+      values.push_back(v);
+    }
+    std::vector<double> expected = values;
+    std::sort(expected.begin(), expected.end());
+    sortNonNegative(&values);
+    ASSERT_EQ(values.size(), expected.size());
+    ASSERT_EQ(std::memcmp(values.data(), expected.data(), values.size() * sizeof(double)), 0)
+        << "trial " << trial;
+  }
 }
 
 }  // namespace mvod
