@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 
@@ -551,47 +552,43 @@ bool hasHorizontalStructure(const std::vector<HorizontalNormal>& normals, double
   return inliers >= kMinHorizontalInliers && inliers >= kMinPeakToMeanRatio * mean_inliers;
 }
 
+// The points on the horizontal plane (x_h, y_h) and their bounds: computed once per box for the
+// outline's normals, the footprint's strip ends and the minimum-area fallback.
+struct Footprint {
+  std::vector<Eigen::Vector2d> points;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+};
+
+Footprint projectFootprint(const PointCloud& points_W, const GravityFrame& gravity) {
+  Footprint footprint;
+  footprint.points.resize(points_W.size());
+  for (size_t i = 0; i < points_W.size(); ++i) {
+    const Eigen::Vector3d q = points_W[i].cast<double>();
+    footprint.points[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
+    footprint.lo = footprint.lo.cwiseMin(footprint.points[i]);
+    footprint.hi = footprint.hi.cwiseMax(footprint.points[i]);
+  }
+  return footprint;
+}
+
 // Fallback when the normals carry no Manhattan structure: the yaw of the minimum-area rectangle
 // around the footprint (the optimal rectangle has a side on a convex hull edge, so every edge
 // direction is tried).
-double minimumAreaYaw(const PointCloud& points_W, const GravityFrame& gravity) {
-  std::vector<Eigen::Vector2d> footprint;
-  footprint.reserve(points_W.size());
-  for (const Eigen::Vector3f& p : points_W) {
-    const Eigen::Vector3d q = p.cast<double>();
-    footprint.emplace_back(q.dot(gravity.x_h), q.dot(gravity.y_h));
-  }
-  return foldYaw(minimumAreaRectangle(footprint).yaw_rad);
-}
-
-// The footprint's outline, approximately and in O(n): of each 1 cm strip along either horizontal
-// axis, only the points at both ends (every hull vertex lies within a strip's width of these).
-// Rectangles around these are those around the whole footprint to about a centimetre.
-// The points on the horizontal plane (x_h, y_h) and their bounds.
-std::vector<Eigen::Vector2d> projectFootprint(const PointCloud& points_W,
-                                              const GravityFrame& gravity, Eigen::Vector2d* lo,
-                                              Eigen::Vector2d* hi) {
-  std::vector<Eigen::Vector2d> footprint(points_W.size());
-  *lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-  *hi = -*lo;
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    const Eigen::Vector3d q = points_W[i].cast<double>();
-    footprint[i] = Eigen::Vector2d(q.dot(gravity.x_h), q.dot(gravity.y_h));
-    *lo = lo->cwiseMin(footprint[i]);
-    *hi = hi->cwiseMax(footprint[i]);
-  }
-  return footprint;
+double minimumAreaYaw(const Footprint& footprint) {
+  return foldYaw(minimumAreaRectangle(footprint.points).yaw_rad);
 }
 
 // The footprint outline's horizontal normals: the points' occupancy on a horizontal grid, closed
 // and smoothed, and the gradient direction wherever it is steep (a band along the boundary). The
 // grid is coarsened for very large footprints (at most 1000 cells a side).
-std::vector<Eigen::Vector3f> outlineNormals(const PointCloud& points_W, const GravityFrame& gravity,
+std::vector<Eigen::Vector3f> outlineNormals(const Footprint& projected, const GravityFrame& gravity,
                                             double cell_m) {
   std::vector<Eigen::Vector3f> normals;
-  if (points_W.size() < 3 || !(cell_m > 0.0)) return normals;
-  Eigen::Vector2d lo, hi;
-  const std::vector<Eigen::Vector2d> footprint = projectFootprint(points_W, gravity, &lo, &hi);
+  if (projected.points.size() < 3 || !(cell_m > 0.0)) return normals;
+  const std::vector<Eigen::Vector2d>& footprint = projected.points;
+  const Eigen::Vector2d& lo = projected.lo;
+  const Eigen::Vector2d& hi = projected.hi;
   const double span_m = (hi - lo).maxCoeff();
   if (!std::isfinite(span_m)) return normals;
   cell_m = std::max(cell_m, span_m / 1000.0);
@@ -627,10 +624,13 @@ std::vector<Eigen::Vector3f> outlineNormals(const PointCloud& points_W, const Gr
   return normals;
 }
 
-std::vector<Eigen::Vector2d> footprintStripEnds(const PointCloud& points_W,
-                                                const GravityFrame& gravity) {
-  Eigen::Vector2d lo, hi;
-  const std::vector<Eigen::Vector2d> footprint = projectFootprint(points_W, gravity, &lo, &hi);
+// The footprint's outline, approximately and in O(n): of each 1 cm strip along either horizontal
+// axis, only the points at both ends (every hull vertex lies within a strip's width of these).
+// Rectangles around these are those around the whole footprint to about a centimetre.
+std::vector<Eigen::Vector2d> footprintStripEnds(const Footprint& projected) {
+  const std::vector<Eigen::Vector2d>& footprint = projected.points;
+  const Eigen::Vector2d& lo = projected.lo;
+  const Eigen::Vector2d& hi = projected.hi;
   std::vector<Eigen::Vector2d> ends;
   if (footprint.empty()) return ends;
   const double strip_m = std::max(0.01, (hi - lo).maxCoeff() / 2000.0);
@@ -917,11 +917,16 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
   const ManhattanFrameEstimator::Config& mf_config = config_.manhattan;
   const double cos_delta = std::cos(mf_config.inlier_angle_deg * kPi / 180.0);
   // The surface normals, and in the gravity-constrained search those of the footprint's outline.
+  std::optional<Footprint> projected;  // the footprint, projected when first needed
+  const auto footprint = [&]() -> const Footprint& {
+    if (!projected) projected = projectFootprint(points, gravity);
+    return *projected;
+  };
   std::vector<Eigen::Vector3f> with_outline;
   if (mf_config.gravity_constrained && config_.outline_cell_m > 0.0) {
     with_outline = normals;
     const std::vector<Eigen::Vector3f> outline =
-        outlineNormals(points, gravity, config_.outline_cell_m);
+        outlineNormals(footprint(), gravity, config_.outline_cell_m);
     with_outline.insert(with_outline.end(), outline.begin(), outline.end());
   }
   const std::vector<Eigen::Vector3f>& eq3_normals = with_outline.empty() ? normals : with_outline;
@@ -955,7 +960,7 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
       // A yaw that rests on a few normals (cups on a table top, the edge of a chair back) can be
       // far off; its box then covers much more floor than the points need. The footprint's
       // minimum-area rectangle replaces it when that is clearly tighter.
-      const std::vector<Eigen::Vector2d> outline = footprintStripEnds(points, gravity);
+      const std::vector<Eigen::Vector2d> outline = footprintStripEnds(footprint());
       const Rectangle2d tight = minimumAreaRectangle(outline);
       // Only an elongated footprint fixes a yaw (a square seat's rectangle fits at any yaw). The
       // yaws are in the footprint coordinates (x_h, y_h), as GravityFrame::rotationFromYaw's.
@@ -968,7 +973,7 @@ Status BoxEstimator::boxFromNormals(const PointCloud& points,
   } else {
     // Degenerate normals (cylinders, flat slabs, tiny clouds, a table top seen from above): the
     // minimum-area footprint instead.
-    yaw_rad = minimumAreaYaw(points, gravity);
+    yaw_rad = minimumAreaYaw(footprint());
   }
   // The reported frame is the one the box uses (R' of Sec. 3.3), with its own Eq. 3 count.
   mf.yaw_rad = yaw_rad;
