@@ -58,6 +58,32 @@ class JoiningThread {
   std::thread thread_;
 };
 
+// The view's points from the depth rows that `box` grown by margin_m can project to: every point
+// of the box projects inside the hull of its corners' projections when all of them lie in front of
+// the camera; two rows more either side for the rounding of the stored points. All points when a
+// corner lies behind the camera.
+std::pair<size_t, size_t> viewRowsAround(const SegmentSelector::FrameView& view,
+                                         const CameraIntrinsics& K, const Eigen::Isometry3d& T_W_D,
+                                         const OrientedBox& box, double margin_m) {
+  const std::pair<size_t, size_t> all(0, view.points_W.size());
+  if (!K.isValid()) return all;
+  const Eigen::Isometry3d T_D_W = T_W_D.inverse();
+  const Eigen::Vector3d half = 0.5 * box.size_m + Eigen::Vector3d::Constant(margin_m + 1e-3);
+  double v_min = std::numeric_limits<double>::infinity();
+  double v_max = -v_min;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner_B((c & 1) ? half.x() : -half.x(), (c & 2) ? half.y() : -half.y(),
+                                   (c & 4) ? half.z() : -half.z());
+    const Eigen::Vector3d p_D = T_D_W * (box.center_m + box.rotation * corner_B);
+    if (!(p_D.z() > 1e-3)) return all;
+    const double v = K.fy * p_D.y() / p_D.z() + K.cy;
+    v_min = std::min(v_min, v);
+    v_max = std::max(v_max, v);
+  }
+  if (!(v_min > -1e6 && v_max < 1e6)) return all;
+  return view.rows(static_cast<int>(std::floor(v_min)) - 2, static_cast<int>(std::ceil(v_max)) + 3);
+}
+
 std::string detectionLabel(size_t index, const Detection2D& detection) {
   std::ostringstream out;
   out << "detection " << index << " ('" << detection.class_name << "' " << detection.score << ")";
@@ -651,7 +677,12 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
     const Eigen::Matrix3f R_B_W = box.rotation.transpose().cast<float>();
     const Eigen::Vector3f centre = box.center_m.cast<float>();
     const Eigen::Vector3f half = (0.5 * box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
-    for (const Eigen::Vector3f& p_W : context.view->points_W) {
+    const SegmentSelector::FrameView& view = *context.view;
+    const std::pair<size_t, size_t> range =
+        context.frame != nullptr ? viewRowsAround(view, context.frame->K_depth, T_W_D, box, 0.3)
+                                 : std::make_pair(size_t{0}, view.points_W.size());
+    for (size_t k = range.first; k < range.second; ++k) {
+      const Eigen::Vector3f& p_W = view.points_W[k];
       if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) {
         observation->seen_W.push_back(p_W);
       }

@@ -157,7 +157,10 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
   view.points_W.reserve(pixels);
   view.pixels_color.reserve(pixels);
   std::vector<float> row_m(columns);
+  view.stride = stride;
+  view.row_begin.reserve((depth.rows + stride - 1) / stride + 1);
   for (int v = 0; v < depth.rows; v += stride) {
+    view.row_begin.push_back(view.points_D.size());
     ObjectCloudExtractor::depthRowAt(depth, v, 0, stride, columns, min_depth_m, max_depth_m,
                                      row_m.data());
     for (int u = 0; u < depth.cols; u += stride) {
@@ -171,7 +174,18 @@ SegmentSelector::FrameView SegmentSelector::makeFrameView(const RgbdFrame& frame
       view.pixels_color.push_back(pixel);
     }
   }
+  view.row_begin.push_back(view.points_D.size());
   return view;
+}
+
+std::pair<std::size_t, std::size_t> SegmentSelector::FrameView::rows(int first_row,
+                                                                     int end_row) const {
+  if (row_begin.empty() || stride < 1) return {0, points_D.size()};
+  const int rows_stored = static_cast<int>(row_begin.size()) - 1;
+  // Stored rows j hold depth row j * stride: the first j with j * stride >= first_row.
+  const int first = std::min(rows_stored, std::max(0, (first_row + stride - 1) / stride));
+  const int end = std::min(rows_stored, std::max(first, (end_row + stride - 1) / stride));
+  return {row_begin[first], row_begin[end]};
 }
 
 SegmentSelector::DetectionMasks SegmentSelector::detectionMasks(const Detection2D& detection,
@@ -309,7 +323,11 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
       bool touched_valid = false;
       int ring_points = 0;  // the view's points in the ring
       const FrameView& view = *input.view;
-      for (size_t k = 0; k < view.points_D.size(); ++k) {
+      // A registered frame's view points lie at their colour pixels: only the crop's rows.
+      const std::pair<std::size_t, std::size_t> range =
+          frame.registered ? view.rows(crop.y, crop.y + crop.height)
+                           : std::make_pair(std::size_t{0}, view.points_D.size());
+      for (size_t k = range.first; k < range.second; ++k) {
         const cv::Point& pixel = view.pixels_color[k];
         if (!crop.contains(pixel)) continue;
         if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;

@@ -206,6 +206,57 @@ TEST_F(ObjectCutTest, SelectionMasksGivenOrComputedGiveTheSameCut) {
   EXPECT_NE(whole.message().find("whole image"), std::string::npos) << whole.message();
 }
 
+TEST_F(ObjectCutTest, ViewRowsAndTheSurfaceSeenAroundTheBox) {
+  // The frame view's row index: the points of a row range are those of its rows. The surface a
+  // view saw around the object's box (evidence fusion votes on it) is taken from the rows the grown
+  // box can project to: the same points as testing every point of the view, for views from the
+  // front, the side and close above (the box's projection then spans most rows).
+  int index = 0;
+  for (const double angle : {0.0, 50.0, -80.0}) {
+    cv::Mat mask;
+    const RgbdFrame frame = test::renderFrame(scene_, arcPose(angle), index++, &mask);
+    const SegmentSelector::FrameView view = SegmentSelector::makeFrameView(
+        frame, 2, config_.extractor.min_valid_depth_m, config_.extractor.max_valid_depth_m);
+    ASSERT_EQ(view.row_begin.size(), 240u + 1u);
+    for (const auto& rows : {std::make_pair(0, 480), std::make_pair(101, 203),
+                             std::make_pair(-50, 10), std::make_pair(470, 900)}) {
+      const std::pair<size_t, size_t> range = view.rows(rows.first, rows.second);
+      size_t expected_first = view.points_D.size();
+      size_t expected_end = 0;
+      for (size_t k = 0; k < view.points_D.size(); ++k) {
+        const int v = view.pixels_color[k].y;  // registered: the depth pixel
+        if (v >= rows.first && v < rows.second) {
+          expected_first = std::min(expected_first, k);
+          expected_end = std::max(expected_end, k + 1);
+        }
+      }
+      if (expected_end == 0) {
+        EXPECT_EQ(range.first, range.second);
+      } else {
+        EXPECT_EQ(range.first, expected_first);
+        EXPECT_EQ(range.second, expected_end);
+      }
+    }
+    const Detection2D detection = bledDetection(mask, 6);
+    std::vector<PointCloud> clouds;
+    ASSERT_TRUE(ObjectCloudExtractor(config_.extractor).extract(frame, {detection}, &clouds).ok());
+    ObjectMapper mapper(config_, priors_);
+    ObjectObservation observation;
+    ASSERT_TRUE(mapper.processSingleView(frame, detection, clouds[0], &observation, nullptr).ok());
+    const Eigen::Matrix3f R_B_W = observation.box.rotation.transpose().cast<float>();
+    const Eigen::Vector3f centre = observation.box.center_m.cast<float>();
+    const Eigen::Vector3f half =
+        (0.5 * observation.box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
+    PointCloud seen;
+    for (const Eigen::Vector3f& p_W : view.points_W) {
+      if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) seen.push_back(p_W);
+    }
+    EXPECT_GT(seen.size(), clouds[0].size() / 8);
+    EXPECT_LT(seen.size(), view.points_W.size());
+    EXPECT_EQ(observation.seen_W, seen) << "view at " << angle << " degrees";
+  }
+}
+
 TEST_F(ObjectCutTest, DetectionOfOnlyFloorAndWallIsSkippedWithAWarning) {
   cv::Mat mask;
   const RgbdFrame frame = test::renderFrame(scene_, arcPose(0.0), 7, &mask);

@@ -93,6 +93,12 @@ class SegmentSelector {
     PointCloud points_D;
     PointCloud points_W;  // the same points in the world frame (T_W_D), computed once
     std::vector<cv::Point> pixels_color;  // (-1, -1): outside the colour image
+    // The points of depth row v (v a multiple of stride) are [row_begin[v / stride],
+    // row_begin[v / stride + 1]): a caller that needs some rows only skips the others.
+    int stride = 1;
+    std::vector<std::size_t> row_begin;
+    // The points from depth rows [first_row, end_row) (clamped to the image), as an index range.
+    std::pair<std::size_t, std::size_t> rows(int first_row, int end_row) const;
   };
   static FrameView makeFrameView(const RgbdFrame& frame, int stride, double min_depth_m,
                                  double max_depth_m);
