@@ -1,5 +1,9 @@
 #include "multiview_object_detection/pipeline/detection.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
 namespace mvod {
 
 bool maskOrigin(const Detection2D& detection, const cv::Size& image_size, cv::Point* origin) {
@@ -28,6 +32,37 @@ cv::Mat maskInRegion(const Detection2D& detection, const cv::Size& image_size,
   if (overlap.empty()) return out;
   detection.mask(overlap - origin).copyTo(out(overlap - region.tl()));
   return out;
+}
+
+cv::Rect nonZeroBounds(const cv::Mat& mask) {
+  CV_Assert(mask.type() == CV_8UC1);
+  int top = -1;
+  int bottom = -1;
+  int left = mask.cols;
+  int right = -1;
+  for (int y = 0; y < mask.rows; ++y) {
+    const std::uint8_t* row = mask.ptr<std::uint8_t>(y);
+    int x = 0;
+    for (std::uint64_t word = 0; x + 8 <= mask.cols; x += 8) {
+      std::memcpy(&word, row + x, sizeof(word));
+      if (word != 0) break;
+    }
+    while (x < mask.cols && row[x] == 0) ++x;
+    if (x == mask.cols) continue;  // an empty row
+    if (top < 0) top = y;
+    bottom = y;
+    left = std::min(left, x);
+    // From the right, down to the rightmost column found so far (row[x] stops it in any case).
+    int r = mask.cols - 1;
+    for (std::uint64_t word = 0; r - 7 > right; r -= 8) {
+      std::memcpy(&word, row + r - 7, sizeof(word));
+      if (word != 0) break;
+    }
+    while (r > right && row[r] == 0) --r;
+    right = std::max(right, r);
+  }
+  if (top < 0) return cv::Rect();
+  return cv::Rect(left, top, right - left + 1, bottom - top + 1);
 }
 
 void cropMaskToBox(Detection2D* detection, const cv::Size& image_size) {

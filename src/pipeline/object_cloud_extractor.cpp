@@ -189,7 +189,7 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
       masks[i].mask = mask;
       masks[i].origin = origin;
     }
-    masks[i].box = cv::boundingRect(masks[i].mask) + masks[i].origin;
+    masks[i].box = nonZeroBounds(masks[i].mask) + masks[i].origin;
   }
   clouds_D->assign(detections.size(), PointCloud());
 
@@ -280,8 +280,13 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     fillRow(v0, here);
     const double tolerance_base_m = config_.consistency_tolerance_m;
     const double tolerance_per_m2 = 3.0 * config_.depth_step_per_m2;
+    std::vector<size_t> row_masks;  // the masks whose boxes hold row v
     for (int v = v0; v < any_box.br().y; v += stride) {
       fillRow(v + stride, below);
+      row_masks.clear();
+      for (size_t i = 0; i < masks.size(); ++i) {
+        if (v >= masks[i].box.y && v < masks[i].box.br().y) row_masks.push_back(i);
+      }
       const uint8_t* covered_row = covered.ptr<uint8_t>(v - any_box.y);
       for (int u = u0; u < u_end; u += stride) {
         if (covered_row[u - any_box.x] == 0) continue;
@@ -300,7 +305,14 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
         const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
                                   static_cast<float>((v - K_d.cy) * z / K_d.fy),
                                   static_cast<float>(z));
-        assign(u, v, p_D);
+        // assign(), with the masks of this row only.
+        for (const size_t i : row_masks) {
+          const MaskLookup& m = masks[i];
+          if (u < m.box.x || u >= m.box.br().x) continue;
+          if (m.mask.ptr<uint8_t>(v - m.origin.y)[u - m.origin.x] != 0) {
+            (*clouds_D)[i].push_back(p_D);
+          }
+        }
       }
       std::swap(above, here);
       std::swap(here, below);

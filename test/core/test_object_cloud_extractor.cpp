@@ -332,6 +332,35 @@ TEST(ObjectCloudExtractorTest, DepthRowsAreDepthAtPerPixel) {
   }
 }
 
+TEST(ObjectCloudExtractorTest, NonZeroBoundsIsOpenCvsBoundingRect) {
+  // Blobs and single pixels anywhere (at the borders, in the last bytes of a row), widths that are
+  // not multiples of eight, empty and full masks, views into a larger image: cv::boundingRect's
+  // rectangle.
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int cols = 1 + static_cast<int>(rng() % 90);
+    const int rows = 1 + static_cast<int>(rng() % 40);
+    cv::Mat image(rows + 4, cols + 5, CV_8UC1, cv::Scalar(0));
+    cv::Mat mask = image(cv::Rect(2, 1, cols, rows));
+    const int kind = trial % 5;
+    if (kind == 1) mask.setTo(7);
+    if (kind == 2)
+      mask.at<uint8_t>(static_cast<int>(rng() % rows), static_cast<int>(rng() % cols)) = 1;
+    if (kind == 3) {
+      cv::circle(mask, cv::Point(static_cast<int>(rng() % cols), static_cast<int>(rng() % rows)),
+                 1 + static_cast<int>(rng() % 12), cv::Scalar(255), cv::FILLED);
+    }
+    if (kind == 4) {
+      for (int k = 0; k < 3; ++k) {
+        mask.at<uint8_t>(static_cast<int>(rng() % rows), static_cast<int>(rng() % cols)) = 200;
+      }
+      mask.at<uint8_t>(rows - 1, cols - 1) = 3;
+    }
+    image.col(0).setTo(255);  // outside the view: not counted
+    ASSERT_EQ(nonZeroBounds(mask), cv::boundingRect(mask)) << "trial " << trial;
+  }
+}
+
 // Two cameras (7-Scenes, Kinect without registration): colour at another resolution and focal
 // length, offset by T_C_D. The extractor must select exactly the depth points whose projection into
 // the colour image lands in the mask.

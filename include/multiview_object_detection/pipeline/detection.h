@@ -30,6 +30,9 @@ bool maskOrigin(const Detection2D& detection, const cv::Size& image_size, cv::Po
 // not reach. All zeros when maskOrigin() is false.
 cv::Mat maskInRegion(const Detection2D& detection, const cv::Size& image_size,
                      const cv::Rect& region);
+// The bounding rectangle of a CV_8UC1 mask's non-zero pixels (empty: Rect()), as cv::boundingRect
+// gives it, skipping zero runs eight bytes at a time (most of an image-sized mask is zero).
+cv::Rect nonZeroBounds(const cv::Mat& mask);
 // Makes an image-sized mask box-sized (a copy of the box's pixels); other masks are left as they
 // are.
 void cropMaskToBox(Detection2D* detection, const cv::Size& image_size);
