@@ -247,9 +247,11 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   Eigen::Vector3d lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d upper = -lower;
   std::vector<char> usable(points.size(), 0);
+  std::vector<Eigen::Vector3f> transformed_points(points.size());  // each transformed once
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].allFinite() || (log_transform && !(points[i].z() > 0.0f))) continue;
-    const Eigen::Vector3d q = transformed(points[i]).cast<double>();
+    transformed_points[i] = transformed(points[i]);
+    const Eigen::Vector3d q = transformed_points[i].cast<double>();
     if (!q.allFinite()) continue;
     usable[i] = 1;
     lower = lower.cwiseMin(q);
@@ -267,7 +269,7 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!usable[i]) continue;
     const Eigen::Vector3d cell =
-        ((transformed(points[i]).cast<double>() - lower) / resolution).array().floor();
+        ((transformed_points[i].cast<double>() - lower) / resolution).array().floor();
     keyed.emplace_back(
         morton(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
                static_cast<std::int64_t>(cell.z())),
