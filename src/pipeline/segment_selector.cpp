@@ -188,6 +188,120 @@ std::pair<std::size_t, std::size_t> SegmentSelector::FrameView::rows(int first_r
   return {row_begin[first], row_begin[end]};
 }
 
+namespace {
+
+// Segment adjacency (adjacent[a][b]: a point of a and one of b lie in the same or neighbouring
+// cells of cell_m) on a dense grid of the points' cells, each holding a bit per segment, for up to
+// 64 segments over at most 2^24 cells; false (nothing done) otherwise. The cells are voxelKeyOf's,
+// so the adjacency is that of the packed-key search.
+bool segmentAdjacencyOnGrid(const PointCloud& points, const std::vector<std::vector<int>>& segments,
+                            double cell_m, std::vector<std::vector<char>>* adjacent) {
+  const int num_segments = static_cast<int>(segments.size());
+  if (num_segments > 64 || num_segments == 0) return false;
+  const double inv = 1.0 / cell_m;
+  constexpr double kMaxCell = 1 << 20;  // voxelKeyOf's fields: no aliasing below this
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  std::vector<Eigen::Array3i> cells;  // per point of the segments, in segment order
+  for (const std::vector<int>& segment : segments) {
+    for (const int i : segment) {
+      const Eigen::Vector3f& p = points[i];
+      Eigen::Array3i c;
+      for (int d = 0; d < 3; ++d) {
+        const double index = std::floor(p[d] * inv);
+        if (!(std::abs(index) < kMaxCell)) return false;
+        c[d] = static_cast<int>(index);
+      }
+      lo = lo.min(c);
+      hi = hi.max(c);
+      cells.push_back(c);
+    }
+  }
+  if (cells.empty()) return false;
+  const Eigen::Array3i dims = hi - lo + 3;  // a margin of one cell for the neighbours
+  if (!(static_cast<double>(dims[0]) * dims[1] * dims[2] <= 16.0 * 1024 * 1024)) return false;
+  const std::int64_t stride_y = dims[0];
+  const std::int64_t stride_z = static_cast<std::int64_t>(dims[0]) * dims[1];
+  std::vector<std::uint64_t> grid(static_cast<std::size_t>(stride_z) * dims[2], 0);
+  std::vector<std::int64_t> occupied;
+  std::size_t k = 0;
+  for (int s = 0; s < num_segments; ++s) {
+    for (std::size_t n = 0; n < segments[s].size(); ++n, ++k) {
+      const Eigen::Array3i r = cells[k] - lo + 1;
+      const std::int64_t cell = r[2] * stride_z + r[1] * stride_y + r[0];
+      if (grid[cell] == 0) occupied.push_back(cell);
+      grid[cell] |= std::uint64_t{1} << s;
+    }
+  }
+  std::vector<std::uint64_t> touching(num_segments, 0);
+  for (const std::int64_t cell : occupied) {
+    std::uint64_t around = 0;
+    for (int dz = -1; dz <= 1; ++dz) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) around |= grid[cell + dz * stride_z + dy * stride_y + dx];
+      }
+    }
+    for (std::uint64_t here = grid[cell]; here != 0; here &= here - 1) {
+      int a = 0;
+      while (((here >> a) & 1u) == 0) ++a;
+      touching[a] |= around;
+    }
+  }
+  for (int a = 0; a < num_segments; ++a) {
+    for (int b = 0; b < num_segments; ++b) (*adjacent)[a][b] = (touching[a] >> b) & 1u;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::vector<char>> SegmentSelector::segmentAdjacency(
+    const PointCloud& points, const std::vector<std::vector<int>>& segments, double cell_m) {
+  const int num_segments = static_cast<int>(segments.size());
+  std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
+  if (segmentAdjacencyOnGrid(points, segments, cell_m, &adjacent)) return adjacent;
+  // The (cell, segment) pairs radix-sorted and made unique (packed keys are non-negative, so
+  // their order as unsigned is theirs); each occupied cell is then a range of segments, found by
+  // key.
+  std::vector<std::pair<std::uint64_t, int>> cell_segment;
+  cell_segment.reserve(points.size());
+  for (int s = 0; s < num_segments; ++s) {
+    for (const int i : segments[s]) {
+      cell_segment.emplace_back(static_cast<std::uint64_t>(voxelKeyOf(points[i], cell_m)), s);
+    }
+  }
+  radixSortByKey(&cell_segment);  // stable: a cell's segments stay in ascending order
+  cell_segment.erase(std::unique(cell_segment.begin(), cell_segment.end()), cell_segment.end());
+  std::vector<std::size_t> cell_begin;
+  FlatHashMap<std::uint64_t, int> cell_of_key;  // key -> index into cell_begin
+  for (std::size_t k = 0; k < cell_segment.size(); ++k) {
+    if (k == 0 || cell_segment[k].first != cell_segment[k - 1].first) {
+      cell_of_key[cell_segment[k].first] = static_cast<int>(cell_begin.size());
+      cell_begin.push_back(k);
+    }
+  }
+  cell_begin.push_back(cell_segment.size());
+  for (std::size_t c = 0; c + 1 < cell_begin.size(); ++c) {
+    const std::int64_t key = static_cast<std::int64_t>(cell_segment[cell_begin[c]].first);
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it =
+              cell_of_key.find(static_cast<std::uint64_t>(offsetVoxelKey(key, dx, dy, dz)));
+          if (it == cell_of_key.end()) continue;
+          const std::size_t d = static_cast<std::size_t>(it->second);
+          for (std::size_t a = cell_begin[c]; a < cell_begin[c + 1]; ++a) {
+            for (std::size_t b = cell_begin[d]; b < cell_begin[d + 1]; ++b) {
+              adjacent[cell_segment[a].second][cell_segment[b].second] = 1;
+            }
+          }
+        }
+      }
+    }
+  }
+  return adjacent;
+}
+
 SegmentSelector::DetectionMasks SegmentSelector::detectionMasks(const Detection2D& detection,
                                                                 const cv::Size& image_size) const {
   DetectionMasks masks;
@@ -514,46 +628,8 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
   }
 
   // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
-  // The (cell, segment) pairs radix-sorted and made unique (packed keys are non-negative, so their
-  // order as unsigned is theirs); each occupied cell is then a range of segments, found by key.
-  std::vector<std::pair<std::uint64_t, int>> cell_segment;
-  cell_segment.reserve(points.size());
-  for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s]) {
-      cell_segment.emplace_back(
-          static_cast<std::uint64_t>(voxelKeyOf(points[i], config_.adjacency_distance_m)), s);
-    }
-  }
-  radixSortByKey(&cell_segment);  // stable: a cell's segments stay in ascending order
-  cell_segment.erase(std::unique(cell_segment.begin(), cell_segment.end()), cell_segment.end());
-  std::vector<std::size_t> cell_begin;
-  FlatHashMap<std::uint64_t, int> cell_of_key;  // key -> index into cell_begin
-  for (std::size_t k = 0; k < cell_segment.size(); ++k) {
-    if (k == 0 || cell_segment[k].first != cell_segment[k - 1].first) {
-      cell_of_key[cell_segment[k].first] = static_cast<int>(cell_begin.size());
-      cell_begin.push_back(k);
-    }
-  }
-  cell_begin.push_back(cell_segment.size());
-  std::vector<std::vector<char>> adjacent(num_segments, std::vector<char>(num_segments, 0));
-  for (std::size_t c = 0; c + 1 < cell_begin.size(); ++c) {
-    const std::int64_t key = static_cast<std::int64_t>(cell_segment[cell_begin[c]].first);
-    for (int dx = -1; dx <= 1; ++dx) {
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it =
-              cell_of_key.find(static_cast<std::uint64_t>(offsetVoxelKey(key, dx, dy, dz)));
-          if (it == cell_of_key.end()) continue;
-          const std::size_t d = static_cast<std::size_t>(it->second);
-          for (std::size_t a = cell_begin[c]; a < cell_begin[c + 1]; ++a) {
-            for (std::size_t b = cell_begin[d]; b < cell_begin[d + 1]; ++b) {
-              adjacent[cell_segment[a].second][cell_segment[b].second] = 1;
-            }
-          }
-        }
-      }
-    }
-  }
+  const std::vector<std::vector<char>> adjacent =
+      segmentAdjacency(points, segments, config_.adjacency_distance_m);
 
   // ---- Grow from the seed: touching segments join while the union stays plausible in size.
   double max_height_m = std::numeric_limits<double>::infinity();

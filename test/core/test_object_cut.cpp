@@ -9,6 +9,7 @@
 
 #include "box_scene.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/voxel_key.h"
 #include "part_scene.h"
 
 namespace mvod {
@@ -254,6 +255,52 @@ TEST_F(ObjectCutTest, ViewRowsAndTheSurfaceSeenAroundTheBox) {
     EXPECT_GT(seen.size(), clouds[0].size() / 8);
     EXPECT_LT(seen.size(), view.points_W.size());
     EXPECT_EQ(observation.seen_W, seen) << "view at " << angle << " degrees";
+  }
+}
+
+TEST(SegmentAdjacency, NeighbouringCellsAsDefined) {
+  // Random segments of random points (a few large, many small; around the origin, so cells of
+  // both signs), 9 and 100 segments (the dense grid's path and the sorted keys' path), and a
+  // cloud too wide for the grid: a touches b where points of the two lie in the same or in
+  // neighbouring voxelKeyOf cells.
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<float> uniform(-0.5f, 0.5f);
+  for (const int num_segments : {9, 64, 65, 100}) {
+    for (const float spread : {1.f, 3e5f}) {
+      PointCloud points;
+      std::vector<std::vector<int>> segments(num_segments);
+      for (int s = 0; s < num_segments; ++s) {
+        const Eigen::Vector3f centre =
+            0.4f * Eigen::Vector3f(uniform(rng), uniform(rng), uniform(rng));
+        const int size = s % 7 == 0 ? 300 : 1 + static_cast<int>(rng() % 20);
+        for (int k = 0; k < size; ++k) {
+          segments[s].push_back(static_cast<int>(points.size()));
+          points.push_back(centre +
+                           0.08f * Eigen::Vector3f(uniform(rng), uniform(rng), uniform(rng)));
+        }
+      }
+      if (spread > 1.f) points[segments[0][0]] = Eigen::Vector3f(spread, 0.f, 0.f);
+      const double cell_m = 0.03;
+      const std::vector<std::vector<char>> adjacent =
+          SegmentSelector::segmentAdjacency(points, segments, cell_m);
+      std::vector<Eigen::Vector3i> cells;
+      for (const Eigen::Vector3f& p : points) cells.push_back(unpackVoxel(voxelKeyOf(p, cell_m)));
+      int touching = 0;
+      for (int a = 0; a < num_segments; ++a) {
+        for (int b = 0; b < num_segments; ++b) {
+          bool expected = false;
+          for (const int i : segments[a]) {
+            for (const int j : segments[b]) {
+              expected = expected || (cells[i] - cells[j]).cwiseAbs().maxCoeff() <= 1;
+            }
+          }
+          ASSERT_EQ(adjacent[a][b] != 0, expected)
+              << a << " " << b << " of " << num_segments << ", spread " << spread;
+          touching += expected && a != b;
+        }
+      }
+      EXPECT_GE(touching, num_segments / 2);  // pairs, both ways
+    }
   }
 }
 

@@ -116,6 +116,12 @@ class SegmentSelector {
   };
   DetectionMasks detectionMasks(const Detection2D& detection, const cv::Size& image_size) const;
 
+  // adjacent[a][b]: a point of segment a and one of segment b lie in the same or in neighbouring
+  // cells of cell_m (voxelKeyOf's cells; a segment touches itself). On a dense grid of per-cell
+  // segment bits for up to 64 segments over at most 2^24 cells, else by sorted packed cell keys.
+  static std::vector<std::vector<char>> segmentAdjacency(
+      const PointCloud& points, const std::vector<std::vector<int>>& segments, double cell_m);
+
   struct Input {
     const PointCloud* points_D = nullptr;  // the detection's cloud, depth-camera frame
     const std::vector<std::vector<int>>* segments = nullptr;  // indices into points_D
