@@ -585,20 +585,30 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
     const float floor_m = static_cast<float>(floor_.floorHeight_m());
     const float clearance_m = static_cast<float>(config_.floor.clearance_m);
     const float per_m2 = static_cast<float>(config_.floor.clearance_per_m2);
+    // With the filter, its pass-through in the same pass: one copy of the cloud, not two.
+    const bool pass_through = config_.filter.enable;
+    const double min_depth_m = config_.filter.min_depth_m;
+    const double max_depth_m = config_.filter.max_depth_m;
     above_floor_D.reserve(points_D.size());
+    size_t above = 0;
     for (const Eigen::Vector3f& p : points_D) {
       const float height_m = up_D.dot(p) + up_offset - floor_m;
-      if (height_m >= clearance_m + per_m2 * p.z() * p.z()) above_floor_D.push_back(p);
+      if (!(height_m >= clearance_m + per_m2 * p.z() * p.z())) continue;
+      ++above;
+      if (!pass_through || PointCloudFilter::inDepthRange(p, min_depth_m, max_depth_m)) {
+        above_floor_D.push_back(p);
+      }
     }
-    if (above_floor_D.empty()) {
+    if (above == 0) {
       stage.filter_ms += msSince(t);
       return Status::Error("every point lies on the floor (" + std::to_string(points_D.size()) +
                            " points)");
     }
     input_D = &above_floor_D;
   }
-  const PointCloud filtered_D =
-      config_.filter.enable ? filter_.filterCameraFrame(*input_D) : *input_D;
+  const PointCloud filtered_D = !config_.filter.enable ? *input_D
+                                : floorCutActive()     ? filter_.filterPassedThrough(*input_D)
+                                                       : filter_.filterCameraFrame(*input_D);
   stage.filter_ms += msSince(t);
   if (static_cast<int>(filtered_D.size()) < config_.min_object_points) {
     return Status::Error("only " + std::to_string(filtered_D.size()) + " of " +

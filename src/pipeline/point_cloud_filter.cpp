@@ -86,9 +86,12 @@ PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const
   if (!config_.enable) return points_C;
   // Sec. 3.2: depth range first (cheap, removes the noisiest far points), then the 0.01 m grid,
   // then outliers on the uniform-density cloud.
-  const PointCloud in_range = passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m);
-  const PointCloud voxelized = voxelize(in_range, config_.voxel_leaf_size_m);
-  return removeOutliers(voxelized);
+  return filterPassedThrough(passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m));
+}
+
+PointCloud PointCloudFilter::filterPassedThrough(const PointCloud& in_range_C) const {
+  if (!config_.enable) return in_range_C;
+  return removeOutliers(voxelize(in_range_C, config_.voxel_leaf_size_m));
 }
 
 PointCloud PointCloudFilter::removeOutliers(const PointCloud& voxelized) const {
@@ -656,7 +659,7 @@ PointCloud PointCloudFilter::passThroughDepth(const PointCloud& points_C, double
   PointCloud out;
   out.reserve(points_C.size());
   for (const Eigen::Vector3f& p : points_C) {
-    if (p.allFinite() && p.z() >= min_depth_m && p.z() <= max_depth_m) out.push_back(p);
+    if (inDepthRange(p, min_depth_m, max_depth_m)) out.push_back(p);
   }
   return out;
 }

@@ -49,6 +49,13 @@ class PointCloudFilter {
 
   // Single view, camera frame: pass-through on z, voxel grid, outlier removal.
   PointCloud filterCameraFrame(const PointCloud& points_C) const;
+  // The same after the pass-through, for a caller that applied it already (inDepthRange) in a pass
+  // of its own over the points.
+  PointCloud filterPassedThrough(const PointCloud& in_range_C) const;
+  // The pass-through's test: finite, with depth (z) in [min_depth_m, max_depth_m].
+  static bool inDepthRange(const Eigen::Vector3f& p_C, double min_depth_m, double max_depth_m) {
+    return p_C.allFinite() && p_C.z() >= min_depth_m && p_C.z() <= max_depth_m;
+  }
   // Fused multi-view cloud, world frame (Eq. 7): voxel grid and outlier removal.
   // on_grid_m: the voxel size the cloud already lies on (the object database keeps fused clouds on
   // its fusion grid, anchored at the origin like this one); when it equals voxel_leaf_size_m the
