@@ -55,16 +55,16 @@ namespace {
 // The distinct voxel keys of points_W, ascending (packed keys are non-negative: their order as
 // unsigned is their order), radix-sorted instead of hashed.
 std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
-  std::vector<std::pair<std::uint64_t, bool>> keyed;
+  std::vector<std::uint64_t> keyed;
   keyed.reserve(points_W.size());
   for (const Eigen::Vector3f& p : points_W) {
-    keyed.emplace_back(static_cast<std::uint64_t>(voxelKeyOf(p, voxel_size_m)), false);
+    keyed.push_back(static_cast<std::uint64_t>(voxelKeyOf(p, voxel_size_m)));
   }
-  radixSortByKey(&keyed);
+  radixSortKeys(&keyed);
   std::vector<std::int64_t> keys;
   keys.reserve(keyed.size());
-  for (const auto& entry : keyed) {
-    const std::int64_t key = static_cast<std::int64_t>(entry.first);
+  for (const std::uint64_t entry : keyed) {
+    const std::int64_t key = static_cast<std::int64_t>(entry);
     if (keys.empty() || keys.back() != key) keys.push_back(key);
   }
   return keys;

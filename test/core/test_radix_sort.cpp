@@ -77,4 +77,27 @@ TEST(RadixSort, NonNegativeDoublesInStdSortsOrder) {
   }
 }
 
+TEST(RadixSort, KeysInStdSortsOrder) {
+  // Packed voxel keys of an object (a few low bits of each field vary), full 64-bit keys, one
+  // key repeated, and none.
+  std::mt19937_64 rng(9);
+  std::uniform_int_distribution<int> near(-60, 60);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<std::uint64_t> keys;
+    for (int i = 0; i < 20000; ++i) {
+      keys.push_back(trial == 0   ? static_cast<std::uint64_t>(packVoxel(
+                                        Eigen::Vector3i(near(rng), 500 + near(rng), near(rng))))
+                     : trial == 1 ? rng()
+                                  : std::uint64_t{12345});
+    }
+    std::vector<std::uint64_t> expected = keys;
+    std::sort(expected.begin(), expected.end());
+    radixSortKeys(&keys);
+    ASSERT_EQ(keys, expected) << "trial " << trial;
+  }
+  std::vector<std::uint64_t> none;
+  radixSortKeys(&none);
+  EXPECT_TRUE(none.empty());
+}
+
 }  // namespace mvod

@@ -51,6 +51,37 @@ void radixSortByKey(std::vector<std::pair<std::uint64_t, Value>>* items) {
   }
 }
 
+// Sorts 64-bit keys ascending (LSD radix over the bits in which they differ).
+inline void radixSortKeys(std::vector<std::uint64_t>* keys) {
+  constexpr int kDigitBits = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+  const std::size_t n = keys->size();
+  if (n < 2) return;
+  std::uint64_t any_set = 0;
+  std::uint64_t all_set = ~std::uint64_t{0};
+  for (const std::uint64_t key : *keys) {
+    any_set |= key;
+    all_set &= key;
+  }
+  const std::uint64_t varying = any_set & ~all_set;
+  std::vector<std::uint64_t> buffer(n);
+  std::array<std::size_t, kBuckets> count;
+  for (int shift = 0; shift < 64; shift += kDigitBits) {
+    while (shift < 64 && ((varying >> shift) & 1u) == 0) ++shift;
+    if (shift >= 64) break;
+    count.fill(0);
+    for (const std::uint64_t key : *keys) ++count[(key >> shift) & (kBuckets - 1)];
+    std::size_t total = 0;
+    for (std::size_t& c : count) {
+      const std::size_t here = c;
+      c = total;
+      total += here;
+    }
+    for (const std::uint64_t key : *keys) buffer[count[(key >> shift) & (kBuckets - 1)]++] = key;
+    keys->swap(buffer);
+  }
+}
+
 // Sorts values ascending, as std::sort does: where every value is finite and non-negative, and
 // none is -0.0, by an LSD radix sort of their bit patterns (whose unsigned order is then the
 // values' order, and equal values have equal bits, so the result is std::sort's to the bit);
@@ -64,34 +95,10 @@ inline void sortNonNegative(std::vector<double>* values) {
     std::sort(values->begin(), values->end());
     return;
   }
-  constexpr int kDigitBits = 11;
-  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
   const std::size_t n = values->size();
   std::vector<std::uint64_t> keys(n);
   std::memcpy(keys.data(), values->data(), n * sizeof(double));
-  std::uint64_t any_set = 0;
-  std::uint64_t all_set = ~std::uint64_t{0};
-  for (const std::uint64_t key : keys) {
-    any_set |= key;
-    all_set &= key;
-  }
-  const std::uint64_t varying = any_set & ~all_set;
-  std::vector<std::uint64_t> buffer(n);
-  std::array<std::size_t, kBuckets> count;
-  for (int shift = 0; shift < 64; shift += kDigitBits) {
-    while (shift < 64 && ((varying >> shift) & 1u) == 0) ++shift;
-    if (shift >= 64) break;
-    count.fill(0);
-    for (const std::uint64_t key : keys) ++count[(key >> shift) & (kBuckets - 1)];
-    std::size_t total = 0;
-    for (std::size_t& c : count) {
-      const std::size_t here = c;
-      c = total;
-      total += here;
-    }
-    for (const std::uint64_t key : keys) buffer[count[(key >> shift) & (kBuckets - 1)]++] = key;
-    keys.swap(buffer);
-  }
+  radixSortKeys(&keys);
   std::memcpy(values->data(), keys.data(), n * sizeof(double));
 }
 
