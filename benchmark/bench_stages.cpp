@@ -7,9 +7,9 @@
 #include <cmath>
 #include <random>
 
-#include "multiview_object_detection/pipeline/lccp_segmenter.h"
-#include "multiview_object_detection/pipeline/manhattan_frame.h"
-#include "multiview_object_detection/pipeline/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 namespace {

@@ -15,7 +15,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/io/image_io.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 namespace {

@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "multiview_object_detection/pipeline/oriented_box.h"
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
 namespace {

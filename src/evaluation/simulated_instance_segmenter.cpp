@@ -19,7 +19,7 @@
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
 #include "multiview_object_detection/io/image_io.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 namespace {

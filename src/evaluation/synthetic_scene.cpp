@@ -17,7 +17,7 @@
 
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 namespace {

@@ -16,7 +16,7 @@
 #include <set>
 #include <sstream>
 
-#include "multiview_object_detection/pipeline/voxel_key.h"
+#include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace mvod {
 namespace {

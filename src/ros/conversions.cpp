@@ -12,8 +12,8 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
-#include "multiview_object_detection/pipeline/oriented_box.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
 namespace {

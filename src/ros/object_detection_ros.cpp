@@ -3,7 +3,7 @@
 #include <boost/bind/bind.hpp>
 #include <utility>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/detections_buffer.h"
 #include "multiview_object_detection/ros/keyframe_buffer.h"
 #include "multiview_object_detection/ros/keyframe_worker.h"

@@ -27,7 +27,7 @@
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
 namespace fs = std::filesystem;

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
-#include "multiview_object_detection/pipeline/detection.h"
-#include "multiview_object_detection/pipeline/rgbd_frame.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
 namespace test {

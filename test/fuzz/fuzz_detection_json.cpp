@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace {
 

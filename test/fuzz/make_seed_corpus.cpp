@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/voxel_key.h"
+#include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace fs = std::filesystem;
 

@@ -12,7 +12,7 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/rgbd_frame.h"
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
 

@@ -13,7 +13,7 @@
 
 #include <cstdint>
 
-#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
 
 namespace mvod {
 

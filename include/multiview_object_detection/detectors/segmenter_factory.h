@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
 
 namespace mvod {
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/pipeline/detection.h"
-#include "multiview_object_detection/pipeline/rgbd_frame.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/common.h"
-#include "multiview_object_detection/pipeline/object_database.h"
-#include "multiview_object_detection/pipeline/oriented_box.h"
+#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
 

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
 
 namespace mvod {
 

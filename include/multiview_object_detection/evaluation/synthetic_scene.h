@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/detection.h"
-#include "multiview_object_detection/pipeline/oriented_box.h"
-#include "multiview_object_detection/pipeline/rgbd_frame.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/common.h"
+#include "multiview_object_detection/pipeline/types/common.h"
 
 namespace mvod {
 

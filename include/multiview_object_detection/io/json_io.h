@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
 namespace mvod {

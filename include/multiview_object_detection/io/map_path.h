@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "multiview_object_detection/pipeline/common.h"
+#include "multiview_object_detection/pipeline/types/common.h"
 
 namespace mvod {
 

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/common.h"
-#include "multiview_object_detection/pipeline/detection.h"
-#include "multiview_object_detection/pipeline/object_database.h"
-#include "multiview_object_detection/pipeline/rgbd_frame.h"
+#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
+#include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/detection.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/pending_frames.h"
 

@@ -16,7 +16,7 @@
 #include <mutex>
 #include <string>
 
-#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/stages/keyframe_selector.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"

@@ -16,7 +16,7 @@
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/detections_buffer.h"

@@ -12,8 +12,8 @@
 #include <set>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/detection.h"
-#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
+#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 

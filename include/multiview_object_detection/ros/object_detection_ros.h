@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
-#include "multiview_object_detection/pipeline/object_database.h"
+#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 

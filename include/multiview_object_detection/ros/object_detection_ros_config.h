@@ -6,7 +6,7 @@
 #include <string>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
-#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/stages/keyframe_selector.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
 namespace mvod {

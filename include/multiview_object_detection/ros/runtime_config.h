@@ -7,7 +7,7 @@
 
 #include <mutex>
 
-#include "multiview_object_detection/pipeline/keyframe_selector.h"
+#include "multiview_object_detection/pipeline/stages/keyframe_selector.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 
 namespace mvod {

@@ -1,0 +1,600 @@
+#include "multiview_object_detection/pipeline/map/object_database.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/utils/radix_sort.h"
+#include "multiview_object_detection/pipeline/utils/voxel_key.h"
+
+namespace mvod {
+
+Status ObjectDatabase::Config::isValid() const {
+  if (!(std::isfinite(fusion_voxel_size_m) && fusion_voxel_size_m > 0.0)) {
+    return Status::Error("fusion_voxel_size_m must be a finite value > 0 (got " +
+                         std::to_string(fusion_voxel_size_m) + ")");
+  }
+  if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
+    return Status::Error("min_overlap_to_fuse must be in [0, 1]");
+  }
+  if (!(same_class_overlap_voxels >= 0 && same_class_overlap_voxels <= 3)) {
+    return Status::Error("same_class_overlap_voxels must be in [0, 3] (got " +
+                         std::to_string(same_class_overlap_voxels) + ")");
+  }
+  if (!(std::isfinite(surface_band_m) && surface_band_m >= 0.0)) {
+    return Status::Error("surface_band_m must be a finite value >= 0 (got " +
+                         std::to_string(surface_band_m) + ")");
+  }
+  const Status amodal_status = amodal.isValid();
+  if (!amodal_status) return amodal_status;
+  if (fusion != "paper" && fusion != "evidence") {
+    return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
+  }
+  return Status::Ok();
+}
+
+std::string ObjectDatabase::Config::print() const {
+  std::ostringstream out;
+  out << "fusion_voxel_size_m: " << fusion_voxel_size_m << "\n"
+      << "no_fusion_within_keyframe: " << (no_fusion_within_keyframe ? "true" : "false") << "\n"
+      << "disable_fusion: " << (disable_fusion ? "true" : "false") << "\n"
+      << "fusion: " << fusion << "\n"
+      << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n"
+      << "same_class_overlap_voxels: " << same_class_overlap_voxels << "\n"
+      << "surface_band_m: " << surface_band_m << "\n";
+  std::istringstream amodal_lines(amodal.print());
+  for (std::string line; std::getline(amodal_lines, line);) out << "amodal." << line << "\n";
+  return out.str();
+}
+
+namespace {
+
+// The distinct voxel keys of points_W, ascending (packed keys are non-negative: their order as
+// unsigned is their order), radix-sorted instead of hashed.
+std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
+  std::vector<std::uint64_t> keyed;
+  keyed.reserve(points_W.size());
+  for (const Eigen::Vector3f& p : points_W) {
+    keyed.push_back(static_cast<std::uint64_t>(voxelKeyOf(p, voxel_size_m)));
+  }
+  radixSortKeys(&keyed);
+  std::vector<std::int64_t> keys;
+  keys.reserve(keyed.size());
+  for (const std::uint64_t entry : keyed) {
+    const std::int64_t key = static_cast<std::int64_t>(entry);
+    if (keys.empty() || keys.back() != key) keys.push_back(key);
+  }
+  return keys;
+}
+
+void countInside(const std::vector<std::int64_t>& inside, EvidenceMap* evidence) {
+  for (const std::int64_t key : inside) {
+    VoxelEvidence& e = (*evidence)[key];
+    if (e.inside < UINT16_MAX) ++e.inside;
+  }
+}
+
+// The cut's normals into the voxels they lie in (the voxels are in `evidence` already).
+void addNormals(const ObjectObservation& observation, double voxel_size_m, EvidenceMap* evidence) {
+  if (observation.segment_normals_W.size() != observation.segment_W.size()) return;
+  for (size_t i = 0; i < observation.segment_W.size(); ++i) {
+    const Eigen::Vector3f& n = observation.segment_normals_W[i];
+    if (!n.allFinite()) continue;
+    const auto it = evidence->find(voxelKeyOf(observation.segment_W[i], voxel_size_m));
+    if (it != evidence->end()) it->second.normal_sum += n;
+  }
+}
+
+// This view's signed distance of every voxel of the object it sees (the view's cost: the
+// object's voxels, one projection each), over the entries [first, last): each voxel is one entry,
+// so disjoint ranges can run in parallel with the same result.
+void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence,
+                        std::size_t first, std::size_t last) {
+  for (std::size_t position = first; position < last; ++position) {
+    EvidenceMap::value_type& entry = evidence->entry(position);
+    VoxelEvidence& e = entry.second;
+    if (e.sdf_count == UINT16_MAX) continue;
+    const Eigen::Vector3f centre =
+        ((unpackVoxel(entry.first).cast<double>().array() + 0.5) * voxel_size_m)
+            .matrix()
+            .cast<float>();
+    float sdf_m = 0.f;
+    if (!view.signedDistance(centre, &sdf_m)) continue;
+    e.sdf_sum += sdf_m;
+    ++e.sdf_count;
+  }
+}
+
+void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence) {
+  addSignedDistances(view, voxel_size_m, evidence, 0, evidence->size());
+}
+
+// Evidence fusion's class vote: `score` more for `class_name`; the object takes the class with the
+// largest sum. An object without scores yet (a map saved before them) starts from its own class.
+void addClassScore(const std::string& class_name, double score, MapObject* object) {
+  std::map<std::string, double>& scores = object->class_scores;
+  if (scores.empty()) scores[object->class_name] = object->probability * object->observations;
+  scores[class_name] += score;
+  const auto best =
+      std::max_element(scores.begin(), scores.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (best->first != object->class_name) {
+    object->class_name = best->first;
+    object->class_id = cocoClassId(best->first);
+  }
+}
+
+}  // namespace
+
+FusionKeys makeFusionKeys(const PointCloud& segment_W, const PointCloud& seen_W,
+                          double voxel_size_m) {
+  FusionKeys keys;
+  keys.voxel_size_m = voxel_size_m;
+  keys.cut = voxelKeys(segment_W, voxel_size_m);
+  const std::vector<std::int64_t> seen = voxelKeys(seen_W, voxel_size_m);
+  std::set_difference(seen.begin(), seen.end(), keys.cut.begin(), keys.cut.end(),
+                      std::back_inserter(keys.outside));
+  return keys;
+}
+
+bool ObjectDatabase::isSupported(const VoxelEvidence& e) const {
+  if (!(e.inside >= 1 && e.inside >= e.outside)) return false;
+  if (!(config_.surface_band_m > 0.0) || e.sdf_count == 0) return true;
+  return std::abs(e.sdf_sum / e.sdf_count) <= config_.surface_band_m;
+}
+
+std::int64_t ObjectDatabase::voxelKey(const Eigen::Vector3f& p_W) const {
+  return voxelKeyOf(p_W, config_.fusion_voxel_size_m);
+}
+
+Eigen::Vector3f ObjectDatabase::voxelCentre(std::int64_t key) const {
+  return ((unpackVoxel(key).cast<double>().array() + 0.5) * config_.fusion_voxel_size_m)
+      .matrix()
+      .cast<float>();
+}
+
+PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
+                                           std::vector<Eigen::Vector3f>* normals_W) const {
+  // Packed voxel keys are non-negative (63 bits): their order as unsigned is their order.
+  std::vector<std::pair<std::uint64_t, const VoxelEvidence*>> supported;
+  supported.reserve(object.evidence.size());
+  for (const auto& entry : object.evidence) {
+    const VoxelEvidence& e = entry.second;
+    if (isSupported(e)) supported.emplace_back(static_cast<std::uint64_t>(entry.first), &e);
+  }
+  // Hash order is not stable across library versions: key order for reproducible boxes.
+  radixSortByKey(&supported);
+  PointCloud centres;
+  centres.reserve(supported.size());
+  if (normals_W != nullptr) {
+    normals_W->clear();
+    normals_W->reserve(supported.size());
+  }
+  for (const auto& voxel : supported) {
+    centres.push_back(voxelCentre(static_cast<std::int64_t>(voxel.first)));
+    if (normals_W == nullptr) continue;
+    const float norm = voxel.second->normal_sum.norm();
+    if (norm > 1e-6f && std::isfinite(norm)) normals_W->push_back(voxel.second->normal_sum / norm);
+  }
+  return centres;
+}
+
+ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservation& observation,
+                                                          const FusedCloudProcessor& process,
+                                                          bool defer_rebox) {
+  if (observation.keyframe != current_keyframe_) {
+    current_keyframe_ = observation.keyframe;
+    inserted_this_keyframe_.clear();
+  }
+
+  // Eq. 6: the nearest object of the same class, by box-centre distance.
+  FusionResult result;
+  result.distance_m = std::numeric_limits<double>::infinity();
+  MapObject* nearest = nullptr;
+  for (auto& entry : objects_) {
+    MapObject& object = entry.second;
+    if (object.class_name != observation.class_name) continue;
+    if (config_.no_fusion_within_keyframe &&
+        std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
+            inserted_this_keyframe_.end()) {
+      continue;  // Sec. 3.4.1: two detections of one image are two objects.
+    }
+    // A completed box's centre lies in the part no view saw: the views' own box is matched.
+    const double d = (object.seenBox().center_m - observation.box.center_m).norm();
+    if (d < result.distance_m) {
+      result.distance_m = d;
+      nearest = &object;
+    }
+  }
+
+  const double threshold_m = priors_.fusionDistance(observation.class_name);
+  const bool evidence = config_.fusion == "evidence";
+  // Evidence fusion: the voxels of this view's cut and of what it saw around it, computed once
+  // (by the single-view stage, or here).
+  std::shared_ptr<const FusionKeys> keys = observation.fusion_keys;
+  if (evidence && (keys == nullptr || keys->voxel_size_m != config_.fusion_voxel_size_m)) {
+    keys = std::make_shared<const FusionKeys>(
+        makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
+  }
+  const std::vector<std::int64_t> no_keys;
+  const std::vector<std::int64_t>& cut = evidence ? keys->cut : no_keys;
+  bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
+  if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
+    // Not near a same-class object: the object (any class) whose supported voxels hold most of
+    // this cut, if enough of it.
+    double best_overlap = 0.0;
+    MapObject* best_object = nullptr;
+    for (auto& entry : objects_) {
+      MapObject& object = entry.second;
+      if (object.evidence.empty() || object.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
+        continue;
+      }
+      if (config_.no_fusion_within_keyframe &&
+          std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
+              inserted_this_keyframe_.end()) {
+        continue;
+      }
+      if ((object.box.center_m - observation.box.center_m).norm() >
+          0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
+        continue;  // the boxes cannot overlap
+      }
+      // The votes only: a new view's cut may lie in the shell of noise around the surface
+      // (surface_band_m selects the object's voxels, not what it can be matched on).
+      const auto voted = [&object](std::int64_t key) {
+        const auto it = object.evidence.find(key);
+        return it != object.evidence.end() && it->second.inside >= 1 &&
+               it->second.inside >= it->second.outside;
+      };
+      const int reach =
+          object.class_name == observation.class_name ? config_.same_class_overlap_voxels : 0;
+      int shared = 0;
+      for (const std::int64_t key : cut) {
+        if (voted(key)) {
+          ++shared;
+          continue;
+        }
+        if (reach == 0) continue;
+        const Eigen::Vector3i centre = unpackVoxel(key);
+        bool near = false;
+        for (int dx = -reach; dx <= reach && !near; ++dx) {
+          for (int dy = -reach; dy <= reach && !near; ++dy) {
+            for (int dz = -reach; dz <= reach && !near; ++dz) {
+              near = voted(packVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
+            }
+          }
+        }
+        if (near) ++shared;
+      }
+      const double overlap = cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
+      if (overlap > best_overlap) {
+        best_overlap = overlap;
+        best_object = &object;
+      }
+    }
+    if (best_object != nullptr && best_overlap >= config_.min_overlap_to_fuse) {
+      fuse = true;
+      nearest = best_object;
+      result.distance_m = (nearest->seenBox().center_m - observation.box.center_m).norm();
+    }
+  }
+  if (!config_.disable_fusion && fuse) {
+    MapObject& object = *nearest;
+    if (evidence) {
+      // The class: the largest summed probability of the detections fused here.
+      addClassScore(observation.class_name, observation.probability, &object);
+    }
+    // Eq. 8 taken literally: the mean of the new and the stored probability (a running pairwise
+    // mean, which weights recent views more than an average over all views would).
+    object.probability = 0.5 * (observation.probability + object.probability);
+    object.observations += 1;
+    object.last_keyframe = observation.keyframe;
+    object.last_seen_s = observation.stamp_s;
+    const PointCloud* to_process = &object.points_W;  // the paper's fusion: Eq. 7's cloud
+    if (config_.fusion == "evidence") {
+      // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
+      if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
+      object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+      if (object.evidence.empty()) {
+        countInside(voxelKeys(object.segment_W, config_.fusion_voxel_size_m), &object.evidence);
+      }
+      // This view's votes: inside for the voxels of its cut, outside for the voxels it saw surface
+      // in but left out of the cut. Cost: the view's points, not the object's size.
+      countInside(cut, &object.evidence);
+      addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
+      for (const std::int64_t key : keys->outside) {
+        const auto it = object.evidence.find(key);
+        if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
+      }
+      const bool measure = observation.depth_view != nullptr && config_.surface_band_m > 0.0;
+      if (defer_rebox) {
+        const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
+        if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
+        // The keyframe's signed distances (and free space) once per object, however many of its
+        // detections fuse here, with the boxing (in parallel).
+        if (observation.depth_view != nullptr) {
+          pending_depth_views_[object.id] = observation.depth_view;
+        }
+        to_process = nullptr;
+      } else {
+        if (measure) {
+          addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m,
+                             &object.evidence);
+        }
+        rebox(&object, process, observation.depth_view.get());
+        to_process = nullptr;
+      }
+    } else {
+      // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface
+      // bounded.
+      PointCloud merged;
+      merged.reserve(object.points_W.size() + observation.points_W.size());
+      merged.insert(merged.end(), object.points_W.begin(), object.points_W.end());
+      merged.insert(merged.end(), observation.points_W.begin(), observation.points_W.end());
+      object.points_W = PointCloudFilter::voxelize(merged, config_.fusion_voxel_size_m);
+    }
+
+    PointCloud segment_W;
+    OrientedBox box;
+    double yaw_rad = object.yaw_rad;
+    if (process && to_process != nullptr &&
+        process(object.class_name, *to_process, {}, &segment_W, &box, &yaw_rad)) {
+      object.segment_W = std::move(segment_W);
+      object.box = box;
+      object.yaw_rad = yaw_rad;
+    }  // else: nothing usable in the fused cloud, the previous segment and box stay.
+
+    result.decision = Decision::kFused;
+    result.object_id = object.id;
+    return result;
+  }
+
+  MapObject object;
+  object.id = takeNextId();
+  object.class_id = observation.class_id;
+  object.class_name = observation.class_name;
+  object.probability = observation.probability;
+  object.observations = 1;
+  object.segment_W = observation.segment_W;
+  if (evidence) {
+    // The object is what the cut holds; its cloud is the voxels with evidence, as after fusions.
+    object.class_scores[observation.class_name] = observation.probability;
+    countInside(cut, &object.evidence);
+    addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
+    if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
+      addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
+    }
+    object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+    for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
+  } else {
+    object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);
+  }
+  object.box = observation.box;
+  object.yaw_rad = observation.yaw_rad;
+  if (evidence) completeBox(&object, observation.depth_view.get());
+  object.first_keyframe = observation.keyframe;
+  object.last_keyframe = observation.keyframe;
+  object.first_seen_s = observation.stamp_s;
+  object.last_seen_s = observation.stamp_s;
+  inserted_this_keyframe_.push_back(object.id);
+
+  result.decision = Decision::kInserted;
+  result.object_id = object.id;
+  objects_.emplace(object.id, std::move(object));
+  return result;
+}
+
+int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads) {
+  std::vector<MapObject*> pending;
+  std::vector<const DepthView*> views;
+  pending.reserve(pending_rebox_.size());
+  for (const int id : pending_rebox_) {
+    const auto it = objects_.find(id);
+    if (it == objects_.end() || it->second.evidence.empty()) continue;
+    pending.push_back(&it->second);
+    const auto view = pending_depth_views_.find(id);
+    views.push_back(view != pending_depth_views_.end() ? view->second.get() : nullptr);
+  }
+  pending_rebox_.clear();
+  // The keyframe's signed distances first, in chunks of voxels of every object: one large object
+  // (a bed, ~10^5 voxels) would otherwise keep one core busy while the other idles.
+  struct VoxelChunk {
+    std::size_t object;
+    std::size_t first;
+    std::size_t last;
+  };
+  constexpr std::size_t kVoxelsPerChunk = 4096;
+  std::vector<VoxelChunk> chunks;
+  for (std::size_t k = 0; k < pending.size(); ++k) {
+    if (views[k] == nullptr || !(config_.surface_band_m > 0.0)) continue;
+    const std::size_t voxels = pending[k]->evidence.size();
+    for (std::size_t first = 0; first < voxels; first += kVoxelsPerChunk) {
+      chunks.push_back({k, first, std::min(voxels, first + kVoxelsPerChunk)});
+    }
+  }
+  parallelForEach(chunks.size(), threads, [&](std::size_t c) {
+    const VoxelChunk& chunk = chunks[c];
+    addSignedDistances(*views[chunk.object], config_.fusion_voxel_size_m,
+                       &pending[chunk.object]->evidence, chunk.first, chunk.last);
+  });
+  // Then each object's box, largest first, each thread taking the next object as it finishes.
+  // Each job reads and writes its own object only (the map itself does not change meanwhile).
+  std::vector<std::size_t> by_size(pending.size());
+  for (std::size_t k = 0; k < by_size.size(); ++k) by_size[k] = k;
+  std::stable_sort(by_size.begin(), by_size.end(), [&pending](std::size_t a, std::size_t b) {
+    return pending[a]->evidence.size() > pending[b]->evidence.size();
+  });
+  parallelForEach(by_size.size(), threads,
+                  [&](std::size_t j) { rebox(pending[by_size[j]], process, views[by_size[j]]); });
+  pending_depth_views_.clear();
+  return static_cast<int>(pending.size());
+}
+
+void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process,
+                           const DepthView* view) const {
+  std::vector<Eigen::Vector3f> normals;
+  const PointCloud supported = supportedVoxels(*object, &normals);
+  object->points_W.clear();
+  object->points_W.reserve(object->evidence.size());
+  for (const auto& entry : object->evidence) object->points_W.push_back(voxelCentre(entry.first));
+  PointCloud segment_W;
+  OrientedBox box;
+  double yaw_rad = object->yaw_rad;
+  if (process && process(object->class_name, supported, normals, &segment_W, &box, &yaw_rad)) {
+    object->segment_W = std::move(segment_W);
+    object->box = box;
+    object->yaw_rad = yaw_rad;
+    completeBox(object, view);
+  }  // else: the previous box (completed or not) stays.
+}
+
+void ObjectDatabase::completeBox(MapObject* object, const DepthView* view) const {
+  object->box_completed = false;
+  if (!config_.amodal.enable || config_.fusion != "evidence") return;
+  const ClassPrior* prior = priors_.find(object->class_name);
+  if (prior == nullptr || !(prior->amodal_depth_m > 0.0)) return;
+  // Completion works in the box's frame, its third axis up.
+  if (!gravity_up_.isZero() && !(object->box.rotation.col(2).dot(gravity_up_) >= 0.999)) return;
+  const AmodalCompletion completion(config_.amodal);
+  if (object->free_space_cell_m != config_.amodal.cell_size_m) {
+    object->free_space.clear();
+    object->free_space_cell_m = config_.amodal.cell_size_m;
+  }
+  const double depth_m = prior->amodal_depth_m;
+  if (view != nullptr) {
+    completion.countFreeSpace(*view, object->box, depth_m, floor_height_m_, &object->free_space);
+  }
+  if (object->observations < config_.amodal.min_observations) return;
+  const AmodalCompletion::Decision decision =
+      completion.decide(object->box, depth_m, floor_height_m_, object->free_space);
+  if (decision.side == 0) return;
+  object->observed_box = object->box;
+  object->box = AmodalCompletion::complete(object->box, decision, depth_m, floor_height_m_);
+  object->box_completed = true;
+}
+
+bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcessor& process) {
+  const auto into_it = objects_.find(into_id);
+  const auto from_it = objects_.find(from_id);
+  if (into_id == from_id || into_it == objects_.end() || from_it == objects_.end()) return false;
+  MapObject& into = into_it->second;
+  const MapObject& from = from_it->second;
+  if (into.evidence.empty() || from.evidence.empty() ||
+      into.evidence_voxel_size_m != config_.fusion_voxel_size_m ||
+      from.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
+    return false;
+  }
+  const auto saturated = [](std::uint16_t a, std::uint16_t b) {
+    return static_cast<std::uint16_t>(std::min<int>(UINT16_MAX, int{a} + int{b}));
+  };
+  // In key order: the sums do not depend on the hash map's iteration order.
+  std::vector<std::pair<std::uint64_t, const VoxelEvidence*>> voxels;
+  voxels.reserve(from.evidence.size());
+  for (const auto& entry : from.evidence) {
+    voxels.emplace_back(static_cast<std::uint64_t>(entry.first), &entry.second);
+  }
+  radixSortByKey(&voxels);
+  for (const auto& voxel : voxels) {
+    VoxelEvidence& e = into.evidence[static_cast<std::int64_t>(voxel.first)];
+    const VoxelEvidence& f = *voxel.second;
+    e.inside = saturated(e.inside, f.inside);
+    e.outside = saturated(e.outside, f.outside);
+    e.normal_sum += f.normal_sum;
+    e.sdf_sum += f.sdf_sum;
+    e.sdf_count = saturated(e.sdf_count, f.sdf_count);
+  }
+  // The free space both saw around them (on one grid; otherwise into's alone), in key order.
+  if (from.free_space_cell_m == into.free_space_cell_m && into.free_space_cell_m > 0.0) {
+    std::vector<std::pair<std::uint64_t, FreeSpaceCount>> cells;
+    cells.reserve(from.free_space.size());
+    for (const auto& entry : from.free_space) {
+      cells.emplace_back(static_cast<std::uint64_t>(entry.first), entry.second);
+    }
+    radixSortByKey(&cells);
+    for (const auto& cell : cells) {
+      FreeSpaceCount& c = into.free_space[static_cast<std::int64_t>(cell.first)];
+      c.in_view = saturated(c.in_view, cell.second.in_view);
+      c.seen_free = saturated(c.seen_free, cell.second.seen_free);
+    }
+  }
+  // from's class scores (its own class, for a map saved before them) into into's vote.
+  std::map<std::string, double> from_scores = from.class_scores;
+  if (from_scores.empty()) from_scores[from.class_name] = from.probability * from.observations;
+  for (const auto& entry : from_scores) addClassScore(entry.first, entry.second, &into);
+  const int observations = into.observations + from.observations;
+  if (observations > 0) {
+    into.probability =
+        (into.probability * into.observations + from.probability * from.observations) /
+        observations;
+  }
+  into.observations = observations;
+  into.first_keyframe = std::min(into.first_keyframe, from.first_keyframe);
+  into.last_keyframe = std::max(into.last_keyframe, from.last_keyframe);
+  into.first_seen_s = std::min(into.first_seen_s, from.first_seen_s);
+  into.last_seen_s = std::max(into.last_seen_s, from.last_seen_s);
+  remove(from_id);
+  rebox(&into, process, nullptr);
+  return true;
+}
+
+const MapObject* ObjectDatabase::find(int id) const {
+  const auto it = objects_.find(id);
+  return it == objects_.end() ? nullptr : &it->second;
+}
+
+std::vector<const MapObject*> ObjectDatabase::findByClass(const std::string& class_name) const {
+  std::vector<const MapObject*> found;
+  for (const auto& entry : objects_) {
+    if (entry.second.class_name == class_name) found.push_back(&entry.second);
+  }
+  return found;
+}
+
+bool ObjectDatabase::remove(int id) {
+  pending_rebox_.erase(std::remove(pending_rebox_.begin(), pending_rebox_.end(), id),
+                       pending_rebox_.end());
+  pending_depth_views_.erase(id);
+  inserted_this_keyframe_.erase(
+      std::remove(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), id),
+      inserted_this_keyframe_.end());
+  return objects_.erase(id) > 0;
+}
+
+void ObjectDatabase::clear() {
+  objects_.clear();
+  pending_rebox_.clear();
+  pending_depth_views_.clear();
+  inserted_this_keyframe_.clear();
+  current_keyframe_ = -1;
+}
+
+Status ObjectDatabase::setObjects(const std::vector<MapObject>& objects) {
+  std::map<int, MapObject> replaced;
+  int largest_id = 0;
+  for (const MapObject& object : objects) {
+    if (object.id < 0 || object.id > kMaxObjectId) {
+      return Status::Error("object id " + std::to_string(object.id) + " is outside [0, " +
+                           std::to_string(kMaxObjectId) + "]");
+    }
+    if (!replaced.emplace(object.id, object).second) {
+      return Status::Error("object id " + std::to_string(object.id) + " is repeated");
+    }
+    largest_id = std::max(largest_id, object.id);
+  }
+  clear();
+  objects_ = std::move(replaced);
+  next_id_ = std::max(next_id_, largest_id + 1);
+  return Status::Ok();
+}
+
+int ObjectDatabase::takeNextId() {
+  if (next_id_ <= kMaxObjectId) return next_id_++;
+  // After a billion objects: the smallest id not in use (ids are reused only here).
+  int id = 0;
+  while (objects_.count(id) != 0) ++id;
+  return id;
+}
+
+}  // namespace mvod

@@ -1,0 +1,866 @@
+#include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <unordered_set>
+
+namespace mvod {
+namespace {
+
+// |coordinate / leaf| beyond this cannot be stored in a 64-bit voxel index.
+constexpr double kMaxVoxelIndex = 4.0e18;
+
+PointCloud finitePoints(const PointCloud& points) {
+  PointCloud out;
+  out.reserve(points.size());
+  for (const Eigen::Vector3f& p : points) {
+    if (p.allFinite()) out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace
+
+Status PointCloudFilter::Config::isValid() const {
+  if (!(std::isfinite(voxel_leaf_size_m) && voxel_leaf_size_m > 0.0)) {
+    return Status::Error("voxel_leaf_size_m must be a finite value > 0 (got " +
+                         std::to_string(voxel_leaf_size_m) + ")");
+  }
+  if (!(std::isfinite(min_depth_m) && min_depth_m >= 0.0)) {
+    return Status::Error("min_depth_m must be a finite value >= 0 (got " +
+                         std::to_string(min_depth_m) + ")");
+  }
+  if (!(std::isfinite(max_depth_m) && max_depth_m > min_depth_m)) {
+    return Status::Error("max_depth_m must be finite and > min_depth_m (got " +
+                         std::to_string(max_depth_m) + ")");
+  }
+  if (num_threads < 1 || num_threads > 256) {
+    return Status::Error("num_threads must be in [1, 256] (got " + std::to_string(num_threads) +
+                         ")");
+  }
+  if (outlier_removal != "voxel_neighbours" && outlier_removal != "statistical" &&
+      outlier_removal != "statistical_centres" && outlier_removal != "none") {
+    return Status::Error("outlier_removal must be voxel_neighbours, statistical or none (got '" +
+                         outlier_removal + "')");
+  }
+  if (min_voxel_neighbours < 0 || min_voxel_neighbours > 26) {
+    return Status::Error("min_voxel_neighbours must be in [0, 26] (got " +
+                         std::to_string(min_voxel_neighbours) + ")");
+  }
+  if (sor_mean_k < 1) {
+    return Status::Error("sor_mean_k must be >= 1 (got " + std::to_string(sor_mean_k) + ")");
+  }
+  if (!(std::isfinite(sor_stddev_mul) && sor_stddev_mul > 0.0)) {
+    return Status::Error("sor_stddev_mul must be a finite value > 0 (got " +
+                         std::to_string(sor_stddev_mul) + ")");
+  }
+  return Status::Ok();
+}
+
+std::string PointCloudFilter::Config::print() const {
+  std::ostringstream out;
+  out << "enable: " << (enable ? "true" : "false") << "\n"
+      << "voxel_leaf_size_m: " << voxel_leaf_size_m << "\n"
+      << "min_depth_m: " << min_depth_m << "\n"
+      << "max_depth_m: " << max_depth_m << "\n"
+      << "outlier_removal: " << outlier_removal << "\n"
+      << "min_voxel_neighbours: " << min_voxel_neighbours << "\n"
+      << "sor_mean_k: " << sor_mean_k << "\n"
+      << "sor_stddev_mul: " << sor_stddev_mul << "\n";
+  return out.str();
+}
+
+PointCloud PointCloudFilter::filterCameraFrame(const PointCloud& points_C) const {
+  if (!config_.enable) return points_C;
+  // Sec. 3.2: depth range first (cheap, removes the noisiest far points), then the 0.01 m grid,
+  // then outliers on the uniform-density cloud.
+  return filterPassedThrough(passThroughDepth(points_C, config_.min_depth_m, config_.max_depth_m));
+}
+
+PointCloud PointCloudFilter::filterPassedThrough(const PointCloud& in_range_C) const {
+  if (!config_.enable) return in_range_C;
+  return removeOutliers(voxelize(in_range_C, config_.voxel_leaf_size_m));
+}
+
+PointCloud PointCloudFilter::removeOutliers(const PointCloud& voxelized) const {
+  if (config_.outlier_removal == "voxel_neighbours") {
+    return removeSparseVoxels(voxelized, config_.voxel_leaf_size_m, config_.min_voxel_neighbours);
+  }
+  if (config_.outlier_removal == "statistical_centres") {
+    return removeStatisticalOutliersOnVoxelCentres(voxelized, config_.sor_mean_k,
+                                                   config_.sor_stddev_mul,
+                                                   config_.voxel_leaf_size_m, config_.num_threads);
+  }
+  if (config_.outlier_removal == "statistical") {
+    return removeStatisticalOutliersOnGrid(voxelized, config_.sor_mean_k, config_.sor_stddev_mul,
+                                           config_.voxel_leaf_size_m, config_.num_threads);
+  }
+  return voxelized;
+}
+
+PointCloud PointCloudFilter::filterFused(const PointCloud& points_W, double on_grid_m) const {
+  if (!config_.enable) return points_W;
+  // No pass-through: the fused cloud (Eq. 7) is in the world frame, depth means nothing there.
+  // A cloud already on this grid is not voxelised again.
+  if (on_grid_m == config_.voxel_leaf_size_m) return removeOutliers(points_W);
+  return removeOutliers(voxelize(points_W, config_.voxel_leaf_size_m));
+}
+
+namespace {
+
+// The voxel grid by sorting the points' 64-bit indices: for any cloud (extents beyond 32-bit
+// grid positions too).
+PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m);
+
+}  // namespace
+
+PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
+  if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
+  // The common case, a cloud of fewer than 2^32 points whose voxels' positions in their bounding
+  // grid fit in 32 bits: each point's position and its index packed into one 64-bit word, radix
+  // sorted on the position's digits only (stable, so a voxel's points stay in input order). Half
+  // the memory traffic of sorting positions and indices apart, and no hash table.
+  constexpr double kMaxIndex = 2.0e9;  // |index| below this fits a 32-bit int
+  const double inv_leaf = 1.0 / leaf_size_m;
+  const std::size_t n = points.size();
+  if (n >= std::numeric_limits<std::uint32_t>::max()) return voxelizeBySorting(points, leaf_size_m);
+  std::vector<std::array<std::int32_t, 3>> cells;
+  std::vector<std::uint32_t> source;  // the finite points' indices
+  cells.reserve(n);
+  source.reserve(n);
+  std::array<std::int32_t, 3> lo = {std::numeric_limits<std::int32_t>::max(),
+                                    std::numeric_limits<std::int32_t>::max(),
+                                    std::numeric_limits<std::int32_t>::max()};
+  std::array<std::int32_t, 3> hi = {std::numeric_limits<std::int32_t>::min(),
+                                    std::numeric_limits<std::int32_t>::min(),
+                                    std::numeric_limits<std::int32_t>::min()};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    std::array<std::int32_t, 3> cell;
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
+      if (!(std::abs(index) < kMaxIndex)) return voxelizeBySorting(points, leaf_size_m);
+      cell[d] = static_cast<std::int32_t>(index);
+      lo[d] = std::min(lo[d], cell[d]);
+      hi[d] = std::max(hi[d], cell[d]);
+    }
+    cells.push_back(cell);
+    source.push_back(static_cast<std::uint32_t>(i));
+  }
+  PointCloud out;
+  if (cells.empty()) return out;
+  std::array<std::uint64_t, 3> dims;
+  double grid_cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    dims[d] = static_cast<std::uint64_t>(static_cast<std::int64_t>(hi[d]) - lo[d]) + 1;
+    grid_cells *= static_cast<double>(dims[d]);
+  }
+  if (!(grid_cells < 4.0e9)) return voxelizeBySorting(points, leaf_size_m);
+  // (position in the grid, x major) << 32 | the point's index.
+  const std::size_t m = cells.size();
+  std::vector<std::uint64_t> keyed(m);
+  std::uint64_t max_position = 0;
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::uint64_t x = static_cast<std::uint64_t>(cells[k][0] - lo[0]);
+    const std::uint64_t y = static_cast<std::uint64_t>(cells[k][1] - lo[1]);
+    const std::uint64_t z = static_cast<std::uint64_t>(cells[k][2] - lo[2]);
+    const std::uint64_t position = (x * dims[1] + y) * dims[2] + z;
+    max_position = std::max(max_position, position);
+    keyed[k] = (position << 32) | source[k];
+  }
+  constexpr int kDigitBits = 11;
+  constexpr std::uint64_t kDigitMask = (std::uint64_t{1} << kDigitBits) - 1;
+  std::vector<std::uint64_t> buffer(m);
+  std::vector<std::uint32_t> count(std::size_t{1} << kDigitBits);
+  for (int shift = 32; shift < 64 && (max_position >> (shift - 32)) != 0; shift += kDigitBits) {
+    std::fill(count.begin(), count.end(), 0u);
+    for (const std::uint64_t key : keyed) ++count[(key >> shift) & kDigitMask];
+    std::uint32_t total = 0;
+    for (std::uint32_t& c : count) {
+      const std::uint32_t here = c;
+      c = total;
+      total += here;
+    }
+    for (const std::uint64_t key : keyed) buffer[count[(key >> shift) & kDigitMask]++] = key;
+    keyed.swap(buffer);
+  }
+  out.reserve(m / 2);
+  std::size_t begin = 0;
+  while (begin < m) {
+    const std::uint64_t position = keyed[begin] >> 32;
+    std::size_t end = begin;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    while (end < m && (keyed[end] >> 32) == position) {
+      sum += points[keyed[end] & 0xffffffffu].cast<double>();
+      ++end;
+    }
+    out.emplace_back((sum / static_cast<double>(end - begin)).cast<float>());
+    begin = end;
+  }
+  return out;
+}
+
+namespace {
+
+PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m) {
+  // 64-bit integer voxel index per point, without PCL's 32-bit index limit for large extents.
+  using Key = std::array<std::int64_t, 3>;
+  std::vector<Key> keys;
+  std::vector<std::uint32_t> source;
+  keys.reserve(points.size());
+  source.reserve(points.size());
+  const double inv_leaf = 1.0 / leaf_size_m;
+  Key lo = {0, 0, 0};
+  Key hi = {0, 0, 0};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    Key key;
+    bool representable = true;
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
+      if (!(std::abs(index) < kMaxVoxelIndex)) {
+        representable = false;
+        break;
+      }
+      key[d] = static_cast<std::int64_t>(index);
+    }
+    if (!representable) continue;
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = keys.empty() ? key[d] : std::min(lo[d], key[d]);
+      hi[d] = keys.empty() ? key[d] : std::max(hi[d], key[d]);
+    }
+    keys.push_back(key);
+    source.push_back(static_cast<std::uint32_t>(i));
+  }
+  const std::size_t n = keys.size();
+  PointCloud out;
+  if (n == 0) return out;
+
+  // Output in ascending (x, y, z) voxel order, each voxel's points summed in input order: a
+  // deterministic order that does not depend on a hash. The voxels' positions in the cloud's
+  // bounding grid are sortable integers; a stable LSD radix sort on them costs O(n) instead of a
+  // comparison sort's O(n log n).
+  std::array<std::uint64_t, 3> dims;
+  double cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    dims[d] = static_cast<std::uint64_t>(hi[d] - lo[d]) + 1;
+    cells *= static_cast<double>(dims[d]);
+  }
+  std::vector<std::uint64_t> order_key(n);
+  std::vector<std::uint32_t> order(n);
+  if (cells < 9.0e18 && points.size() < std::numeric_limits<std::uint32_t>::max()) {
+    std::uint64_t max_key = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint64_t x = static_cast<std::uint64_t>(keys[k][0] - lo[0]);
+      const std::uint64_t y = static_cast<std::uint64_t>(keys[k][1] - lo[1]);
+      const std::uint64_t z = static_cast<std::uint64_t>(keys[k][2] - lo[2]);
+      order_key[k] = (x * dims[1] + y) * dims[2] + z;
+      order[k] = static_cast<std::uint32_t>(k);
+      max_key = std::max(max_key, order_key[k]);
+    }
+    constexpr int kDigitBits = 11;
+    constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+    std::vector<std::uint64_t> next_key(n);
+    std::vector<std::uint32_t> next(n);
+    std::vector<std::uint32_t> count(kBuckets);
+    for (int shift = 0; shift < 64 && (max_key >> shift) != 0; shift += kDigitBits) {
+      std::fill(count.begin(), count.end(), 0u);
+      for (std::size_t k = 0; k < n; ++k) ++count[(order_key[k] >> shift) & (kBuckets - 1)];
+      std::uint32_t total = 0;
+      for (std::uint32_t& c : count) {
+        const std::uint32_t here = c;
+        c = total;
+        total += here;
+      }
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::uint32_t slot = count[(order_key[k] >> shift) & (kBuckets - 1)]++;
+        next_key[slot] = order_key[k];
+        next[slot] = order[k];
+      }
+      order_key.swap(next_key);
+      order.swap(next);
+    }
+  } else {
+    // Extents beyond 64-bit grid positions: a comparison sort on the keys themselves.
+    std::vector<std::pair<Key, std::uint32_t>> keyed(n);
+    for (std::size_t k = 0; k < n; ++k) keyed[k] = {keys[k], static_cast<std::uint32_t>(k)};
+    std::sort(keyed.begin(), keyed.end());
+    std::uint64_t rank = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k > 0 && keyed[k].first != keyed[k - 1].first) ++rank;
+      order_key[k] = rank;
+      order[k] = keyed[k].second;
+    }
+  }
+
+  std::size_t begin = 0;
+  while (begin < n) {
+    std::size_t end = begin;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    while (end < n && order_key[end] == order_key[begin]) {
+      sum += points[source[order[end]]].cast<double>();
+      ++end;
+    }
+    out.emplace_back((sum / static_cast<double>(end - begin)).cast<float>());
+    begin = end;
+  }
+  return out;
+}
+
+// keep[i] |= the cell of finite[i] (grid of cell_m, anchored at the origin) has at least
+// min_neighbours occupied cells among its 26 neighbours.
+void markDenseCells(const PointCloud& finite, double cell_m, int min_neighbours,
+                    std::vector<char>* keep) {
+  // The cells; a dense occupancy grid over the cloud's bounding box (one bit per cell, with a
+  // margin of one) when it is small, else a hash set.
+  const double inv_cell = 1.0 / cell_m;
+  std::vector<Eigen::Array3i> cells;
+  cells.reserve(finite.size());
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  for (const Eigen::Vector3f& p : finite) {
+    Eigen::Array3i c;
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(p[d]) * inv_cell);
+      // Beyond +-1e9 cells (10 000 km at 1 cm) every point is its own speck.
+      c[d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
+    }
+    lo = lo.min(c);
+    hi = hi.max(c);
+    cells.push_back(c);
+  }
+  const Eigen::Array3i dims = hi - lo + 3;  // one cell of margin on either side
+  const double num_cells = static_cast<double>(dims[0]) * dims[1] * static_cast<double>(dims[2]);
+  const auto mark = [&](const auto& occupied) {
+    for (std::size_t i = 0; i < finite.size(); ++i) {
+      if ((*keep)[i]) continue;
+      int count = -1;  // its own cell is counted below
+      for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            count += occupied(cells[i] + Eigen::Array3i(dx, dy, dz)) ? 1 : 0;
+          }
+        }
+      }
+      if (count >= min_neighbours) (*keep)[i] = 1;
+    }
+  };
+  if (num_cells <= 64.0 * 1024 * 1024) {
+    std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
+    const auto bit_of = [&](const Eigen::Array3i& c) {
+      const Eigen::Array3i r = c - lo + 1;
+      return (static_cast<std::size_t>(r[2]) * dims[1] + r[1]) * dims[0] + r[0];
+    };
+    for (const Eigen::Array3i& c : cells) {
+      const std::size_t b = bit_of(c);
+      bits[b / 64] |= std::uint64_t{1} << (b % 64);
+    }
+    mark([&](const Eigen::Array3i& c) {
+      const std::size_t b = bit_of(c);
+      return ((bits[b / 64] >> (b % 64)) & 1u) != 0;
+    });
+  } else {
+    struct CellHash {
+      std::size_t operator()(const std::array<int, 3>& c) const {
+        return static_cast<std::size_t>(c[0]) * 73856093u ^
+               static_cast<std::size_t>(c[1]) * 19349663u ^
+               static_cast<std::size_t>(c[2]) * 83492791u;
+      }
+    };
+    const auto key_of = [](const Eigen::Array3i& c) {
+      return std::array<int, 3>{c[0], c[1], c[2]};
+    };
+    std::unordered_set<std::array<int, 3>, CellHash> occupied;
+    occupied.reserve(2 * cells.size());
+    for (const Eigen::Array3i& c : cells) occupied.insert(key_of(c));
+    mark([&](const Eigen::Array3i& c) { return occupied.count(key_of(c)) != 0; });
+  }
+}
+
+}  // namespace
+
+PointCloud PointCloudFilter::removeSparseVoxels(const PointCloud& points, double leaf_size_m,
+                                                int min_neighbours) {
+  PointCloud finite = finitePoints(points);
+  if (min_neighbours <= 0 || finite.empty() || !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) {
+    return finite;
+  }
+  std::vector<char> keep(finite.size(), 0);
+  markDenseCells(finite, leaf_size_m, min_neighbours, &keep);
+  PointCloud out;
+  out.reserve(finite.size());
+  for (std::size_t i = 0; i < finite.size(); ++i) {
+    if (keep[i]) out.push_back(finite[i]);
+  }
+  return out;
+}
+
+namespace {
+
+// Grid offsets (cells) within radius_cells of the origin, the origin excluded, by length (ties in
+// a fixed order), with their lengths.
+struct SortedOffsets {
+  std::vector<Eigen::Array3i> offsets;
+  std::vector<float> lengths;
+};
+
+SortedOffsets sortedOffsets(int radius_cells) {
+  std::vector<std::pair<int, Eigen::Array3i>> all;
+  for (int z = -radius_cells; z <= radius_cells; ++z) {
+    for (int y = -radius_cells; y <= radius_cells; ++y) {
+      for (int x = -radius_cells; x <= radius_cells; ++x) {
+        const int squared = x * x + y * y + z * z;
+        if (squared == 0 || squared > radius_cells * radius_cells) continue;
+        all.emplace_back(squared, Eigen::Array3i(x, y, z));
+      }
+    }
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  SortedOffsets sorted;
+  for (const auto& entry : all) {
+    sorted.offsets.push_back(entry.second);
+    sorted.lengths.push_back(std::sqrt(static_cast<float>(entry.first)));
+  }
+  return sorted;
+}
+
+// The 5 x 5 x 5 cells around a cell hold every offset of squared length 1 to 8 (92 offsets; no
+// offset has squared length 7), grouped in shells of one squared length: 1, 2, 3, 4, 5, 6, 8. A
+// row of the cube along x (dy, dz fixed) is five bits; row_counts[class][bits] holds how many of
+// them are occupied per shell, as kCountBits-bit fields (shell s at bit kCountBits * s), so the
+// counts of a cube are the sum of its 25 rows' entries. The class is the row's dy^2 + dz^2.
+struct CubeShells {
+  static constexpr int kRows = 25;
+  static constexpr int kShells = 7;
+  static constexpr int kMaxSquared = 8;
+  static constexpr int kCountBits = 6;  // a shell holds at most 24 offsets
+  static constexpr std::uint64_t kCountMask = (std::uint64_t{1} << kCountBits) - 1;
+  static constexpr int kClasses = 6;
+  std::array<int, kRows> row_dy;
+  std::array<int, kRows> row_dz;
+  std::array<int, kRows> row_class;
+  std::array<std::array<std::uint64_t, 32>, kClasses> row_counts;
+  std::array<float, kShells> shell_length;  // as sortedOffsets computes it
+};
+
+// Bits q .. q + 4 of a bitset (bit q % 64 of word q / 64), the next word readable.
+inline std::uint64_t fiveBits(const std::vector<std::uint64_t>& bits, std::uint64_t q) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  // Little-endian words are a little-endian byte string: eight bytes from q's byte hold them.
+  std::uint64_t eight_bytes;
+  std::memcpy(&eight_bytes, reinterpret_cast<const unsigned char*>(bits.data()) + q / 8,
+              sizeof(eight_bytes));
+  return (eight_bytes >> (q % 8)) & std::uint64_t{0x1f};
+#else
+  // Across a word boundary: the second word shifted by 64 - shift, in two steps so that shift 0
+  // stays defined.
+  const std::uint64_t word = q / 64;
+  const unsigned shift = static_cast<unsigned>(q % 64);
+  return ((bits[word] >> shift) | ((bits[word + 1] << 1) << (63 - shift))) & std::uint64_t{0x1f};
+#endif
+}
+
+const CubeShells& cubeShells() {
+  static const CubeShells table = [] {
+    CubeShells cube;
+    constexpr std::array<int, 9> kShellOf = {-1, 0, 1, 2, 3, 4, 5, -1, 6};   // by squared length
+    constexpr std::array<int, 9> kClassOf = {0, 1, 2, -1, 3, 4, -1, -1, 5};  // by dy^2 + dz^2
+    constexpr std::array<int, CubeShells::kClasses> kClassSquared = {0, 1, 2, 4, 5, 8};
+    for (int squared = 1; squared <= CubeShells::kMaxSquared; ++squared) {
+      if (kShellOf[squared] >= 0) {
+        cube.shell_length[kShellOf[squared]] = std::sqrt(static_cast<float>(squared));
+      }
+    }
+    int r = 0;
+    for (int dz = -2; dz <= 2; ++dz) {
+      for (int dy = -2; dy <= 2; ++dy, ++r) {
+        cube.row_dy[r] = dy;
+        cube.row_dz[r] = dz;
+        cube.row_class[r] = kClassOf[dy * dy + dz * dz];
+      }
+    }
+    for (int c = 0; c < CubeShells::kClasses; ++c) {
+      for (int row = 0; row < 32; ++row) {
+        std::uint64_t counts = 0;
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int squared = kClassSquared[c] + dx * dx;
+          if (!((row >> (dx + 2)) & 1) || squared == 0 || squared > CubeShells::kMaxSquared) {
+            continue;
+          }
+          counts += std::uint64_t{1} << (CubeShells::kCountBits * kShellOf[squared]);
+        }
+        cube.row_counts[c][row] = counts;
+      }
+    }
+    return cube;
+  }();
+  return table;
+}
+
+}  // namespace
+
+PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const PointCloud& points,
+                                                                     int mean_k, double stddev_mul,
+                                                                     double leaf_size_m,
+                                                                     int threads) {
+  PointCloud finite = finitePoints(points);
+  const std::size_t n = finite.size();
+  if (mean_k < 1 || !std::isfinite(stddev_mul) || n < static_cast<std::size_t>(mean_k) + 1 ||
+      !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) {
+    return finite;
+  }
+  std::vector<float> mean_distance;
+  if (!voxelCentreMeanDistances(finite, mean_k, leaf_size_m, threads, &mean_distance)) {
+    return removeStatisticalOutliersOnGrid(finite, mean_k, stddev_mul, leaf_size_m, threads);
+  }
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance) {
+    sum += distance;
+    sq_sum += static_cast<double>(distance) * distance;
+  }
+  const double count_d = static_cast<double>(n);
+  const double mean = sum / count_d;
+  const double variance = std::max(0.0, (sq_sum - sum * sum / count_d) / (count_d - 1.0));
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
+  }
+  return out;
+}
+
+bool PointCloudFilter::voxelCentreMeanDistances(const PointCloud& finite, int mean_k,
+                                                double leaf_size_m, int threads,
+                                                std::vector<float>* mean_distance_m) {
+  const std::size_t n = finite.size();
+  if (mean_k < 1 || !(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return false;
+  mean_distance_m->clear();
+  if (n == 0) return true;
+  // The mean_k nearest voxels of a surface lie within about sqrt(mean_k) cells; a point with fewer
+  // occupied voxels within twice that counts the missing ones at that distance (an outlier
+  // anyway).
+  const int radius = std::max(2, static_cast<int>(std::ceil(2.0 * std::sqrt(mean_k))));
+  // The offsets depend on mean_k only: computed once per thread and mean_k.
+  static thread_local std::map<int, SortedOffsets> tables;
+  auto cached = tables.find(radius);
+  if (cached == tables.end()) cached = tables.emplace(radius, sortedOffsets(radius)).first;
+  const SortedOffsets& table = cached->second;
+
+  const double inv_leaf = 1.0 / leaf_size_m;
+  std::vector<Eigen::Array3i> cells(n);
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(finite[i][d]) * inv_leaf);
+      cells[i][d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
+    }
+    lo = lo.min(cells[i]);
+    hi = hi.max(cells[i]);
+  }
+  // An occupancy bitset over the bounding box with a margin of `radius` cells; beyond 32 MB the
+  // exact search handles the cloud.
+  double num_cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    num_cells *= static_cast<double>(hi[d]) - static_cast<double>(lo[d]) + 1.0 + 2.0 * radius;
+  }
+  if (!(num_cells <= 256.0 * 1024 * 1024)) return false;
+  const Eigen::Array3i dims = hi - lo + 1 + 2 * radius;
+  std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
+  const std::int64_t stride_y = dims[0];
+  const std::int64_t stride_z = static_cast<std::int64_t>(dims[0]) * dims[1];
+  const auto bit_of = [&](const Eigen::Array3i& c) {
+    const Eigen::Array3i r = c - lo + radius;
+    return r[2] * stride_z + r[1] * stride_y + r[0];
+  };
+  for (const Eigen::Array3i& c : cells) {
+    const std::int64_t b = bit_of(c);
+    bits[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
+  }
+  // One spare word: a row of the cube is read from the word it starts in and the next.
+  bits.push_back(0);
+  std::vector<std::int64_t> deltas(table.offsets.size());
+  for (std::size_t k = 0; k < deltas.size(); ++k) {
+    const Eigen::Array3i& o = table.offsets[k];
+    deltas[k] = o[2] * stride_z + o[1] * stride_y + o[0];
+  }
+  const CubeShells& cube = cubeShells();
+  // The cube's shells only where the table holds them all (not for mean_k 1, radius 2).
+  const bool use_cube = radius * radius >= CubeShells::kMaxSquared;
+  std::size_t beyond_cube = 0;  // the table's first offset outside the cube's shells
+  while (use_cube && beyond_cube < table.offsets.size() &&
+         table.offsets[beyond_cube].square().sum() <= CubeShells::kMaxSquared) {
+    ++beyond_cube;
+  }
+  std::array<std::int64_t, CubeShells::kRows> row_start;  // bit of each row's first cell
+  for (int r = 0; r < CubeShells::kRows; ++r) {
+    row_start[r] = cube.row_dz[r] * stride_z + cube.row_dy[r] * stride_y - 2;
+  }
+  const float missing = static_cast<float>(radius + 1);
+  std::vector<float>& mean_distance = *mean_distance_m;
+  mean_distance.assign(n, 0.f);
+  parallelRanges(n, threads, 4096, [&](std::size_t first, std::size_t last) {
+    for (std::size_t i = first; i < last; ++i) {
+      const std::int64_t b = bit_of(cells[i]);
+      // The occupied cells of the 5 x 5 x 5 cube around the voxel, counted per shell: five bits
+      // per row of the cube, and a table turns them into counts at the row's squared lengths.
+      std::uint64_t counts = 0;
+      for (int r = 0; use_cube && r < CubeShells::kRows; ++r) {
+        const std::uint64_t q = static_cast<std::uint64_t>(b + row_start[r]);
+        counts += cube.row_counts[cube.row_class[r]][fiveBits(bits, q)];
+      }
+      // The nearest occupied cells shell by shell: all of a shell's offsets have its length, so
+      // adding it once per occupied cell is the scan's sum, bit for bit, in the scan's order.
+      int found = 0;
+      float sum = 0.f;
+      for (int s = 0; s < CubeShells::kShells && found < mean_k; ++s) {
+        const int in_shell =
+            static_cast<int>((counts >> (CubeShells::kCountBits * s)) & CubeShells::kCountMask);
+        const int take = std::min(in_shell, mean_k - found);
+        for (int t = 0; t < take; ++t) sum += cube.shell_length[s];
+        found += take;
+      }
+      // Beyond the cube (a surface's edge, a sparse view): the table's offsets in order.
+      // Branch-free: whether a neighbour cell is occupied is close to a coin flip on a surface's
+      // edge, which a branch mispredicts half the time. Adding 0 for an empty cell leaves the sum's
+      // bits as they were (it is never -0), so the sum is that of the occupied cells in order.
+      for (std::size_t k = beyond_cube; k < deltas.size() && found < mean_k; ++k) {
+        const std::size_t q = static_cast<std::size_t>(b + deltas[k]);
+        const std::uint64_t occupied = (bits[q / 64] >> (q % 64)) & 1u;
+        sum += table.lengths[k] * static_cast<float>(occupied);
+        found += static_cast<int>(occupied);
+      }
+      sum += static_cast<float>(mean_k - found) * missing;
+      mean_distance[i] = static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
+    }
+  });
+  return true;
+}
+
+PointCloud PointCloudFilter::passThroughDepth(const PointCloud& points_C, double min_depth_m,
+                                              double max_depth_m) {
+  PointCloud out;
+  out.reserve(points_C.size());
+  for (const Eigen::Vector3f& p : points_C) {
+    if (inDepthRange(p, min_depth_m, max_depth_m)) out.push_back(p);
+  }
+  return out;
+}
+
+PointCloud PointCloudFilter::removeStatisticalOutliers(const PointCloud& points, int mean_k,
+                                                       double stddev_mul) {
+  PointCloud finite = finitePoints(points);
+  if (mean_k < 1 || !std::isfinite(stddev_mul) ||
+      finite.size() < static_cast<std::size_t>(mean_k) + 1) {
+    return finite;
+  }
+
+  // PCL's StatisticalOutlierRemoval: mean distance to the k nearest neighbours per point; drop
+  // points whose mean lies beyond mean + stddev_mul * stddev over all points.
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->resize(finite.size());
+  for (std::size_t i = 0; i < finite.size(); ++i) {
+    (*cloud)[i] = pcl::PointXYZ(finite[i].x(), finite[i].y(), finite[i].z());
+  }
+  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+  sor.setInputCloud(cloud);
+  sor.setMeanK(mean_k);
+  sor.setStddevMulThresh(stddev_mul);
+  pcl::Indices kept;
+  sor.filter(kept);
+
+  PointCloud out;
+  out.reserve(kept.size());
+  for (const auto index : kept) out.push_back(finite[static_cast<std::size_t>(index)]);
+  return out;
+}
+
+PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
+                                                             double stddev_mul, double cell_m,
+                                                             int threads) {
+  PointCloud finite = finitePoints(points);
+  if (mean_k < 1 || !std::isfinite(stddev_mul) ||
+      finite.size() < static_cast<std::size_t>(mean_k) + 1) {
+    return finite;
+  }
+  if (!(std::isfinite(cell_m) && cell_m > 0.0)) {
+    return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+  }
+  // On a voxelised surface the k nearest lie within about sqrt(k) / 2 voxels: cells that wide keep
+  // the search to the 27 cells around the point (the result does not depend on it).
+  cell_m *= std::max(1.0, std::round(std::sqrt(mean_k + 1.0) / 1.5));
+  // Cells of the grid over the cloud's bounding box.
+  Eigen::Vector3f lo = finite[0];
+  Eigen::Vector3f hi = finite[0];
+  for (const Eigen::Vector3f& p : finite) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double inv_cell = 1.0 / cell_m;
+  Eigen::Array3i dims;
+  for (int d = 0; d < 3; ++d) {
+    const double cells = std::floor((static_cast<double>(hi[d]) - lo[d]) * inv_cell) + 1.0;
+    if (!(cells < 1e6)) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+    dims[d] = static_cast<int>(cells);
+  }
+  const std::int64_t num_cells =
+      static_cast<std::int64_t>(dims[0]) * dims[1] * static_cast<std::int64_t>(dims[2]);
+  // A dense table of cells when it is small (a view of an object); else the k-d tree.
+  if (num_cells > 16 * 1000 * 1000) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+  const std::size_t n = finite.size();
+  std::vector<Eigen::Array3i> cell_of(n);
+  std::vector<std::int32_t> count(static_cast<std::size_t>(num_cells) + 1, 0);
+  auto index_of = [&dims](const Eigen::Array3i& c) {
+    return (static_cast<std::int64_t>(c[2]) * dims[1] + c[1]) * dims[0] + c[0];
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const int c =
+          static_cast<int>(std::floor((static_cast<double>(finite[i][d]) - lo[d]) * inv_cell));
+      cell_of[i][d] = std::min(std::max(c, 0), dims[d] - 1);
+    }
+    ++count[static_cast<std::size_t>(index_of(cell_of[i])) + 1];
+  }
+  // Points sorted by cell (counting sort): cell c holds order[start[c] .. start[c + 1]).
+  std::vector<std::int32_t>& start = count;
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::int32_t> order(n);
+  {
+    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(index_of(cell_of[i]))]++)] =
+          static_cast<std::int32_t>(i);
+    }
+  }
+
+  // Points in cell order, for locality.
+  std::vector<Eigen::Vector3f> sorted(n);
+  for (std::size_t k = 0; k < n; ++k) sorted[k] = finite[static_cast<std::size_t>(order[k])];
+
+  // The exact k + 1 nearest (the query included, as PCL's search returns it), shell by shell of
+  // cells: a point in a cell s + 1 cells away (Chebyshev) is at least s cells away in space, so
+  // once the k + 1-th distance is within s cells nothing further can be nearer. Squared distances
+  // in float, summed dimension by dimension as FLANN's L2 does, and their roots added in ascending
+  // order as PCL does, so the result is PCL's.
+  const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
+  std::vector<float> mean_distance(n);
+  const int max_shell = std::max({dims[0], dims[1], dims[2]});
+  // Sparse clouds (many isolated points far apart) would visit many empty cells: past this budget
+  // (shared pro rata by the threads) the k-d tree is cheaper.
+  std::atomic<bool> over_budget{false};
+  // Each query is independent: the queries (in cell order) are split into contiguous ranges.
+  const auto search = [&](std::size_t first, std::size_t last) {
+    const std::int64_t budget =
+        400 * static_cast<std::int64_t>(last - first) +
+        static_cast<std::int64_t>(1000000.0 * static_cast<double>(last - first) / n) + 1;
+    std::int64_t visited = 0;
+    std::vector<float> candidates;
+    // Neighbouring points have similar k-th distances: the previous query's pre-selects the
+    // candidates, and the exact selection then runs on those few when they suffice.
+    float guess_kth = 0.f;
+    for (std::size_t ordered = first; ordered < last; ++ordered) {
+      const std::size_t i = static_cast<std::size_t>(order[ordered]);
+      const Eigen::Vector3f& q = finite[i];
+      const Eigen::Array3i& qc = cell_of[i];
+      candidates.clear();
+      auto visit = [&](int x, int y, int z) {
+        ++visited;
+        if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
+        const std::size_t c = static_cast<std::size_t>(index_of(Eigen::Array3i(x, y, z)));
+        const std::int32_t end = start[c + 1];
+        for (std::int32_t k = start[c]; k < end; ++k) {
+          const Eigen::Vector3f& p = sorted[static_cast<std::size_t>(k)];
+          float d2 = 0.f;
+          const float dx = q.x() - p.x();
+          d2 += dx * dx;
+          const float dy = q.y() - p.y();
+          d2 += dy * dy;
+          const float dz = q.z() - p.z();
+          d2 += dz * dz;
+          candidates.push_back(d2);
+        }
+      };
+      for (int s = 0; s <= max_shell; ++s) {
+        for (int dz = -s; dz <= s; ++dz) {
+          for (int dy = -s; dy <= s; ++dy) {
+            const bool inner = std::abs(dz) < s && std::abs(dy) < s;
+            for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
+              visit(qc[0] + dx, qc[1] + dy, qc[2] + dz);
+              if (s == 0) break;
+            }
+          }
+        }
+        if (s > 0 && candidates.size() >= want) {
+          // Keep only the `want` smallest so far (those under the guess, when there are enough).
+          std::size_t under = 0;
+          if (guess_kth > 0.f) {
+            // A branch-free partition (each step swaps positions `under` and k).
+            for (std::size_t k = 0; k < candidates.size(); ++k) {
+              const float d2 = candidates[k];
+              candidates[k] = candidates[under];
+              candidates[under] = d2;
+              under += d2 <= guess_kth ? 1 : 0;
+            }
+          }
+          if (under < want) under = candidates.size();
+          std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
+                           candidates.begin() + static_cast<std::ptrdiff_t>(under));
+          candidates.resize(want);
+          const float kth = *std::max_element(candidates.begin(), candidates.end());
+          const double reach = s * cell_m;
+          if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
+        }
+      }
+      if (visited > budget || over_budget.load(std::memory_order_relaxed)) {
+        over_budget = true;
+        return;
+      }
+      std::sort(candidates.begin(), candidates.end());
+      guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
+      double sum = 0.0;
+      for (std::size_t k = 1; k < want && k < candidates.size(); ++k) {
+        sum += std::sqrt(candidates[k]);
+      }
+      mean_distance[i] = static_cast<float>(sum / mean_k);
+    }
+  };
+  // Below a few thousand points a thread costs more than it saves.
+  parallelRanges(n, threads, 4096, search);
+  if (over_budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
+  // PCL's threshold: mean + stddev_mul * standard deviation of the mean distances.
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance) {
+    sum += distance;
+    sq_sum += distance * distance;
+  }
+  const double count_d = static_cast<double>(n);
+  const double mean = sum / count_d;
+  const double variance = (sq_sum - sum * sum / count_d) / (count_d - 1.0);
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
+  }
+  return out;
+}
+
+}  // namespace mvod
