@@ -83,7 +83,7 @@ demo: build
 FUZZ_SECONDS ?= 60
 .PHONY: fuzz
 fuzz:
-	@bash scripts/install_deps.sh tools/fuzz-packages.txt
+	@bash scripts/install_deps.sh deps/fuzz-packages.txt
 	@bash test/fuzz/run_fuzzers.sh $(ROOT)/build/fuzz $(FUZZ_SECONDS)
 
 format:

@@ -13,7 +13,7 @@ selected keyframe is processed, calls ~refine and ~save_map (DIR/objects.json, w
 started is stopped on the way out. Exit status: 0 ok, 1 the node failed or found nothing, 2 bad arguments.
 
 Needs the Python message packages (Debian's python3-{std,geometry,diagnostic,sensor,visualization,tf2}-msgs,
-python3-std-srvs; tools/debian-packages.txt) and this package's own, generated in the catkin devel space.
+python3-std-srvs; deps/debian-packages.txt) and this package's own, generated in the catkin devel space.
 """
 import argparse
 import json

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Installs the Debian bookworm packages listed in tools/debian-packages.txt (or in the lists given as
-# arguments, e.g. tools/fuzz-packages.txt) that are not installed yet.
+# Installs the Debian bookworm packages listed in deps/debian-packages.txt (or in the lists given as
+# arguments, e.g. deps/fuzz-packages.txt) that are not installed yet.
 # Needs root (or sudo) and apt; does nothing when everything is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 lists=("$@")
-[[ ${#lists[@]} -gt 0 ]] || lists=(tools/debian-packages.txt)
+[[ ${#lists[@]} -gt 0 ]] || lists=(deps/debian-packages.txt)
 mapfile -t wanted < <(cat "${lists[@]}" | grep -v -E '^\s*(#|$)' | sort -u)
 missing=()
 for pkg in "${wanted[@]}"; do
