@@ -42,17 +42,10 @@ struct Candidate {
   fs::path mask_path;  // empty: the box is the mask
 };
 
-// Reads one entry without touching its mask file; false with *problem set when the entry has to
-// be skipped.
-bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& image_size,
-                Candidate* candidate, std::string* problem) {
-  Detection2D* detection = &candidate->detection;
-  if (!entry.is_object()) {
-    *problem = "not an object";
-    return false;
-  }
-
-  // Class: the name decides; "class_id" alone (without a name) is accepted when it is a COCO id.
+// The entry's class: the name decides; "class_id" alone (without a name) is accepted when it is a
+// COCO id. Names take the COCO spelling (cocoClassId also takes aliases such as "sofa"): class
+// names key the priors.
+bool parseClass(const json& entry, Detection2D* detection, std::string* problem) {
   const auto name_it = entry.find("class_name");
   const auto id_it = entry.find("class_id");
   if (name_it != entry.end()) {
@@ -75,9 +68,11 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
     *problem = "unknown class '" + detection->class_name + "' (not a COCO class name)";
     return false;
   }
-  // The COCO spelling (cocoClassId also takes aliases such as "sofa"): class names key the priors.
   detection->class_name = cocoClassNames()[detection->class_id];
+  return true;
+}
 
+bool parseScore(const json& entry, Detection2D* detection, std::string* problem) {
   const auto score_it = entry.find("score");
   if (score_it == entry.end() || !score_it->is_number()) {
     *problem = "\"score\" missing or not a number";
@@ -90,43 +85,63 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
     return false;
   }
   detection->score = static_cast<float>(score);
+  return true;
+}
 
-  const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
-  bool has_box = false;
+// The optional "box" [x1, y1, x2, y2], clipped to the image; *has_box tells whether there is one.
+bool parseBox(const json& entry, const cv::Size& image_size, Detection2D* detection, bool* has_box,
+              std::string* problem) {
+  *has_box = false;
   const auto box_it = entry.find("box");
-  if (box_it != entry.end()) {
-    if (!box_it->is_array() || box_it->size() != 4) {
-      *problem = "\"box\" is not [x1, y1, x2, y2]";
-      return false;
-    }
-    double b[4];
-    for (int i = 0; i < 4; ++i) {
-      if (!(*box_it)[i].is_number()) {
-        *problem = "\"box\" is not [x1, y1, x2, y2] numbers";
-        return false;
-      }
-      b[i] = (*box_it)[i].get<double>();
-      if (!std::isfinite(b[i]) || std::abs(b[i]) > 1e6) {
-        *problem = "\"box\" holds a non-finite or huge value";
-        return false;
-      }
-    }
-    if (!(b[2] > b[0] && b[3] > b[1])) {
-      *problem = "\"box\" has x2 <= x1 or y2 <= y1";
-      return false;
-    }
-    const int x1 = static_cast<int>(std::floor(b[0]));
-    const int y1 = static_cast<int>(std::floor(b[1]));
-    const int x2 = static_cast<int>(std::ceil(b[2]));
-    const int y2 = static_cast<int>(std::ceil(b[3]));
-    detection->box_px = cv::Rect(x1, y1, x2 - x1, y2 - y1) & image_rect;  // clipped to the image
-    if (detection->box_px.empty()) {
-      *problem = "\"box\" lies outside the " + sizeText(image_size) + " image";
-      return false;
-    }
-    has_box = true;
+  if (box_it == entry.end()) return true;
+  if (!box_it->is_array() || box_it->size() != 4) {
+    *problem = "\"box\" is not [x1, y1, x2, y2]";
+    return false;
   }
+  double b[4];
+  for (int i = 0; i < 4; ++i) {
+    if (!(*box_it)[i].is_number()) {
+      *problem = "\"box\" is not [x1, y1, x2, y2] numbers";
+      return false;
+    }
+    b[i] = (*box_it)[i].get<double>();
+    if (!std::isfinite(b[i]) || std::abs(b[i]) > 1e6) {
+      *problem = "\"box\" holds a non-finite or huge value";
+      return false;
+    }
+  }
+  if (!(b[2] > b[0] && b[3] > b[1])) {
+    *problem = "\"box\" has x2 <= x1 or y2 <= y1";
+    return false;
+  }
+  const int x1 = static_cast<int>(std::floor(b[0]));
+  const int y1 = static_cast<int>(std::floor(b[1]));
+  const int x2 = static_cast<int>(std::ceil(b[2]));
+  const int y2 = static_cast<int>(std::ceil(b[3]));
+  const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
+  detection->box_px = cv::Rect(x1, y1, x2 - x1, y2 - y1) & image_rect;  // clipped to the image
+  if (detection->box_px.empty()) {
+    *problem = "\"box\" lies outside the " + sizeText(image_size) + " image";
+    return false;
+  }
+  *has_box = true;
+  return true;
+}
 
+// Reads one entry without touching its mask file; false with *problem set when the entry has to
+// be skipped.
+bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& image_size,
+                Candidate* candidate, std::string* problem) {
+  Detection2D* detection = &candidate->detection;
+  if (!entry.is_object()) {
+    *problem = "not an object";
+    return false;
+  }
+  bool has_box = false;
+  if (!parseClass(entry, detection, problem) || !parseScore(entry, detection, problem) ||
+      !parseBox(entry, image_size, detection, &has_box, problem)) {
+    return false;
+  }
   const auto mask_it = entry.find("mask");
   if (mask_it != entry.end() && !mask_it->is_null()) {
     if (!mask_it->is_string() || mask_it->get<std::string>().empty()) {

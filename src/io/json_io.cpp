@@ -134,31 +134,30 @@ Status readCloud(const json& value, const std::string& path, PointCloud* out) {
   return Status::Ok();
 }
 
-Status readObject(const json& value, const std::string& path, MapObject* out) {
-  if (!value.is_object()) return fieldError(path, "expected an object");
-  const std::string prefix = path + ".";
-  MapObject object;
+// id, class, probability and observations.
+Status readIdentity(const json& value, const std::string& prefix, MapObject* object) {
   Status status;
-  if (!(status = readInt(value, prefix, "id", 0, &object.id))) return status;
-  if (object.id > kMaxObjectId) {
+  if (!(status = readInt(value, prefix, "id", 0, &object->id))) return status;
+  if (object->id > kMaxObjectId) {
     return fieldError(prefix + "id", "beyond " + std::to_string(kMaxObjectId));
   }
   const json* name = nullptr;
   if (!(status = member(value, prefix, "class_name", &name))) return status;
   if (!name->is_string()) return fieldError(prefix + "class_name", "expected a string");
-  object.class_name = name->get<std::string>();
-  if (object.class_name.empty()) return fieldError(prefix + "class_name", "empty");
-  if (!(status = readInt(value, prefix, "class_id", -1, &object.class_id))) return status;
-  if (!(status = readNumber(value, prefix, "probability", &object.probability))) return status;
-  if (object.probability < 0.0 || object.probability > 1.0) {
+  object->class_name = name->get<std::string>();
+  if (object->class_name.empty()) return fieldError(prefix + "class_name", "empty");
+  if (!(status = readInt(value, prefix, "class_id", -1, &object->class_id))) return status;
+  if (!(status = readNumber(value, prefix, "probability", &object->probability))) return status;
+  if (object->probability < 0.0 || object->probability > 1.0) {
     return fieldError(prefix + "probability", "must be in [0, 1]");
   }
-  if (!(status = readInt(value, prefix, "observations", 0, &object.observations))) return status;
-  if (!(status = readVector3(value, prefix, "center", &object.box.center_m))) return status;
-  if (!(status = readVector3(value, prefix, "size", &object.box.size_m))) return status;
-  if ((object.box.size_m.array() < 0.0).any()) return fieldError(prefix + "size", "negative");
+  return readInt(value, prefix, "observations", 0, &object->observations);
+}
 
+// A 3 x 3 array of rows that is a rotation.
+Status readRotation(const json& value, const std::string& prefix, Eigen::Matrix3d* R) {
   const json* rotation = nullptr;
+  Status status;
   if (!(status = member(value, prefix, "rotation", &rotation))) return status;
   if (!rotation->is_array() || rotation->size() != 3) {
     return fieldError(prefix + "rotation", "expected a 3x3 array of rows");
@@ -169,185 +168,233 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
               readVector3((*rotation)[r], prefix + "rotation[" + std::to_string(r) + "]", &row))) {
       return status;
     }
-    object.box.rotation.row(r) = row.transpose();
+    R->row(r) = row.transpose();
   }
-  const Eigen::Matrix3d& R = object.box.rotation;
-  if (!(R.transpose() * R).isApprox(Eigen::Matrix3d::Identity(), 1e-3) ||
-      std::abs(R.determinant() - 1.0) > 1e-3) {
+  if (!(R->transpose() * *R).isApprox(Eigen::Matrix3d::Identity(), 1e-3) ||
+      std::abs(R->determinant() - 1.0) > 1e-3) {
     return fieldError(prefix + "rotation", "not a rotation (orthonormal, determinant +1)");
   }
+  return Status::Ok();
+}
 
-  if (!(status = readNumber(value, prefix, "yaw", &object.yaw_rad))) return status;
-  int num_points = 0;
-  if (!(status = readInt(value, prefix, "num_points", 0, &num_points))) return status;
+// The box (centre, size, rotation) and its yaw.
+Status readBox(const json& value, const std::string& prefix, MapObject* object) {
+  Status status;
+  if (!(status = readVector3(value, prefix, "center", &object->box.center_m))) return status;
+  if (!(status = readVector3(value, prefix, "size", &object->box.size_m))) return status;
+  if ((object->box.size_m.array() < 0.0).any()) return fieldError(prefix + "size", "negative");
+  if (!(status = readRotation(value, prefix, &object->box.rotation))) return status;
+  return readNumber(value, prefix, "yaw", &object->yaw_rad);
+}
+
+// First and last keyframe and stamp.
+Status readSeen(const json& value, const std::string& prefix, MapObject* object) {
+  Status status;
   if (!(status = readInt(value, prefix, "first_keyframe", std::numeric_limits<int>::min(),
-                         &object.first_keyframe))) {
+                         &object->first_keyframe))) {
     return status;
   }
   if (!(status = readInt(value, prefix, "last_keyframe", std::numeric_limits<int>::min(),
-                         &object.last_keyframe))) {
+                         &object->last_keyframe))) {
     return status;
   }
-  if (!(status = readNumber(value, prefix, "first_seen", &object.first_seen_s))) return status;
-  if (!(status = readNumber(value, prefix, "last_seen", &object.last_seen_s))) return status;
+  if (!(status = readNumber(value, prefix, "first_seen", &object->first_seen_s))) return status;
+  return readNumber(value, prefix, "last_seen", &object->last_seen_s);
+}
 
-  // Clouds are optional (include_clouds); when present, num_points must match.
+// Clouds are optional (include_clouds); when present, num_points must match.
+Status readClouds(const json& value, const std::string& prefix, MapObject* object) {
+  int num_points = 0;
+  Status status;
+  if (!(status = readInt(value, prefix, "num_points", 0, &num_points))) return status;
   const auto points = value.find("points");
   if (points != value.end()) {
-    if (!(status = readCloud(*points, prefix + "points", &object.points_W))) return status;
-    if (static_cast<int>(object.points_W.size()) != num_points) {
+    if (!(status = readCloud(*points, prefix + "points", &object->points_W))) return status;
+    if (static_cast<int>(object->points_W.size()) != num_points) {
       return fieldError(prefix + "num_points", "does not match the number of points");
     }
   }
   const auto segment = value.find("segment");
   if (segment != value.end()) {
-    if (!(status = readCloud(*segment, prefix + "segment", &object.segment_W))) return status;
+    if (!(status = readCloud(*segment, prefix + "segment", &object->segment_W))) return status;
   }
-  // Evidence fusion's class votes (optional).
+  return Status::Ok();
+}
+
+// Evidence fusion's class votes (optional).
+Status readClassScores(const json& value, const std::string& prefix, MapObject* object) {
   const auto scores = value.find("class_scores");
-  if (scores != value.end()) {
-    if (!scores->is_object()) {
-      return fieldError(prefix + "class_scores", "expected {\"class\": summed probability, ...}");
-    }
-    for (auto it = scores->begin(); it != scores->end(); ++it) {
-      if (!it.value().is_number() || !std::isfinite(it.value().get<double>()) ||
-          it.value().get<double>() < 0.0) {
-        return fieldError(prefix + "class_scores", "values must be finite numbers >= 0");
-      }
-      object.class_scores[it.key()] = it.value().get<double>();
-    }
+  if (scores == value.end()) return Status::Ok();
+  if (!scores->is_object()) {
+    return fieldError(prefix + "class_scores", "expected {\"class\": summed probability, ...}");
   }
-  // Evidence fusion's votes (optional; maps without them go on fusing from their segment).
+  for (auto it = scores->begin(); it != scores->end(); ++it) {
+    if (!it.value().is_number() || !std::isfinite(it.value().get<double>()) ||
+        it.value().get<double>() < 0.0) {
+      return fieldError(prefix + "class_scores", "values must be finite numbers >= 0");
+    }
+    object->class_scores[it.key()] = it.value().get<double>();
+  }
+  return Status::Ok();
+}
+
+// An integer of a voxel or cell entry: not an unsigned value beyond INT64_MAX (it would wrap to a
+// negative number), and in [min_value, max_value].
+bool integerInRange(const json& value, std::int64_t min_value, std::int64_t max_value) {
+  if (!value.is_number_integer()) return false;
+  if (value.is_number_unsigned() &&
+      value.get<std::uint64_t>() >
+          static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) {
+    return false;
+  }
+  const std::int64_t v = value.get<std::int64_t>();
+  return v >= min_value && v <= max_value;
+}
+
+// [i, j, k, a, b]'s grid index within the key's range (voxel_key.h).
+bool gridIndex(const json& entry, Eigen::Vector3i* index) {
+  for (int i = 0; i < 3; ++i) {
+    if (!integerInRange(entry[i], -(1 << 20), (1 << 20) - 1)) return false;
+    (*index)[i] = entry[i].get<int>();
+  }
+  return true;
+}
+
+// One evidence voxel: [i, j, k, in, out], with the voxel's summed normal [..., nx, ny, nz], and
+// with its summed signed distance and their count [..., nx, ny, nz, sdf_sum, sdf_count].
+bool readEvidenceVoxel(const json& voxel, std::int64_t* key, VoxelEvidence* e) {
+  if (!voxel.is_array() || !(voxel.size() == 5 || voxel.size() == 8 || voxel.size() == 10)) {
+    return false;
+  }
+  Eigen::Vector3i index;
+  if (!gridIndex(voxel, &index) || !integerInRange(voxel[3], 0, UINT16_MAX) ||
+      !integerInRange(voxel[4], 0, UINT16_MAX)) {
+    return false;
+  }
+  // A sum of unit normals: no larger than the number of points that can fall in a voxel.
+  const auto bounded = [](const json& v) {
+    return v.is_number() && std::isfinite(v.get<double>()) &&
+           std::abs(v.get<double>()) <= kMaxNormalSum;
+  };
+  e->normal_sum = Eigen::Vector3f::Zero();
+  for (size_t i = 5; i < voxel.size() && i < 8; ++i) {
+    if (!bounded(voxel[i])) return false;
+    e->normal_sum[static_cast<int>(i) - 5] = voxel[i].get<float>();
+  }
+  e->sdf_sum = 0.f;
+  e->sdf_count = 0;
+  if (voxel.size() == 10) {
+    // A count of views, and their signed distances, each truncated to a few decimetres.
+    if (voxel[9].is_number_float() || !integerInRange(voxel[9], 0, UINT16_MAX) ||
+        !bounded(voxel[8])) {
+      return false;
+    }
+    e->sdf_sum = voxel[8].get<float>();
+    e->sdf_count = static_cast<std::uint16_t>(voxel[9].get<std::int64_t>());
+  }
+  e->inside = static_cast<std::uint16_t>(voxel[3].get<int>());
+  e->outside = static_cast<std::uint16_t>(voxel[4].get<int>());
+  *key = packVoxel(index);
+  return true;
+}
+
+// Evidence fusion's votes (optional; maps without them go on fusing from their segment).
+Status readEvidence(const json& value, const std::string& prefix, MapObject* object) {
   const auto evidence = value.find("evidence");
-  if (evidence != value.end()) {
-    const std::string where = prefix + "evidence";
-    if (!evidence->is_object() || !evidence->contains("voxel_size_m") ||
-        !(*evidence)["voxel_size_m"].is_number() || !evidence->contains("voxels") ||
-        !(*evidence)["voxels"].is_array()) {
+  if (evidence == value.end()) return Status::Ok();
+  const std::string where = prefix + "evidence";
+  if (!evidence->is_object() || !evidence->contains("voxel_size_m") ||
+      !(*evidence)["voxel_size_m"].is_number() || !evidence->contains("voxels") ||
+      !(*evidence)["voxels"].is_array()) {
+    return fieldError(where,
+                      "expected {\"voxel_size_m\": s, \"voxels\": [[i, j, k, in, out], ...]}");
+  }
+  const double size_m = (*evidence)["voxel_size_m"].get<double>();
+  if (!(std::isfinite(size_m) && size_m > 0.0))
+    return fieldError(where, "voxel_size_m must be > 0");
+  // No voxels = no grid yet (0), as objectsToJson writes no "evidence" then: the map round-trips.
+  object->evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
+  for (const json& voxel : (*evidence)["voxels"]) {
+    std::int64_t key = 0;
+    VoxelEvidence e;
+    if (!readEvidenceVoxel(voxel, &key, &e)) {
       return fieldError(where,
-                        "expected {\"voxel_size_m\": s, \"voxels\": [[i, j, k, in, out], ...]}");
+                        "voxels must be [i, j, k, in, out], [i, j, k, in, out, nx, ny, nz] or "
+                        "[i, j, k, in, out, nx, ny, nz, sdf_sum, sdf_count] with integers in "
+                        "range and finite numbers");
     }
-    const double size_m = (*evidence)["voxel_size_m"].get<double>();
-    if (!(std::isfinite(size_m) && size_m > 0.0))
-      return fieldError(where, "voxel_size_m must be > 0");
-    // No voxels = no grid yet (0), as objectsToJson writes no "evidence" then: the map round-trips.
-    object.evidence_voxel_size_m = (*evidence)["voxels"].empty() ? 0.0 : size_m;
-    for (const json& voxel : (*evidence)["voxels"]) {
-      // [i, j, k, in, out], with the voxel's summed normal [i, j, k, in, out, nx, ny, nz], and
-      // with its summed signed distance and their count [..., nx, ny, nz, sdf_sum, sdf_count].
-      bool ok = voxel.is_array() && (voxel.size() == 5 || voxel.size() == 8 || voxel.size() == 10);
-      // Unsigned values beyond INT64_MAX would wrap to negative numbers below: refused here.
-      for (size_t i = 0; ok && i < 5; ++i) {
-        ok = voxel[i].is_number_integer() &&
-             !(voxel[i].is_number_unsigned() &&
-               voxel[i].get<std::uint64_t>() >
-                   static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()));
-      }
-      if (ok) {
-        for (int i = 0; i < 3; ++i) {
-          const std::int64_t v = voxel[i].get<std::int64_t>();
-          ok = ok && v >= -(1 << 20) && v < (1 << 20);
-        }
-        for (int i = 3; i < 5; ++i) {
-          const std::int64_t v = voxel[i].get<std::int64_t>();
-          ok = ok && v >= 0 && v <= UINT16_MAX;
-        }
-      }
-      Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
-      for (size_t i = 5; ok && i < voxel.size() && i < 8; ++i) {
-        // A sum of unit normals: no larger than the number of points that can fall in a voxel.
-        ok = voxel[i].is_number() && std::isfinite(voxel[i].get<double>()) &&
-             std::abs(voxel[i].get<double>()) <= kMaxNormalSum;
-        if (ok) normal_sum[static_cast<int>(i) - 5] = voxel[i].get<float>();
-      }
-      float sdf_sum = 0.f;
-      std::uint16_t sdf_count = 0;
-      if (ok && voxel.size() == 10) {
-        // A count of views, and their signed distances, each truncated to a few decimetres.
-        ok = voxel[9].is_number_integer() && !voxel[9].is_number_float() &&
-             voxel[9].get<std::int64_t>() >= 0 && voxel[9].get<std::int64_t>() <= UINT16_MAX &&
-             voxel[8].is_number() && std::isfinite(voxel[8].get<double>()) &&
-             std::abs(voxel[8].get<double>()) <= kMaxNormalSum;
-        if (ok) {
-          sdf_sum = voxel[8].get<float>();
-          sdf_count = static_cast<std::uint16_t>(voxel[9].get<std::int64_t>());
-        }
-      }
-      if (!ok) {
-        return fieldError(where,
-                          "voxels must be [i, j, k, in, out], [i, j, k, in, out, nx, ny, nz] or "
-                          "[i, j, k, in, out, nx, ny, nz, sdf_sum, sdf_count] with integers in "
-                          "range and finite numbers");
-      }
-      const std::int64_t key =
-          packVoxel(Eigen::Vector3i(voxel[0].get<int>(), voxel[1].get<int>(), voxel[2].get<int>()));
-      VoxelEvidence& e = object.evidence[key];
-      e.inside = static_cast<std::uint16_t>(voxel[3].get<int>());
-      e.outside = static_cast<std::uint16_t>(voxel[4].get<int>());
-      e.normal_sum = normal_sum;
-      e.sdf_sum = sdf_sum;
-      e.sdf_count = sdf_count;
-    }
+    object->evidence[key] = e;
   }
-  // Amodal completion's free space around the object (optional; maps without it count afresh).
+  return Status::Ok();
+}
+
+// Amodal completion's free space around the object (optional; maps without it count afresh).
+Status readFreeSpace(const json& value, const std::string& prefix, MapObject* object) {
   const auto free_space = value.find("free_space");
-  if (free_space != value.end()) {
-    const std::string where = prefix + "free_space";
-    const char* expected =
-        "expected {\"cell_size_m\": s, \"cells\": [[i, j, k, in_view, seen_free], ...]} with "
-        "integers in range and seen_free <= in_view";
-    if (!free_space->is_object() || !free_space->contains("cell_size_m") ||
-        !(*free_space)["cell_size_m"].is_number() || !free_space->contains("cells") ||
-        !(*free_space)["cells"].is_array()) {
-      return fieldError(where, expected);
-    }
-    const double size_m = (*free_space)["cell_size_m"].get<double>();
-    if (!(std::isfinite(size_m) && size_m > 0.0)) {
-      return fieldError(where, "cell_size_m must be > 0");
-    }
-    object.free_space_cell_m = (*free_space)["cells"].empty() ? 0.0 : size_m;
-    for (const json& cell : (*free_space)["cells"]) {
-      bool ok = cell.is_array() && cell.size() == 5;
-      for (size_t i = 0; ok && i < 5; ++i) {
-        // Unsigned values beyond INT64_MAX would wrap to negative numbers: refused here.
-        ok = cell[i].is_number_integer() &&
-             !(cell[i].is_number_unsigned() &&
-               cell[i].get<std::uint64_t>() >
-                   static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()));
-        if (!ok) break;
-        const std::int64_t v = cell[i].get<std::int64_t>();
-        ok = i < 3 ? (v >= -(1 << 20) && v < (1 << 20)) : (v >= 0 && v <= UINT16_MAX);
-      }
-      if (ok) ok = cell[4].get<std::int64_t>() <= cell[3].get<std::int64_t>();
-      if (!ok) return fieldError(where, expected);
-      FreeSpaceCount& count = object.free_space[packVoxel(
-          Eigen::Vector3i(cell[0].get<int>(), cell[1].get<int>(), cell[2].get<int>()))];
-      count.in_view = static_cast<std::uint16_t>(cell[3].get<int>());
-      count.seen_free = static_cast<std::uint16_t>(cell[4].get<int>());
-    }
+  if (free_space == value.end()) return Status::Ok();
+  const std::string where = prefix + "free_space";
+  const char* expected =
+      "expected {\"cell_size_m\": s, \"cells\": [[i, j, k, in_view, seen_free], ...]} with "
+      "integers in range and seen_free <= in_view";
+  if (!free_space->is_object() || !free_space->contains("cell_size_m") ||
+      !(*free_space)["cell_size_m"].is_number() || !free_space->contains("cells") ||
+      !(*free_space)["cells"].is_array()) {
+    return fieldError(where, expected);
   }
+  const double size_m = (*free_space)["cell_size_m"].get<double>();
+  if (!(std::isfinite(size_m) && size_m > 0.0)) {
+    return fieldError(where, "cell_size_m must be > 0");
+  }
+  object->free_space_cell_m = (*free_space)["cells"].empty() ? 0.0 : size_m;
+  for (const json& cell : (*free_space)["cells"]) {
+    Eigen::Vector3i index;
+    const bool ok = cell.is_array() && cell.size() == 5 && gridIndex(cell, &index) &&
+                    integerInRange(cell[3], 0, UINT16_MAX) &&
+                    integerInRange(cell[4], 0, UINT16_MAX) &&
+                    cell[4].get<std::int64_t>() <= cell[3].get<std::int64_t>();
+    if (!ok) return fieldError(where, expected);
+    FreeSpaceCount& count = object->free_space[packVoxel(index)];
+    count.in_view = static_cast<std::uint16_t>(cell[3].get<int>());
+    count.seen_free = static_cast<std::uint16_t>(cell[4].get<int>());
+  }
+  return Status::Ok();
+}
+
+// Whether the box was completed, and the observed part (same rotation); without it, the box.
+Status readCompletion(const json& value, const std::string& prefix, MapObject* object) {
   const auto completed = value.find("box_completed");
   if (completed != value.end()) {
     if (!completed->is_boolean()) {
       return fieldError(prefix + "box_completed", "expected true or false");
     }
-    object.box_completed = completed->get<bool>();
+    object->box_completed = completed->get<bool>();
   }
-  // A completed box's observed part (same rotation); without it, the completed box stands in.
-  object.observed_box = object.box;
+  object->observed_box = object->box;
   const auto observed = value.find("observed_box");
-  if (observed != value.end()) {
-    const std::string where = prefix + "observed_box";
-    if (!observed->is_object()) {
-      return fieldError(where, "expected {\"center\": [x, y, z], \"size\": [sx, sy, sz]} (m)");
-    }
-    Eigen::Vector3d center;
-    Eigen::Vector3d size;
-    if (!(status = readVector3(*observed, where + ".", "center", &center))) return status;
-    if (!(status = readVector3(*observed, where + ".", "size", &size))) return status;
-    if ((size.array() < 0.0).any()) return fieldError(where + ".size", "negative");
-    object.observed_box.center_m = center;
-    object.observed_box.size_m = size;
+  if (observed == value.end()) return Status::Ok();
+  const std::string where = prefix + "observed_box";
+  if (!observed->is_object()) {
+    return fieldError(where, "expected {\"center\": [x, y, z], \"size\": [sx, sy, sz]} (m)");
+  }
+  Eigen::Vector3d center;
+  Eigen::Vector3d size;
+  Status status;
+  if (!(status = readVector3(*observed, where + ".", "center", &center))) return status;
+  if (!(status = readVector3(*observed, where + ".", "size", &size))) return status;
+  if ((size.array() < 0.0).any()) return fieldError(where + ".size", "negative");
+  object->observed_box.center_m = center;
+  object->observed_box.size_m = size;
+  return Status::Ok();
+}
+
+Status readObject(const json& value, const std::string& path, MapObject* out) {
+  if (!value.is_object()) return fieldError(path, "expected an object");
+  const std::string prefix = path + ".";
+  MapObject object;
+  for (const auto read : {readIdentity, readBox, readSeen, readClouds, readClassScores,
+                          readEvidence, readFreeSpace, readCompletion}) {
+    const Status status = read(value, prefix, &object);
+    if (!status) return status;
   }
   *out = std::move(object);
   return Status::Ok();

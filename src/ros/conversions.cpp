@@ -1,8 +1,10 @@
 #include "multiview_object_detection/ros/conversions.h"
 
 #include <cv_bridge/cv_bridge.h>
+#include <image_geometry/pinhole_camera_model.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
 #include <cmath>
@@ -207,13 +209,22 @@ Status intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& msg, const std::s
   if (all_zero) {
     return Status::Error(what + ": camera_info K is all zero (camera not calibrated)");
   }
+  // image_geometry's K of the image as published: binning and a region of interest applied.
+  image_geometry::PinholeCameraModel model;
+  try {
+    model.fromCameraInfo(msg);
+  } catch (const std::exception& e) {
+    return Status::Error(what + ": camera_info is not a valid pinhole model: " + e.what());
+  }
+  const cv::Matx33d& K_image = model.intrinsicMatrix();
+  const cv::Size size = model.reducedResolution();
   CameraIntrinsics K;
-  K.fx = msg.K[0];
-  K.fy = msg.K[4];
-  K.cx = msg.K[2];
-  K.cy = msg.K[5];
-  K.width = static_cast<int>(msg.width);
-  K.height = static_cast<int>(msg.height);
+  K.fx = K_image(0, 0);
+  K.fy = K_image(1, 1);
+  K.cx = K_image(0, 2);
+  K.cy = K_image(1, 2);
+  K.width = size.width;
+  K.height = size.height;
   if (!K.isValid()) {
     return Status::Error(what + ": camera_info K has fx " + std::to_string(K.fx) + ", fy " +
                          std::to_string(K.fy) + " (need fx, fy > 0)");
@@ -319,10 +330,12 @@ Status poseFromMsg(const geometry_msgs::Pose& msg, Eigen::Isometry3d* T) {
   if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
     return Status::Error("pose quaternion has norm " + std::to_string(norm) + " (must be 1)");
   }
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = q.normalized().toRotationMatrix();
-  pose.translation() = t;
-  *T = pose;
+  geometry_msgs::Pose unit = msg;  // tf2_eigen takes the quaternion as it is
+  unit.orientation.w /= norm;
+  unit.orientation.x /= norm;
+  unit.orientation.y /= norm;
+  unit.orientation.z /= norm;
+  tf2::fromMsg(unit, *T);
   return Status::Ok();
 }
 
@@ -336,34 +349,22 @@ Status transformFromMsg(const geometry_msgs::Transform& msg, Eigen::Isometry3d* 
 }
 
 geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T) {
-  geometry_msgs::Pose msg;
-  msg.position.x = T.translation().x();
-  msg.position.y = T.translation().y();
-  msg.position.z = T.translation().z();
-  const Eigen::Quaterniond q(properRotation(T.linear()));
-  msg.orientation.w = q.w();
-  msg.orientation.x = q.x();
-  msg.orientation.y = q.y();
-  msg.orientation.z = q.z();
-  return msg;
+  Eigen::Isometry3d proper = T;
+  proper.linear() = properRotation(T.linear());
+  return tf2::toMsg(proper);
 }
 
 geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T) {
-  const geometry_msgs::Pose pose = poseToMsg(T);
-  geometry_msgs::Transform msg;
-  msg.translation.x = pose.position.x;
-  msg.translation.y = pose.position.y;
-  msg.translation.z = pose.position.z;
-  msg.rotation = pose.orientation;
-  return msg;
+  Eigen::Isometry3d proper = T;
+  proper.linear() = properRotation(T.linear());
+  return tf2::eigenToTransform(proper).transform;
 }
 
-Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& msg,
-                         const cv::Size& image_size, const std::string& topic,
-                         std::vector<Detection2D>* detections, std::vector<std::string>* warnings,
-                         size_t max_detections, size_t* capped) {
-  if (capped != nullptr) *capped = 0;
-  const std::string what = describeInput(topic, msg.header);
+namespace {
+
+// The message's arrays agree in length, and the image size is known.
+Status checkDetectionsLayout(const multiview_object_detection::InstanceDetections& msg,
+                             const cv::Size& image_size, const std::string& what) {
   const size_t n = msg.boxes.size();
   if (msg.scores.size() != n) {
     return Status::Error(what + ": " + std::to_string(n) + " boxes but " +
@@ -388,12 +389,16 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
   if (image_size.width <= 0 || image_size.height <= 0) {
     return Status::Error(what + ": the image size is unknown");
   }
+  return Status::Ok();
+}
 
-  const std::vector<std::string>& coco = cocoClassNames();
-  const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
-  // Scores first: a probability outside [0, 1] (a detector publishing percentages) is refused, and
-  // only the max_detections highest-scoring detections are converted, so one huge message costs
-  // bounded memory and time.
+// Scores first: a probability outside [0, 1] (a detector publishing percentages) is refused, and
+// only the max_detections highest-scoring detections are converted, so one huge message costs
+// bounded memory and time. The indices kept, in message order.
+std::vector<size_t> detectionsToConvert(const multiview_object_detection::InstanceDetections& msg,
+                                        const std::string& what, size_t max_detections,
+                                        std::vector<std::string>* warnings, size_t* capped) {
+  const size_t n = msg.boxes.size();
   std::vector<size_t> kept;
   kept.reserve(std::min(n, max_detections + 1));
   for (size_t i = 0; i < n; ++i) {
@@ -420,69 +425,96 @@ Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& m
     kept.resize(max_detections);
     std::sort(kept.begin(), kept.end());  // message order
   }
+  return kept;
+}
+
+// Detection i of the message; a reason to skip it otherwise (warning text without the label).
+bool detectionFromMsg(const multiview_object_detection::InstanceDetections& msg, size_t i,
+                      const cv::Size& image_size, const std::string& label, Detection2D* detection,
+                      std::string* problem) {
+  const std::vector<std::string>& coco = cocoClassNames();
+  const cv::Rect image_rect(0, 0, image_size.width, image_size.height);
+  detection->score = msg.scores[i];
+  const int id = msg.class_ids.empty() ? -1 : msg.class_ids[i];
+  const std::string name = msg.class_names.empty() ? std::string() : msg.class_names[i];
+  if (id >= 0 && id < static_cast<int>(coco.size())) {
+    detection->class_id = id;
+    detection->class_name = coco[id];
+  } else {
+    // The mapper reports names it cannot place.
+    detection->class_id = cocoClassId(name);
+    detection->class_name = name;
+  }
+  const sensor_msgs::RegionOfInterest& roi = msg.boxes[i];
+  const cv::Rect box = cv::Rect(static_cast<int>(std::min<uint32_t>(roi.x_offset, 1u << 30)),
+                                static_cast<int>(std::min<uint32_t>(roi.y_offset, 1u << 30)),
+                                static_cast<int>(std::min<uint32_t>(roi.width, 1u << 30)),
+                                static_cast<int>(std::min<uint32_t>(roi.height, 1u << 30))) &
+                       image_rect;
+  if (box.area() <= 0) {
+    *problem = "box lies outside the " + sizeText(image_size.width, image_size.height) + " image";
+    return false;
+  }
+  detection->box_px = box;
+  if (msg.masks.empty()) {
+    detection->mask = cv::Mat(box.size(), CV_8UC1, cv::Scalar(255));
+    return true;
+  }
+  const sensor_msgs::Image& mask_msg = msg.masks[i];
+  if (mask_msg.encoding != enc::MONO8 && mask_msg.encoding != enc::TYPE_8UC1) {
+    *problem = "mask encoding '" + mask_msg.encoding + "' (expected mono8)";
+    return false;
+  }
+  if (static_cast<int>(mask_msg.width) != image_size.width ||
+      static_cast<int>(mask_msg.height) != image_size.height) {
+    *problem = "mask is " + sizeText(mask_msg.width, mask_msg.height) + ", the image " +
+               sizeText(image_size.width, image_size.height);
+    return false;
+  }
+  const Status layout = checkImageLayout(mask_msg, label + " mask");
+  if (!layout) {
+    *problem = layout.message();
+    return false;
+  }
+  // Only the box's pixels are kept (Detection2D's box-sized mask).
+  cv::Mat mask(box.size(), CV_8UC1);
+  for (int r = 0; r < box.height; ++r) {
+    std::memcpy(mask.ptr<uint8_t>(r),
+                &mask_msg.data[static_cast<size_t>(r + box.y) * mask_msg.step + box.x],
+                static_cast<size_t>(box.width));
+  }
+  if (cv::countNonZero(mask) == 0) {
+    *problem = "mask is empty";
+    return false;
+  }
+  detection->mask = mask;
+  return true;
+}
+
+}  // namespace
+
+Status detectionsFromMsg(const multiview_object_detection::InstanceDetections& msg,
+                         const cv::Size& image_size, const std::string& topic,
+                         std::vector<Detection2D>* detections, std::vector<std::string>* warnings,
+                         size_t max_detections, size_t* capped) {
+  if (capped != nullptr) *capped = 0;
+  const std::string what = describeInput(topic, msg.header);
+  const Status layout = checkDetectionsLayout(msg, image_size, what);
+  if (!layout) return layout;
+  const std::vector<size_t> kept = detectionsToConvert(msg, what, max_detections, warnings, capped);
   std::vector<Detection2D> out;
   out.reserve(kept.size());
   for (const size_t i : kept) {
     const std::string label = what + ": detection " + std::to_string(i);
-    auto warn = [&](const std::string& text) {
-      if (warnings != nullptr) warnings->push_back(label + ": " + text + ", skipped");
-    };
     Detection2D detection;
-    detection.score = msg.scores[i];
-    const int id = msg.class_ids.empty() ? -1 : msg.class_ids[i];
-    const std::string name = msg.class_names.empty() ? std::string() : msg.class_names[i];
-    if (id >= 0 && id < static_cast<int>(coco.size())) {
-      detection.class_id = id;
-      detection.class_name = coco[id];
-    } else {
-      // The mapper reports names it cannot place.
-      detection.class_id = cocoClassId(name);
-      detection.class_name = name;
+    std::string problem;
+    if (detectionFromMsg(msg, i, image_size, label, &detection, &problem)) {
+      out.push_back(std::move(detection));
+    } else if (warnings != nullptr) {
+      // The image layout check names the mask itself.
+      const bool named = problem.rfind(label, 0) == 0;
+      warnings->push_back((named ? problem : label + ": " + problem) + ", skipped");
     }
-    const sensor_msgs::RegionOfInterest& roi = msg.boxes[i];
-    const cv::Rect box = cv::Rect(static_cast<int>(std::min<uint32_t>(roi.x_offset, 1u << 30)),
-                                  static_cast<int>(std::min<uint32_t>(roi.y_offset, 1u << 30)),
-                                  static_cast<int>(std::min<uint32_t>(roi.width, 1u << 30)),
-                                  static_cast<int>(std::min<uint32_t>(roi.height, 1u << 30))) &
-                         image_rect;
-    if (box.area() <= 0) {
-      warn("box lies outside the " + sizeText(image_size.width, image_size.height) + " image");
-      continue;
-    }
-    detection.box_px = box;
-    if (msg.masks.empty()) {
-      detection.mask = cv::Mat(box.size(), CV_8UC1, cv::Scalar(255));
-    } else {
-      const sensor_msgs::Image& mask_msg = msg.masks[i];
-      if (mask_msg.encoding != enc::MONO8 && mask_msg.encoding != enc::TYPE_8UC1) {
-        warn("mask encoding '" + mask_msg.encoding + "' (expected mono8)");
-        continue;
-      }
-      if (static_cast<int>(mask_msg.width) != image_size.width ||
-          static_cast<int>(mask_msg.height) != image_size.height) {
-        warn("mask is " + sizeText(mask_msg.width, mask_msg.height) + ", the image " +
-             sizeText(image_size.width, image_size.height));
-        continue;
-      }
-      const Status layout = checkImageLayout(mask_msg, label + " mask");
-      if (!layout) {
-        if (warnings != nullptr) warnings->push_back(layout.message() + ", skipped");
-        continue;
-      }
-      // Only the box's pixels are kept (Detection2D's box-sized mask).
-      cv::Mat mask(box.size(), CV_8UC1);
-      for (int r = 0; r < box.height; ++r) {
-        std::memcpy(mask.ptr<uint8_t>(r),
-                    &mask_msg.data[static_cast<size_t>(r + box.y) * mask_msg.step + box.x],
-                    static_cast<size_t>(box.width));
-      }
-      if (cv::countNonZero(mask) == 0) {
-        warn("mask is empty");
-        continue;
-      }
-      detection.mask = mask;
-    }
-    out.push_back(std::move(detection));
   }
   *detections = std::move(out);
   return Status::Ok();

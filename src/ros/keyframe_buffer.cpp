@@ -174,73 +174,70 @@ KeyframeBuffer::Lookup KeyframeBuffer::lookupCameraPose(const PendingFrame& fram
                                                         Eigen::Isometry3d* T_W_C,
                                                         Eigen::Isometry3d* T_C_D,
                                                         std::string* error) {
-  const std_msgs::Header& header = frame.msgs.color->header;
-  const ros::Time stamp = header.stamp;
-  const std::string& world_frame = config_.world_frame;
-  const double tf_timeout_s = config_.tf_timeout_s;
-  const double max_diff_s = config_.pose_max_time_diff_s;
-  const std::string what = describeInput(topics_.color, header);
+  const Lookup depth = lookupDepthToColor(frame, timed_out, T_C_D, error);
+  if (depth != Lookup::kReady) return depth;
+  if (config_.pose_source == "tf") {
+    const std_msgs::Header& header = frame.msgs.color->header;
+    return lookupTransform(
+        config_.world_frame, frame.camera_frame, header.stamp, timed_out,
+        describeInput(topics_.color, header),
+        "at the image stamp within tf_timeout_s (" + std::to_string(config_.tf_timeout_s) + " s)",
+        T_W_C, error);
+  }
+  return lookupPoseOnTopic(frame, timed_out, T_W_C, error);
+}
 
+KeyframeBuffer::Lookup KeyframeBuffer::lookupDepthToColor(const PendingFrame& frame, bool timed_out,
+                                                          Eigen::Isometry3d* T_C_D,
+                                                          std::string* error) const {
   // Unregistered depth: depth camera -> colour camera, a static transform.
   *T_C_D = Eigen::Isometry3d::Identity();
-  if (frame.msgs.depth_info) {
-    const std::string& depth_frame = frame.msgs.depth_info->header.frame_id.empty()
-                                         ? frame.msgs.depth->header.frame_id
-                                         : frame.msgs.depth_info->header.frame_id;
-    if (depth_frame.empty() || depth_frame == frame.camera_frame) {
-      *T_C_D = Eigen::Isometry3d::Identity();
-    } else {
-      std::string tf_error;
-      if (!tf_buffer_.canTransform(frame.camera_frame, depth_frame, ros::Time(0), &tf_error)) {
-        if (!timed_out) return Lookup::kWait;
-        *error = "frame " + what + ": no TF '" + frame.camera_frame + "' <- '" + depth_frame +
-                 "' (depth to colour camera) after " + std::to_string(tf_timeout_s) +
-                 " s: " + tf_error;
-        return Lookup::kFailed;
-      }
-      try {
-        const geometry_msgs::TransformStamped tf =
-            tf_buffer_.lookupTransform(frame.camera_frame, depth_frame, ros::Time(0));
-        const Status valid = transformFromMsg(tf.transform, T_C_D);
-        if (!valid) {
-          *error = "frame " + what + ": TF '" + frame.camera_frame + "' <- '" + depth_frame +
-                   "' is invalid: " + valid.message();
-          return Lookup::kFailed;
-        }
-      } catch (const tf2::TransformException& e) {
-        *error = "frame " + what + ": TF lookup failed: " + e.what();
-        return Lookup::kFailed;
-      }
-    }
-  }
+  if (!frame.msgs.depth_info) return Lookup::kReady;
+  const std::string& depth_frame = frame.msgs.depth_info->header.frame_id.empty()
+                                       ? frame.msgs.depth->header.frame_id
+                                       : frame.msgs.depth_info->header.frame_id;
+  if (depth_frame.empty() || depth_frame == frame.camera_frame) return Lookup::kReady;
+  return lookupTransform(
+      frame.camera_frame, depth_frame, ros::Time(0), timed_out,
+      describeInput(topics_.color, frame.msgs.color->header),
+      "(depth to colour camera) after " + std::to_string(config_.tf_timeout_s) + " s", T_C_D,
+      error);
+}
 
-  if (config_.pose_source == "tf") {
-    std::string tf_error;
-    if (!tf_buffer_.canTransform(world_frame, frame.camera_frame, stamp, &tf_error)) {
-      if (!timed_out) return Lookup::kWait;
-      *error = "frame " + what + ": no TF '" + world_frame + "' <- '" + frame.camera_frame +
-               "' at the image stamp within tf_timeout_s (" + std::to_string(tf_timeout_s) +
-               " s): " + tf_error;
+KeyframeBuffer::Lookup KeyframeBuffer::lookupTransform(
+    const std::string& target, const std::string& source, const ros::Time& stamp, bool timed_out,
+    const std::string& what, const std::string& waited, Eigen::Isometry3d* T,
+    std::string* error) const {
+  std::string tf_error;
+  if (!tf_buffer_.canTransform(target, source, stamp, &tf_error)) {
+    if (!timed_out) return Lookup::kWait;
+    *error = "frame " + what + ": no TF '" + target + "' <- '" + source + "' " + waited + ": " +
+             tf_error;
+    return Lookup::kFailed;
+  }
+  try {
+    const geometry_msgs::TransformStamped tf = tf_buffer_.lookupTransform(target, source, stamp);
+    const Status valid = transformFromMsg(tf.transform, T);
+    if (!valid) {
+      *error = "frame " + what + ": TF '" + target + "' <- '" + source +
+               "' is invalid: " + valid.message();
       return Lookup::kFailed;
     }
-    try {
-      const geometry_msgs::TransformStamped tf =
-          tf_buffer_.lookupTransform(world_frame, frame.camera_frame, stamp);
-      const Status valid = transformFromMsg(tf.transform, T_W_C);
-      if (!valid) {
-        *error = "frame " + what + ": TF '" + world_frame + "' <- '" + frame.camera_frame +
-                 "' is invalid: " + valid.message();
-        return Lookup::kFailed;
-      }
-    } catch (const tf2::TransformException& e) {
-      *error = "frame " + what + ": TF lookup failed: " + e.what();
-      return Lookup::kFailed;
-    }
-    return Lookup::kReady;
+  } catch (const tf2::TransformException& e) {
+    *error = "frame " + what + ": TF lookup failed: " + e.what();
+    return Lookup::kFailed;
   }
+  return Lookup::kReady;
+}
 
-  // pose_source topic: the nearest pose in time. Once a pose at or after the image stamp has
-  // arrived, later poses can only be further away.
+KeyframeBuffer::Lookup KeyframeBuffer::lookupPoseOnTopic(const PendingFrame& frame, bool timed_out,
+                                                         Eigen::Isometry3d* T_W_C,
+                                                         std::string* error) const {
+  const std_msgs::Header& header = frame.msgs.color->header;
+  const ros::Time stamp = header.stamp;
+  const double max_diff_s = config_.pose_max_time_diff_s;
+  // The nearest pose in time. Once a pose at or after the image stamp has arrived, later poses can
+  // only be further away.
   const geometry_msgs::PoseStamped* best = nullptr;
   double best_dt = std::numeric_limits<double>::infinity();
   for (const geometry_msgs::PoseStamped& pose : poses_) {
@@ -252,6 +249,7 @@ KeyframeBuffer::Lookup KeyframeBuffer::lookupCameraPose(const PendingFrame& fram
   }
   const bool final_answer = timed_out || (!poses_.empty() && poses_.back().header.stamp >= stamp);
   if (!final_answer) return Lookup::kWait;
+  const std::string what = describeInput(topics_.color, header);
   if (best == nullptr || best_dt > max_diff_s) {
     std::ostringstream text;
     text << "frame " << what << ": no camera pose on '" << pose_sub_.getTopic()

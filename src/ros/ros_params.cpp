@@ -9,223 +9,346 @@
 namespace mvod {
 namespace {
 
-// nh.param(name, x, x): the current value is the default. A parameter that is set but has the
-// wrong type would silently keep the default; report it instead.
-template <typename T>
-void readParam(const ros::NodeHandle& nh, const std::string& name, T* value,
-               std::vector<std::string>* errors) {
-  if (nh.hasParam(name)) {
-    T parsed = *value;
-    if (!nh.getParam(name, parsed)) {
-      if (errors != nullptr) {
-        errors->push_back("parameter " + nh.resolveName(name) + " has the wrong type");
+// Reads parameters of one namespace: nh.param(name, x, x), the current value as the default. A
+// parameter that is set but has the wrong type would silently keep it; it is reported instead.
+class ParamReader {
+ public:
+  ParamReader(const ros::NodeHandle& nh, ParamErrors* errors) : nh_(nh), errors_(errors) {}
+
+  template <typename T>
+  void read(const std::string& name, T* value) const {
+    if (nh_.hasParam(name)) {
+      T parsed = *value;
+      if (!nh_.getParam(name, parsed)) {
+        error("parameter " + nh_.resolveName(name) + " has the wrong type");
+        return;
       }
+    }
+    nh_.param(name, *value, *value);
+  }
+
+  // Narrower numeric fields (float, ...) go through a double.
+  template <typename T>
+  void readNumber(const std::string& name, T* value) const {
+    double number = static_cast<double>(*value);
+    read(name, &number);
+    *value = static_cast<T>(number);
+  }
+
+  void readVector3(const std::string& name, Eigen::Vector3d* value) const {
+    std::vector<double> list{value->x(), value->y(), value->z()};
+    read(name, &list);
+    if (list.size() != 3) {
+      error("parameter " + nh_.resolveName(name) + " must be a list of 3 numbers");
       return;
     }
+    *value = Eigen::Vector3d(list[0], list[1], list[2]);
   }
-  nh.param(name, *value, *value);
-}
 
-// Narrower numeric fields (float, ...) go through a double.
-template <typename T>
-void readNumber(const ros::NodeHandle& nh, const std::string& name, T* value,
-                std::vector<std::string>* errors) {
-  double number = static_cast<double>(*value);
-  readParam(nh, name, &number, errors);
-  *value = static_cast<T>(number);
-}
-
-void readVector3(const ros::NodeHandle& nh, const std::string& name, Eigen::Vector3d* value,
-                 std::vector<std::string>* errors) {
-  std::vector<double> list{value->x(), value->y(), value->z()};
-  readParam(nh, name, &list, errors);
-  if (list.size() != 3) {
-    if (errors != nullptr) {
-      errors->push_back("parameter " + nh.resolveName(name) + " must be a list of 3 numbers");
-    }
-    return;
+  bool has(const std::string& name) const { return nh_.hasParam(name); }
+  void error(const std::string& message) const {
+    if (errors_ != nullptr) errors_->push_back(message);
   }
-  *value = Eigen::Vector3d(list[0], list[1], list[2]);
+
+ private:
+  const ros::NodeHandle& nh_;
+  ParamErrors* errors_;
+};
+
+ros::NodeHandle child(const ros::NodeHandle& nh, const std::string& ns) {
+  return ros::NodeHandle(nh, ns);
 }
 
 }  // namespace
 
+ObjectCloudExtractor::Config getObjectCloudExtractorConfigFromRosParam(
+    const ros::NodeHandle& nh_extractor, const ObjectCloudExtractor::Config& start,
+    ParamErrors* errors) {
+  const ParamReader p(nh_extractor, errors);
+  ObjectCloudExtractor::Config c = start;
+  p.read("min_valid_depth_m", &c.min_valid_depth_m);
+  p.read("max_valid_depth_m", &c.max_valid_depth_m);
+  p.read("mask_erosion_px", &c.mask_erosion_px);
+  p.read("pixel_stride", &c.pixel_stride);
+  p.read("min_consistent_neighbours", &c.min_consistent_neighbours);
+  p.readNumber("consistency_tolerance_m", &c.consistency_tolerance_m);
+  p.readNumber("depth_step_per_m2", &c.depth_step_per_m2);
+  return c;
+}
+
+PointCloudFilter::Config getPointCloudFilterConfigFromRosParam(
+    const ros::NodeHandle& nh_filter, const PointCloudFilter::Config& start, ParamErrors* errors) {
+  const ParamReader p(nh_filter, errors);
+  PointCloudFilter::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("voxel_leaf_size_m", &c.voxel_leaf_size_m);
+  p.read("min_depth_m", &c.min_depth_m);
+  p.read("max_depth_m", &c.max_depth_m);
+  // Before outlier_removal: statistical_outlier_removal true / false (older configs).
+  if (p.has("statistical_outlier_removal")) {
+    bool statistical = c.outlier_removal.rfind("statistical", 0) == 0;
+    p.read("statistical_outlier_removal", &statistical);
+    if (!statistical) {
+      c.outlier_removal = "none";
+    } else if (c.outlier_removal.rfind("statistical", 0) != 0) {
+      c.outlier_removal = "statistical_centres";
+    }
+  }
+  p.read("outlier_removal", &c.outlier_removal);
+  p.read("sor_mean_k", &c.sor_mean_k);
+  p.read("sor_stddev_mul", &c.sor_stddev_mul);
+  p.read("min_voxel_neighbours", &c.min_voxel_neighbours);
+  return c;
+}
+
+LccpSegmenter::Config getLccpSegmenterConfigFromRosParam(const ros::NodeHandle& nh_lccp,
+                                                         const LccpSegmenter::Config& start,
+                                                         ParamErrors* errors) {
+  const ParamReader p(nh_lccp, errors);
+  LccpSegmenter::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("implementation", &c.implementation);
+  p.read("voxel_resolution_m", &c.voxel_resolution_m);
+  p.read("seed_resolution_m", &c.seed_resolution_m);
+  p.read("spatial_importance", &c.spatial_importance);
+  p.read("normal_importance", &c.normal_importance);
+  p.read("log_depth_transform", &c.log_depth_transform);
+  p.read("concavity_tolerance_deg", &c.concavity_tolerance_deg);
+  p.read("smoothness_threshold", &c.smoothness_threshold);
+  p.read("min_segment_size", &c.min_segment_size);
+  p.read("use_extended_convexity", &c.use_extended_convexity);
+  p.read("use_sanity_criterion", &c.use_sanity_criterion);
+  p.read("min_points", &c.min_points);
+  return c;
+}
+
+SegmentSelector::Config getSegmentSelectorConfigFromRosParam(const ros::NodeHandle& nh_private,
+                                                             const SegmentSelector::Config& start,
+                                                             ParamErrors* errors) {
+  SegmentSelector::Config c = start;
+  ParamReader(child(nh_private, "lccp"), errors).read("selection", &c.selection);
+  const ros::NodeHandle nh_selection = child(nh_private, "selection");
+  const ParamReader p(nh_selection, errors);
+  p.readNumber("core_box_fraction", &c.core_box_fraction);
+  p.readNumber("core_mask_erosion", &c.core_mask_erosion);
+  p.readNumber("adjacency_distance_m", &c.adjacency_distance_m);
+  p.read("ring_px", &c.ring_px);
+  p.readNumber("prior_size_slack", &c.prior_size_slack);
+  p.readNumber("min_ring_share", &c.min_ring_share);
+  p.readNumber("resting_distance_m", &c.resting_distance_m);
+  p.readNumber("resting_min_share", &c.resting_min_share);
+  p.readNumber("resting_edge_margin_m", &c.resting_edge_margin_m);
+  p.readNumber("fallback_min_share", &c.fallback_min_share);
+  p.readNumber("top_clearance_m", &c.top_clearance_m);
+  p.readNumber("top_min_share", &c.top_min_share);
+  p.readNumber("top_crossing_share", &c.top_crossing_share);
+  p.readNumber("support_max_tilt_deg", &c.support_max_tilt_deg);
+  return c;
+}
+
+FloorEstimator::Config getFloorEstimatorConfigFromRosParam(const ros::NodeHandle& nh_floor,
+                                                           const FloorEstimator::Config& start,
+                                                           ParamErrors* errors) {
+  const ParamReader p(nh_floor, errors);
+  FloorEstimator::Config c = start;
+  p.read("enable", &c.enable);
+  p.readNumber("clearance_m", &c.clearance_m);
+  p.readNumber("clearance_per_m2", &c.clearance_per_m2);
+  p.readNumber("grounding_distance_m", &c.grounding_distance_m);
+  return c;
+}
+
+ManhattanFrameEstimator::Config getManhattanFrameConfigFromRosParam(
+    const ros::NodeHandle& nh_box, const ManhattanFrameEstimator::Config& start,
+    ParamErrors* errors) {
+  const ParamReader p(nh_box, errors);
+  ManhattanFrameEstimator::Config c = start;
+  p.read("inlier_angle_deg", &c.inlier_angle_deg);
+  p.read("normal_radius_m", &c.normal_radius_m);
+  p.read("max_normals", &c.max_normals);
+  p.read("gravity_constrained", &c.gravity_constrained);
+  return c;
+}
+
+BoxEstimator::Config getBoxEstimatorConfigFromRosParam(const ros::NodeHandle& nh_box,
+                                                       const BoxEstimator::Config& start,
+                                                       ParamErrors* errors) {
+  const ParamReader p(nh_box, errors);
+  BoxEstimator::Config c = start;
+  c.manhattan = getManhattanFrameConfigFromRosParam(nh_box, start.manhattan, errors);
+  p.read("min_points", &c.min_points);
+  p.readNumber("extent_trim_fraction", &c.extent_trim_fraction);
+  p.readNumber("depth_step_per_m2", &c.depth_step_per_m2);
+  p.readNumber("footprint_yaw_area_ratio", &c.footprint_yaw_area_ratio);
+  p.readNumber("outline_cell_m", &c.outline_cell_m);
+  p.read("normal_estimation", &c.normal_estimation);
+  return c;
+}
+
+AmodalCompletion::Config getAmodalCompletionConfigFromRosParam(
+    const ros::NodeHandle& nh_amodal, const AmodalCompletion::Config& start, ParamErrors* errors) {
+  const ParamReader p(nh_amodal, errors);
+  AmodalCompletion::Config c = start;
+  p.read("enable", &c.enable);
+  p.readNumber("cell_size_m", &c.cell_size_m);
+  p.readNumber("max_thin_ratio", &c.max_thin_ratio);
+  p.readNumber("free_margin_m", &c.free_margin_m);
+  p.readNumber("max_free_share", &c.max_free_share);
+  p.readNumber("min_free_ratio", &c.min_free_ratio);
+  p.read("min_in_view", &c.min_in_view);
+  p.read("min_observations", &c.min_observations);
+  return c;
+}
+
+ObjectDatabase::Config getObjectDatabaseConfigFromRosParam(const ros::NodeHandle& nh_database,
+                                                           const ObjectDatabase::Config& start,
+                                                           ParamErrors* errors) {
+  const ParamReader p(nh_database, errors);
+  ObjectDatabase::Config c = start;
+  p.read("fusion_voxel_size_m", &c.fusion_voxel_size_m);
+  p.read("no_fusion_within_keyframe", &c.no_fusion_within_keyframe);
+  p.read("disable_fusion", &c.disable_fusion);
+  p.read("fusion", &c.fusion);
+  p.readNumber("min_overlap_to_fuse", &c.min_overlap_to_fuse);
+  p.read("same_class_overlap_voxels", &c.same_class_overlap_voxels);
+  p.readNumber("surface_band_m", &c.surface_band_m);
+  c.amodal =
+      getAmodalCompletionConfigFromRosParam(child(nh_database, "amodal"), start.amodal, errors);
+  return c;
+}
+
+PriorSizeFilter::Config getPriorSizeFilterConfigFromRosParam(const ros::NodeHandle& nh_prior_filter,
+                                                             const PriorSizeFilter::Config& start,
+                                                             ParamErrors* errors) {
+  const ParamReader p(nh_prior_filter, errors);
+  PriorSizeFilter::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("volume_min_ratio", &c.volume_min_ratio);
+  p.read("volume_max_ratio", &c.volume_max_ratio);
+  p.read("edge_min_ratio", &c.edge_min_ratio);
+  p.read("keep_classes_without_prior", &c.keep_classes_without_prior);
+  return c;
+}
+
+IntersectionFilter::Config getIntersectionFilterConfigFromRosParam(
+    const ros::NodeHandle& nh_intersection_filter, const IntersectionFilter::Config& start,
+    ParamErrors* errors) {
+  const ParamReader p(nh_intersection_filter, errors);
+  IntersectionFilter::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("volume_ratio_threshold", &c.volume_ratio_threshold);
+  p.readNumber("duplicate_ratio", &c.duplicate_ratio);
+  p.read("merge_duplicates", &c.merge_duplicates);
+  p.readNumber("container_support_ratio", &c.container_support_ratio);
+  return c;
+}
+
+GravityEstimator::Config getGravityEstimatorConfigFromRosParam(
+    const ros::NodeHandle& nh_gravity, const GravityEstimator::Config& start, ParamErrors* errors) {
+  const ParamReader p(nh_gravity, errors);
+  GravityEstimator::Config c = start;
+  p.read("plane_distance_threshold_m", &c.plane_distance_threshold_m);
+  p.read("ransac_iterations", &c.ransac_iterations);
+  p.read("max_tilt_from_camera_up_deg", &c.max_tilt_from_camera_up_deg);
+  p.read("min_plane_fraction", &c.min_plane_fraction);
+  p.read("voxel_size_m", &c.voxel_size_m);
+  return c;
+}
+
+ObjectMapper::Config getObjectMapperConfigFromRosParam(const ros::NodeHandle& nh_private,
+                                                       ParamErrors* errors) {
+  const ParamReader p(nh_private, errors);
+  ObjectMapper::Config m;
+  // paper_method first (Eq. 2 largest segment, Eq. 7 literal fusion, PCL's LCCP, ...): every single
+  // setting read below starts from it, so one set as a parameter overrides it.
+  bool paper_method = false;
+  p.read("paper_method", &paper_method);
+  if (paper_method) m.usePaperMethod();
+  p.read("min_probability", &m.min_probability);
+  p.read("min_object_points", &m.min_object_points);
+  p.read("num_threads", &m.num_threads);
+  const auto ns = [&nh_private](const std::string& name) { return child(nh_private, name); };
+  m.extractor = getObjectCloudExtractorConfigFromRosParam(ns("extractor"), m.extractor, errors);
+  m.filter = getPointCloudFilterConfigFromRosParam(ns("filter"), m.filter, errors);
+  m.lccp = getLccpSegmenterConfigFromRosParam(ns("lccp"), m.lccp, errors);
+  m.selection = getSegmentSelectorConfigFromRosParam(nh_private, m.selection, errors);
+  m.floor = getFloorEstimatorConfigFromRosParam(ns("floor"), m.floor, errors);
+  m.box = getBoxEstimatorConfigFromRosParam(ns("box"), m.box, errors);
+  m.database = getObjectDatabaseConfigFromRosParam(ns("database"), m.database, errors);
+  m.prior_filter = getPriorSizeFilterConfigFromRosParam(ns("prior_filter"), m.prior_filter, errors);
+  m.intersection_filter = getIntersectionFilterConfigFromRosParam(ns("intersection_filter"),
+                                                                  m.intersection_filter, errors);
+  m.gravity = getGravityEstimatorConfigFromRosParam(ns("gravity"), m.gravity, errors);
+  return m;
+}
+
+KeyframeSelector::Config getKeyframeSelectorConfigFromRosParam(const ros::NodeHandle& nh_private,
+                                                               ParamErrors* errors) {
+  const ParamReader p(nh_private, errors);
+  KeyframeSelector::Config c;
+  std::string mode = KeyframeSelector::modeName(c.mode);
+  if (c.mode == KeyframeSelector::Mode::kExternal) mode = "topic";
+  p.read("keyframe_mode", &mode);
+  const Status parsed = KeyframeSelector::modeFromString(mode, &c.mode);
+  if (!parsed) p.error("parameter keyframe_mode: " + parsed.message());
+  p.read("keyframe_every_n", &c.every_n);
+  p.read("keyframe_min_translation_m", &c.min_translation_m);
+  p.read("keyframe_min_rotation_deg", &c.min_rotation_deg);
+  return c;
+}
+
+SegmenterOptions getSegmenterOptionsFromRosParam(const ros::NodeHandle& nh_private,
+                                                 ParamErrors* errors) {
+  const ParamReader p(nh_private, errors);
+  SegmenterOptions c;
+  p.read("model_dir", &c.model_dir);
+  p.readNumber("score_threshold", &c.score_threshold);
+  p.read("detector_backend", &c.backend);
+  p.readNumber("nms_threshold", &c.nms_threshold);
+  p.readNumber("mask_threshold", &c.mask_threshold);
+  p.read("fastestdet_model", &c.fastestdet_model);
+  p.read("fastestdet_labels", &c.fastestdet_labels);
+  p.read("maskrcnn_weights", &c.maskrcnn_weights);
+  p.read("maskrcnn_graph", &c.maskrcnn_graph);
+  p.read("maskrcnn_labels", &c.maskrcnn_labels);
+  return c;
+}
+
 ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHandle& nh_private,
-                                                              std::vector<std::string>* errors) {
-  const ros::NodeHandle& nh = nh_private;
-  std::vector<std::string>* e = errors;
+                                                              ParamErrors* errors) {
+  const ParamReader p(nh_private, errors);
   ObjectDetectionRosConfig cfg;
+  p.read("world_frame", &cfg.world_frame);
+  p.read("camera_frame", &cfg.camera_frame);
+  p.read("depth_registered", &cfg.depth_registered);
+  p.read("queue_size", &cfg.queue_size);
+  p.read("exact_sync", &cfg.exact_sync);
+  p.read("pose_source", &cfg.pose_source);
+  p.read("tf_timeout_s", &cfg.tf_timeout_s);
+  p.read("pose_max_time_diff_s", &cfg.pose_max_time_diff_s);
+  p.read("gravity_source", &cfg.gravity_source);
+  p.readVector3("gravity_down", &cfg.gravity_down_W);
+  p.read("gravity_frame", &cfg.gravity_frame);
+  cfg.keyframes = getKeyframeSelectorConfigFromRosParam(nh_private, errors);
 
-  // Node.
-  readParam(nh, "world_frame", &cfg.world_frame, e);
-  readParam(nh, "camera_frame", &cfg.camera_frame, e);
-  readParam(nh, "depth_registered", &cfg.depth_registered, e);
-  readParam(nh, "queue_size", &cfg.queue_size, e);
-  readParam(nh, "exact_sync", &cfg.exact_sync, e);
-  readParam(nh, "pose_source", &cfg.pose_source, e);
-  readParam(nh, "tf_timeout_s", &cfg.tf_timeout_s, e);
-  readParam(nh, "pose_max_time_diff_s", &cfg.pose_max_time_diff_s, e);
-  readParam(nh, "gravity_source", &cfg.gravity_source, e);
-  readVector3(nh, "gravity_down", &cfg.gravity_down_W, e);
-  readParam(nh, "gravity_frame", &cfg.gravity_frame, e);
-
-  std::string keyframe_mode = KeyframeSelector::modeName(cfg.keyframes.mode);
-  if (cfg.keyframes.mode == KeyframeSelector::Mode::kExternal) keyframe_mode = "topic";
-  readParam(nh, "keyframe_mode", &keyframe_mode, e);
-  const Status mode = KeyframeSelector::modeFromString(keyframe_mode, &cfg.keyframes.mode);
-  if (!mode && errors != nullptr) errors->push_back("parameter keyframe_mode: " + mode.message());
-  readParam(nh, "keyframe_every_n", &cfg.keyframes.every_n, e);
-  readParam(nh, "keyframe_min_translation_m", &cfg.keyframes.min_translation_m, e);
-  readParam(nh, "keyframe_min_rotation_deg", &cfg.keyframes.min_rotation_deg, e);
-
-  // Detector.
-  readParam(nh, "detector", &cfg.detector, e);
-  SegmenterOptions& seg = cfg.segmenter;
-  readParam(nh, "model_dir", &seg.model_dir, e);
-  readNumber(nh, "score_threshold", &seg.score_threshold, e);
-  readParam(nh, "detector_backend", &seg.backend, e);
-  readNumber(nh, "nms_threshold", &seg.nms_threshold, e);
-  readNumber(nh, "mask_threshold", &seg.mask_threshold, e);
-  readParam(nh, "fastestdet_model", &seg.fastestdet_model, e);
-  readParam(nh, "fastestdet_labels", &seg.fastestdet_labels, e);
-  readParam(nh, "maskrcnn_weights", &seg.maskrcnn_weights, e);
-  readParam(nh, "maskrcnn_graph", &seg.maskrcnn_graph, e);
-  readParam(nh, "maskrcnn_labels", &seg.maskrcnn_labels, e);
-  readParam(nh, "detections_max_age_s", &cfg.detections_max_age_s, e);
-  readParam(nh, "max_detections_per_frame", &cfg.max_detections_per_frame, e);
-  readParam(nh, "map_directory", &cfg.map_directory, e);
-  readParam(nh, "allow_any_map_path", &cfg.allow_any_map_path, e);
+  p.read("detector", &cfg.detector);
+  cfg.segmenter = getSegmenterOptionsFromRosParam(nh_private, errors);
+  p.read("detections_max_age_s", &cfg.detections_max_age_s);
+  p.read("max_detections_per_frame", &cfg.max_detections_per_frame);
+  p.read("map_directory", &cfg.map_directory);
+  p.read("allow_any_map_path", &cfg.allow_any_map_path);
   if (cfg.map_directory.empty()) cfg.map_directory = defaultMapDirectory();
-
-  readParam(nh, "processing_queue_size", &cfg.processing_queue_size, e);
-  readParam(nh, "refine_every_n_keyframes", &cfg.refine_every_n_keyframes, e);
-  readParam(nh, "priors_file", &cfg.priors_file, e);
+  p.read("processing_queue_size", &cfg.processing_queue_size);
+  p.read("refine_every_n_keyframes", &cfg.refine_every_n_keyframes);
+  p.read("priors_file", &cfg.priors_file);
   if (cfg.priors_file.empty()) {
     const std::string package = ros::package::getPath("multiview_object_detection");
     if (!package.empty()) cfg.priors_file = package + "/config/class_priors.yaml";
   }
-  readParam(nh, "publish_object_cloud", &cfg.publish_object_cloud, e);
+  p.read("publish_object_cloud", &cfg.publish_object_cloud);
 
-  // Core: every ObjectMapper::Config field, section/field.
-  ObjectMapper::Config& m = cfg.mapper;
-  // paper_method first (Eq. 2 largest segment, Eq. 7 literal fusion, PCL's LCCP, ...): every single
-  // setting read below starts from it, so one set as a parameter overrides it wherever it is read.
-  bool paper_method = false;
-  readParam(nh, "paper_method", &paper_method, e);
-  if (paper_method) m.usePaperMethod();
-  readParam(nh, "min_probability", &m.min_probability, e);
-  readParam(nh, "min_object_points", &m.min_object_points, e);
-  readParam(nh, "num_threads", &m.num_threads, e);
-
-  readParam(nh, "extractor/min_valid_depth_m", &m.extractor.min_valid_depth_m, e);
-  readParam(nh, "extractor/max_valid_depth_m", &m.extractor.max_valid_depth_m, e);
-  readParam(nh, "extractor/mask_erosion_px", &m.extractor.mask_erosion_px, e);
-  readParam(nh, "extractor/pixel_stride", &m.extractor.pixel_stride, e);
-  readParam(nh, "extractor/min_consistent_neighbours", &m.extractor.min_consistent_neighbours, e);
-  readNumber(nh, "extractor/consistency_tolerance_m", &m.extractor.consistency_tolerance_m, e);
-  readNumber(nh, "extractor/depth_step_per_m2", &m.extractor.depth_step_per_m2, e);
-
-  readParam(nh, "filter/enable", &m.filter.enable, e);
-  readParam(nh, "filter/voxel_leaf_size_m", &m.filter.voxel_leaf_size_m, e);
-  readParam(nh, "filter/min_depth_m", &m.filter.min_depth_m, e);
-  readParam(nh, "filter/max_depth_m", &m.filter.max_depth_m, e);
-  // Before outlier_removal: statistical_outlier_removal true / false (older configs).
-  if (nh.hasParam("filter/statistical_outlier_removal")) {
-    bool statistical = m.filter.outlier_removal.rfind("statistical", 0) == 0;
-    readParam(nh, "filter/statistical_outlier_removal", &statistical, e);
-    if (!statistical) {
-      m.filter.outlier_removal = "none";
-    } else if (m.filter.outlier_removal.rfind("statistical", 0) != 0) {
-      m.filter.outlier_removal = "statistical_centres";
-    }
-  }
-  readParam(nh, "filter/sor_mean_k", &m.filter.sor_mean_k, e);
-  readParam(nh, "filter/sor_stddev_mul", &m.filter.sor_stddev_mul, e);
-
-  readParam(nh, "lccp/enable", &m.lccp.enable, e);
-  readParam(nh, "lccp/voxel_resolution_m", &m.lccp.voxel_resolution_m, e);
-  readParam(nh, "lccp/seed_resolution_m", &m.lccp.seed_resolution_m, e);
-  readParam(nh, "lccp/spatial_importance", &m.lccp.spatial_importance, e);
-  readParam(nh, "lccp/normal_importance", &m.lccp.normal_importance, e);
-  readParam(nh, "lccp/log_depth_transform", &m.lccp.log_depth_transform, e);
-  readParam(nh, "lccp/concavity_tolerance_deg", &m.lccp.concavity_tolerance_deg, e);
-  readParam(nh, "lccp/smoothness_threshold", &m.lccp.smoothness_threshold, e);
-  readParam(nh, "lccp/min_segment_size", &m.lccp.min_segment_size, e);
-  readParam(nh, "lccp/use_extended_convexity", &m.lccp.use_extended_convexity, e);
-  readParam(nh, "lccp/use_sanity_criterion", &m.lccp.use_sanity_criterion, e);
-  readParam(nh, "lccp/min_points", &m.lccp.min_points, e);
-  readParam(nh, "filter/outlier_removal", &m.filter.outlier_removal, e);
-  readParam(nh, "filter/min_voxel_neighbours", &m.filter.min_voxel_neighbours, e);
-  readParam(nh, "lccp/selection", &m.selection.selection, e);
-  readParam(nh, "lccp/implementation", &m.lccp.implementation, e);
-  readNumber(nh, "selection/core_box_fraction", &m.selection.core_box_fraction, e);
-  readNumber(nh, "selection/core_mask_erosion", &m.selection.core_mask_erosion, e);
-  readNumber(nh, "selection/adjacency_distance_m", &m.selection.adjacency_distance_m, e);
-  readParam(nh, "selection/ring_px", &m.selection.ring_px, e);
-  readNumber(nh, "selection/prior_size_slack", &m.selection.prior_size_slack, e);
-  readNumber(nh, "selection/min_ring_share", &m.selection.min_ring_share, e);
-  readNumber(nh, "selection/resting_distance_m", &m.selection.resting_distance_m, e);
-  readNumber(nh, "selection/resting_min_share", &m.selection.resting_min_share, e);
-  readNumber(nh, "selection/resting_edge_margin_m", &m.selection.resting_edge_margin_m, e);
-  readNumber(nh, "selection/fallback_min_share", &m.selection.fallback_min_share, e);
-  readNumber(nh, "selection/top_clearance_m", &m.selection.top_clearance_m, e);
-  readNumber(nh, "selection/top_min_share", &m.selection.top_min_share, e);
-  readNumber(nh, "selection/top_crossing_share", &m.selection.top_crossing_share, e);
-  readNumber(nh, "selection/support_max_tilt_deg", &m.selection.support_max_tilt_deg, e);
-  readParam(nh, "floor/enable", &m.floor.enable, e);
-  readNumber(nh, "floor/clearance_m", &m.floor.clearance_m, e);
-  readNumber(nh, "floor/clearance_per_m2", &m.floor.clearance_per_m2, e);
-  readNumber(nh, "floor/grounding_distance_m", &m.floor.grounding_distance_m, e);
-
-  readParam(nh, "box/inlier_angle_deg", &m.box.manhattan.inlier_angle_deg, e);
-  readParam(nh, "box/normal_radius_m", &m.box.manhattan.normal_radius_m, e);
-  readParam(nh, "box/max_normals", &m.box.manhattan.max_normals, e);
-  readParam(nh, "box/gravity_constrained", &m.box.manhattan.gravity_constrained, e);
-  readParam(nh, "box/min_points", &m.box.min_points, e);
-  readNumber(nh, "box/extent_trim_fraction", &m.box.extent_trim_fraction, e);
-  readNumber(nh, "box/depth_step_per_m2", &m.box.depth_step_per_m2, e);
-  readNumber(nh, "box/footprint_yaw_area_ratio", &m.box.footprint_yaw_area_ratio, e);
-  readNumber(nh, "box/outline_cell_m", &m.box.outline_cell_m, e);
-  readParam(nh, "box/normal_estimation", &m.box.normal_estimation, e);
-
-  readParam(nh, "database/fusion_voxel_size_m", &m.database.fusion_voxel_size_m, e);
-  readParam(nh, "database/no_fusion_within_keyframe", &m.database.no_fusion_within_keyframe, e);
-  readParam(nh, "database/disable_fusion", &m.database.disable_fusion, e);
-  readParam(nh, "database/fusion", &m.database.fusion, e);
-  readNumber(nh, "database/min_overlap_to_fuse", &m.database.min_overlap_to_fuse, e);
-  readParam(nh, "database/same_class_overlap_voxels", &m.database.same_class_overlap_voxels, e);
-  readNumber(nh, "database/surface_band_m", &m.database.surface_band_m, e);
-  readParam(nh, "database/amodal/enable", &m.database.amodal.enable, e);
-  readNumber(nh, "database/amodal/cell_size_m", &m.database.amodal.cell_size_m, e);
-  readNumber(nh, "database/amodal/max_thin_ratio", &m.database.amodal.max_thin_ratio, e);
-  readNumber(nh, "database/amodal/free_margin_m", &m.database.amodal.free_margin_m, e);
-  readNumber(nh, "database/amodal/max_free_share", &m.database.amodal.max_free_share, e);
-  readNumber(nh, "database/amodal/min_free_ratio", &m.database.amodal.min_free_ratio, e);
-  readParam(nh, "database/amodal/min_in_view", &m.database.amodal.min_in_view, e);
-  readParam(nh, "database/amodal/min_observations", &m.database.amodal.min_observations, e);
-
-  readParam(nh, "prior_filter/enable", &m.prior_filter.enable, e);
-  readParam(nh, "prior_filter/volume_min_ratio", &m.prior_filter.volume_min_ratio, e);
-  readParam(nh, "prior_filter/volume_max_ratio", &m.prior_filter.volume_max_ratio, e);
-  readParam(nh, "prior_filter/edge_min_ratio", &m.prior_filter.edge_min_ratio, e);
-  readParam(nh, "prior_filter/keep_classes_without_prior",
-            &m.prior_filter.keep_classes_without_prior, e);
-
-  readParam(nh, "intersection_filter/enable", &m.intersection_filter.enable, e);
-  readParam(nh, "intersection_filter/volume_ratio_threshold",
-            &m.intersection_filter.volume_ratio_threshold, e);
-  readNumber(nh, "intersection_filter/duplicate_ratio", &m.intersection_filter.duplicate_ratio, e);
-  readParam(nh, "intersection_filter/merge_duplicates", &m.intersection_filter.merge_duplicates, e);
-  readNumber(nh, "intersection_filter/container_support_ratio",
-             &m.intersection_filter.container_support_ratio, e);
-
-  readParam(nh, "gravity/plane_distance_threshold_m", &m.gravity.plane_distance_threshold_m, e);
-  readParam(nh, "gravity/ransac_iterations", &m.gravity.ransac_iterations, e);
-  readParam(nh, "gravity/max_tilt_from_camera_up_deg", &m.gravity.max_tilt_from_camera_up_deg, e);
-  readParam(nh, "gravity/min_plane_fraction", &m.gravity.min_plane_fraction, e);
-  readParam(nh, "gravity/voxel_size_m", &m.gravity.voxel_size_m, e);
-
-  m.gravity_down_W = cfg.mapperConfig().gravity_down_W;
+  cfg.mapper = getObjectMapperConfigFromRosParam(nh_private, errors);
+  cfg.mapper.gravity_down_W = cfg.mapperConfig().gravity_down_W;
   return cfg;
 }
 

@@ -70,6 +70,15 @@ class KeyframeBuffer {
   void dropPosesAfter(const ros::Time& stamp);                     // needs mutex_
   Lookup lookupCameraPose(const PendingFrame& frame, bool timed_out, Eigen::Isometry3d* T_W_C,
                           Eigen::Isometry3d* T_C_D, std::string* error);  // needs mutex_
+  // The parts of lookupCameraPose: the depth camera in the colour camera (unregistered depth), and
+  // the colour camera in the world from TF or from the pose topic (needs mutex_).
+  Lookup lookupDepthToColor(const PendingFrame& frame, bool timed_out, Eigen::Isometry3d* T_C_D,
+                            std::string* error) const;
+  Lookup lookupTransform(const std::string& target, const std::string& source,
+                         const ros::Time& stamp, bool timed_out, const std::string& what,
+                         const std::string& waited, Eigen::Isometry3d* T, std::string* error) const;
+  Lookup lookupPoseOnTopic(const PendingFrame& frame, bool timed_out, Eigen::Isometry3d* T_W_C,
+                           std::string* error) const;
 
   const ObjectDetectionRosConfig config_;  // fixed fields only (frames, pose source, timeouts)
   const RgbdTopics topics_;
