@@ -16,7 +16,8 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/datasets/class_names.h"
+#include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
 #include "multiview_object_detection/io/image_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"

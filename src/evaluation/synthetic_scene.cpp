@@ -17,6 +17,7 @@
 
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/evaluation/split_mix.h"
+#include "multiview_object_detection/io/ply_writer.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
@@ -1552,31 +1553,22 @@ Status SyntheticScene::writeSceneNN(const std::string& sequence_dir, const std::
   if (!(status = writeText(dir / (id + ".xml"), xml))) return status;
 
   // The observed surface as a labelled vertex cloud (binary little-endian PLY).
-  const std::vector<VoxelAccumulator::Voxel>& voxels = surface.voxels();
-  std::string ply =
-      "ply\nformat binary_little_endian 1.0\ncomment synthetic SceneNN-layout "
-      "sequence (multiview_object_detection), y-up\nelement vertex " +
-      std::to_string(voxels.size()) +
-      "\nproperty float x\nproperty float y\nproperty float z\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-      "property ushort label\nend_header\n";
-  const size_t header_size = ply.size();
-  constexpr size_t kVertexBytes = 3 * 4 + 3 + 2;
-  ply.resize(header_size + voxels.size() * kVertexBytes);
-  char* cursor = &ply[header_size];
-  for (const VoxelAccumulator::Voxel& voxel : voxels) {
+  std::vector<PlyColoredVertex> vertices;
+  vertices.reserve(surface.voxels().size());
+  for (const VoxelAccumulator::Voxel& voxel : surface.voxels()) {
     const Eigen::Vector3d p = M * (voxel.sum / voxel.count);
-    const float xyz[3] = {static_cast<float>(p.x()), static_cast<float>(p.y()),
-                          static_cast<float>(p.z())};
-    std::memcpy(cursor, xyz, sizeof(xyz));  // little-endian host (x86, ARM)
-    cursor += sizeof(xyz);
-    for (int c = 2; c >= 0; --c) {  // BGR sums -> RGB
-      *cursor++ = static_cast<char>(static_cast<uint8_t>(voxel.bgr[c] / voxel.count));
+    PlyColoredVertex vertex;
+    vertex.xyz[0] = static_cast<float>(p.x());
+    vertex.xyz[1] = static_cast<float>(p.y());
+    vertex.xyz[2] = static_cast<float>(p.z());
+    for (int c = 0; c < 3; ++c) {  // BGR sums -> RGB
+      vertex.rgb[c] = static_cast<uint8_t>(voxel.bgr[2 - c] / voxel.count);
     }
-    const uint16_t label = static_cast<uint16_t>(std::clamp(voxel.label, 0, 65535));
-    std::memcpy(cursor, &label, sizeof(label));
-    cursor += sizeof(label);
+    vertex.label = static_cast<uint16_t>(std::clamp(voxel.label, 0, 65535));
+    vertices.push_back(vertex);
   }
+  const std::string ply = plyBinaryColoredLabelled(
+      "synthetic SceneNN-layout sequence (multiview_object_detection), y-up", vertices);
   return writeText(dir / (id + ".ply"), ply);
 }
 

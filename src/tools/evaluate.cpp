@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_args.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
 #include "multiview_object_detection/io/json_io.h"

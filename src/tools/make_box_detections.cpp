@@ -10,6 +10,7 @@
 
 #include "cli_args.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/box_detections.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 

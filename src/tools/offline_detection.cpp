@@ -27,8 +27,9 @@
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/io/ply_writer.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace fs = std::filesystem;
 
@@ -357,18 +358,6 @@ std::string fileSafe(std::string name) {
   return name;
 }
 
-std::string plyText(const mvod::PointCloud& points) {
-  std::ostringstream out;
-  out << "ply\nformat ascii 1.0\nelement vertex " << points.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-  char line[96];
-  for (const Eigen::Vector3f& p : points) {
-    std::snprintf(line, sizeof(line), "%.4f %.4f %.4f\n", p.x(), p.y(), p.z());
-    out << line;
-  }
-  return out.str();
-}
-
 void printTable(const std::vector<mvod::MapObject>& objects) {
   std::printf("%4s  %-16s %5s %4s  %-26s %-22s %8s\n", "id", "class", "prob", "obs", "centre (m)",
               "size (m)", "yaw (deg)");
@@ -647,7 +636,8 @@ int run(int argc, char** argv) {
                                fileSafe(object.class_name);
       for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
                                std::make_pair("_segment.ply", &object.segment_W)}) {
-        const mvod::Status saved = mvod::writeFileAtomic(stem + part.first, plyText(*part.second));
+        const mvod::Status saved =
+            mvod::writeFileAtomic(stem + part.first, mvod::plyAsciiXyz(*part.second));
         if (!saved) {
           std::cerr << "offline_detection: " << saved.message() << "\n";
           exit_code = kExitFailure;
