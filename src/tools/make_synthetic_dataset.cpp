@@ -11,7 +11,7 @@
 #include <string>
 
 #include "cli_args.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 
 namespace {
 

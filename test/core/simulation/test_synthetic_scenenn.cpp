@@ -19,8 +19,8 @@
 #include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/io/ply_reader.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -5,7 +5,7 @@
 // (Irwin-Hall): plain IEEE arithmetic, the same on every platform. Morphology on binary masks
 // (max/min) is exact too; the jitter field is interpolated here rather than by cv::resize, whose
 // SIMD paths may round differently.
-#include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
+#include "multiview_object_detection/simulation/simulated_instance_segmenter.h"
 
 #include <algorithm>
 #include <cctype>
@@ -18,9 +18,9 @@
 
 #include "multiview_object_detection/datasets/class_names.h"
 #include "multiview_object_detection/datasets/scenenn_annotation.h"
-#include "multiview_object_detection/evaluation/split_mix.h"
 #include "multiview_object_detection/io/image_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/simulation/split_mix.h"
 
 namespace mvod {
 namespace {
