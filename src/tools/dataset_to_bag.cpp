@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
@@ -124,71 +124,8 @@ BenchmarkSegmenterOptions segmenterOptions(const Options& options) {
   return segmenter;
 }
 
-// Returns -1 when the options are fine, else the exit status.
-int parseOptions(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (arg == "--lz4") {
-      options->lz4 = true;
-      continue;
-    }
-    if (arg == "--quiet") {
-      options->quiet = true;
-      continue;
-    }
-    if (i + 1 >= argc) return usageError(arg + " needs a value");
-    const std::string value = argv[++i];
-    long number = 0;
-    if (arg == "--dataset") {
-      options->dataset_dir = value;
-    } else if (arg == "--output") {
-      options->output_path = value;
-    } else if (arg == "--format") {
-      if (value != "auto" && value != "7scenes" && value != "scenenn") {
-        return usageError("--format must be auto, 7scenes or scenenn, not '" + value + "'");
-      }
-      options->format = value;
-    } else if (arg == "--detector") {
-      options->detector = value;
-    } else if (arg == "--detections") {
-      options->detections_dir = value;
-    } else if (arg == "--model-dir") {
-      options->model_dir = value;
-    } else if (arg == "--detections-topic") {
-      if (value.empty()) return usageError("--detections-topic must not be empty");
-      options->detections_topic = value;
-    } else if (arg == "--camera") {
-      options->camera = value;
-    } else if (arg == "--world-frame") {
-      options->world_frame = value;
-    } else if (arg == "--pose-topic") {
-      options->pose_topic = value;
-    } else if (arg == "--rate-hz") {
-      if (!cli::parseDouble(value, &options->rate_hz) || !(options->rate_hz > 0.0)) {
-        return usageError("--rate-hz needs a number > 0, not '" + value + "'");
-      }
-    } else if (arg == "--time-offset") {
-      if (!cli::parseDouble(value, &options->time_offset_s) || options->time_offset_s < 0.0) {
-        return usageError("--time-offset needs a number >= 0, not '" + value + "'");
-      }
-    } else if (arg == "--first") {
-      if (!cli::parseLong(value, 0, 999999999, &number)) {
-        return usageError("--first needs a frame number >= 0, not '" + value + "'");
-      }
-      options->first = number;
-    } else if (arg == "--last") {
-      if (!cli::parseLong(value, 0, 999999999, &number)) {
-        return usageError("--last needs a frame number >= 0, not '" + value + "'");
-      }
-      options->last = number;
-    } else {
-      return usageError("unknown option '" + arg + "'");
-    }
-  }
+// The options together: required ones, ROS names, the frame range, the detector.
+int checkOptions(const Options* options) {
   if (options->dataset_dir.empty()) return usageError("--dataset is required");
   if (options->output_path.empty()) return usageError("--output is required");
   if (options->camera.empty() || options->world_frame.empty() || options->pose_topic.empty()) {
@@ -219,6 +156,70 @@ int parseOptions(int argc, char** argv, Options* options) {
     return usageError("--detections needs --detector");
   }
   return -1;
+}
+
+// A number for which `valid` holds; the message names the text given.
+void addNumber(CLI::App* app, const std::string& name, double* value,
+               std::function<bool(double)> valid, const std::string& expected) {
+  cli::addValue(app, name, [=](const std::string& text) {
+    double parsed = 0.0;
+    if (!cli::parseDouble(text, &parsed) || !valid(parsed)) {
+      return name + " needs " + expected + ", not '" + text + "'";
+    }
+    *value = parsed;
+    return std::string();
+  });
+}
+
+// A frame number >= 0; the message names the text given.
+void addFrameNumber(CLI::App* app, const std::string& name, long* value) {
+  cli::addValue(app, name, [=](const std::string& text) {
+    if (!cli::parseLong(text, 0, 999999999, value)) {
+      return name + " needs a frame number >= 0, not '" + text + "'";
+    }
+    return std::string();
+  });
+}
+
+void addOptions(CLI::App* app, Options* options) {
+  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset_dir),
+                                    std::make_pair("--output", &options->output_path),
+                                    std::make_pair("--detector", &options->detector),
+                                    std::make_pair("--detections", &options->detections_dir),
+                                    std::make_pair("--model-dir", &options->model_dir),
+                                    std::make_pair("--camera", &options->camera),
+                                    std::make_pair("--world-frame", &options->world_frame),
+                                    std::make_pair("--pose-topic", &options->pose_topic)}) {
+    cli::addText(app, name, value);
+  }
+  cli::addValue(app, "--format", [options](const std::string& text) {
+    if (text != "auto" && text != "7scenes" && text != "scenenn") {
+      return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
+    }
+    options->format = text;
+    return std::string();
+  });
+  cli::addText(app, "--detections-topic", &options->detections_topic,
+               "--detections-topic must not be empty");
+  addNumber(
+      app, "--rate-hz", &options->rate_hz, [](double v) { return v > 0.0; }, "a number > 0");
+  addNumber(
+      app, "--time-offset", &options->time_offset_s, [](double v) { return v >= 0.0; },
+      "a number >= 0");
+  addFrameNumber(app, "--first", &options->first);
+  addFrameNumber(app, "--last", &options->last);
+  cli::addFlag(app, "--lz4", &options->lz4);
+  cli::addFlag(app, "--quiet", &options->quiet);
+}
+
+// Returns -1 when the options are fine, else the exit status.
+int parseOptions(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  addOptions(&app, options);
+  const int parsed = cli::parse(&app, argc, argv, "dataset_to_bag", kUsage, "\n");
+  if (parsed >= 0) return parsed;
+  return checkOptions(options);
 }
 
 // The dataset, with what a user must tell the node to replay it.

@@ -8,13 +8,14 @@
 #include <string>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
 #include "multiview_object_detection/io/json_io.h"
 
 namespace fs = std::filesystem;
+namespace cli = mvod::cli;
 
 namespace {
 
@@ -66,7 +67,6 @@ struct Options {
   std::string csv;
   std::string up = "auto";
   double voxel_size_m = 0.05;
-  bool help = false;
 };
 
 bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
@@ -86,56 +86,56 @@ bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
   return true;
 }
 
-// Returns an empty string on success, else what is wrong.
-std::string parseArguments(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string* out) {
-      if (i + 1 >= argc) return false;
-      *out = argv[++i];
-      return true;
-    };
-    std::string text;
-    if (arg == "--help" || arg == "-h") {
-      options->help = true;
-    } else if (arg == "--objects" || arg == "--ground-truth" || arg == "--clouds" ||
-               arg == "--markdown" || arg == "--csv" || arg == "--up" || arg == "--plot") {
-      if (!value(&text) || text.empty()) return arg + " needs a value";
-      if (arg == "--objects") options->objects.push_back(text);
-      if (arg == "--ground-truth") options->ground_truth.push_back(text);
-      if (arg == "--clouds") options->clouds.push_back(text);
-      if (arg == "--plot") options->plot = text;
-      if (arg == "--markdown") options->markdown = text;
-      if (arg == "--csv") options->csv = text;
-      if (arg == "--up") {
-        Eigen::Vector3d axis;
-        if (text != "auto" && !parseAxis(text, &axis)) {
-          return "--up must be x, y, z, -x, -y, -z or auto";
-        }
-        options->up = text;
-      }
-    } else if (arg == "--voxel-size") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->voxel_size_m) ||
-          !(options->voxel_size_m > 0.0)) {
-        return "--voxel-size needs a number > 0 (metres)";
-      }
-    } else {
-      return "unknown argument '" + arg + "'";
-    }
+// What is missing or inconsistent after parsing, "" when nothing.
+std::string checkArguments(const Options& options) {
+  if (options.objects.empty()) return "--objects is required";
+  if (options.ground_truth.empty()) {
+    if (options.plot.empty()) return "--ground-truth is required";
+    if (options.objects.size() > 1) return "several --objects need one --ground-truth each";
+  } else if (options.ground_truth.size() != options.objects.size()) {
+    return "give one --ground-truth per --objects (" + std::to_string(options.objects.size()) +
+           " --objects, " + std::to_string(options.ground_truth.size()) + " --ground-truth)";
   }
-  if (options->help) return "";
-  if (options->objects.empty()) return "--objects is required";
-  if (options->ground_truth.empty()) {
-    if (options->plot.empty()) return "--ground-truth is required";
-    if (options->objects.size() > 1) return "several --objects need one --ground-truth each";
-  } else if (options->ground_truth.size() != options->objects.size()) {
-    return "give one --ground-truth per --objects (" + std::to_string(options->objects.size()) +
-           " --objects, " + std::to_string(options->ground_truth.size()) + " --ground-truth)";
-  }
-  if (!options->clouds.empty() && options->clouds.size() != options->objects.size()) {
+  if (!options.clouds.empty() && options.clouds.size() != options.objects.size()) {
     return "give --clouds once per --objects, or not at all";
   }
   return "";
+}
+
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  for (const auto& [name, list] : {std::make_pair("--objects", &options->objects),
+                                   std::make_pair("--ground-truth", &options->ground_truth),
+                                   std::make_pair("--clouds", &options->clouds)}) {
+    cli::addValue(&app, name, [name = std::string(name), list](const std::string& text) {
+      if (text.empty()) return name + " needs a value";
+      list->push_back(text);
+      return std::string();
+    });
+  }
+  for (const auto& [name, value] :
+       {std::make_pair("--plot", &options->plot), std::make_pair("--markdown", &options->markdown),
+        std::make_pair("--csv", &options->csv)}) {
+    cli::addText(&app, name, value, std::string(name) + " needs a value");
+  }
+  cli::addValue(&app, "--up", [options](const std::string& text) {
+    Eigen::Vector3d axis;
+    if (text.empty()) return std::string("--up needs a value");
+    if (text != "auto" && !parseAxis(text, &axis)) {
+      return std::string("--up must be x, y, z, -x, -y, -z or auto");
+    }
+    options->up = text;
+    return std::string();
+  });
+  cli::addNumber(
+      &app, "--voxel-size", &options->voxel_size_m, [](double v) { return v > 0.0; },
+      "--voxel-size needs a number > 0 (metres)");
+  const int parsed = cli::parse(&app, argc, argv, "evaluate", kUsage);
+  if (parsed >= 0) return parsed;
+  const std::string error = checkArguments(*options);
+  return error.empty() ? -1 : cli::usageError("evaluate", error, kUsage);
 }
 
 bool endsWith(const std::string& text, const std::string& suffix) {
@@ -147,15 +147,8 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 
 int main(int argc, char** argv) {
   Options options;
-  const std::string error = parseArguments(argc, argv, &options);
-  if (options.help) {
-    std::fputs(kUsage, stdout);
-    return kExitOk;
-  }
-  if (!error.empty()) {
-    std::cerr << "evaluate: " << error << "\n\n" << kUsage;
-    return kExitUsage;
-  }
+  const int parsed = parseArguments(argc, argv, &options);
+  if (parsed >= 0) return parsed;
 
   // A synthetic dataset folder holds its ground_truth.json; a SceneNN folder holds <id>.ply/.xml.
   std::error_code fs_error;

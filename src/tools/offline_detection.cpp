@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
@@ -32,6 +32,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace fs = std::filesystem;
+namespace cli = mvod::cli;
 
 namespace {
 
@@ -129,140 +130,106 @@ struct Options {
   bool simulated_perfect = false;
   long simulated_seed = 1;
   bool quiet = false;
-  bool help = false;
 };
 
-// Returns an empty string on success, else what is wrong.
-std::string parseArguments(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string* out) {
-      if (i + 1 >= argc) return false;
-      *out = argv[++i];
-      return true;
-    };
-    std::string text;
-    if (arg == "--help" || arg == "-h") {
-      options->help = true;
-    } else if (arg == "--no-filter") {
-      options->no_filter = true;
-    } else if (arg == "--no-lccp") {
-      options->no_lccp = true;
-    } else if (arg == "--single-frame") {
-      options->single_frame = true;
-    } else if (arg == "--paper") {
-      options->paper = true;
-    } else if (arg == "--no-floor") {
-      options->no_floor = true;
-    } else if (arg == "--no-amodal") {
-      options->no_amodal = true;
-    } else if (arg == "--selection") {
-      if (!value(&options->selection) ||
-          (options->selection != "largest" && options->selection != "consistent")) {
-        return "--selection needs largest or consistent";
-      }
-    } else if (arg == "--fusion") {
-      if (!value(&options->fusion) ||
-          (options->fusion != "paper" && options->fusion != "evidence")) {
-        return "--fusion needs paper or evidence";
-      }
-    } else if (arg == "--normal-estimation") {
-      if (!value(&options->normal_estimation) ||
-          (options->normal_estimation != "cells" && options->normal_estimation != "radius")) {
-        return "--normal-estimation needs cells or radius";
-      }
-    } else if (arg == "--lccp-implementation") {
-      if (!value(&options->lccp_implementation) ||
-          (options->lccp_implementation != "voxel_grid" && options->lccp_implementation != "pcl")) {
-        return "--lccp-implementation needs voxel_grid or pcl";
-      }
-    } else if (arg == "--outlier-removal") {
-      if (!value(&options->outlier_removal) ||
-          (options->outlier_removal != "statistical" &&
-           options->outlier_removal != "statistical_centres" &&
-           options->outlier_removal != "voxel_neighbours" && options->outlier_removal != "none")) {
-        return "--outlier-removal needs statistical, statistical_centres, voxel_neighbours or none";
-      }
-    } else if (arg == "--simulated-perfect") {
-      options->simulated_perfect = true;
-    } else if (arg == "--simulated-seed") {
-      if (!value(&text) || !mvod::cli::parseLong(text, 0, std::numeric_limits<unsigned int>::max(),
-                                                 &options->simulated_seed)) {
-        return "--simulated-seed needs an integer >= 0";
-      }
-    } else if (arg == "--estimate-gravity") {
-      options->estimate_gravity = true;
-    } else if (arg == "--quiet") {
-      options->quiet = true;
-    } else if (arg == "--dataset" || arg == "--detections" || arg == "--detector" ||
-               arg == "--model-dir" || arg == "--output" || arg == "--save-clouds" ||
-               arg == "--overlays" || arg == "--priors" || arg == "--backend" ||
-               arg == "--timings" || arg == "--format") {
-      if (!value(&text) || text.empty()) return arg + " needs a value";
-      if (arg == "--dataset") options->dataset = text;
-      if (arg == "--detections") options->detections = text;
-      if (arg == "--detector") options->detector = text;
-      if (arg == "--model-dir") options->model_dir = text;
-      if (arg == "--output") options->output = text;
-      if (arg == "--save-clouds") options->save_clouds = text;
-      if (arg == "--overlays") options->overlays = text;
-      if (arg == "--timings") options->timings = text;
-      if (arg == "--priors") options->priors = text;
-      if (arg == "--backend") options->backend = text;
-      if (arg == "--format") {
-        if (text != "auto" && text != "7scenes" && text != "scenenn") {
-          return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
-        }
-        options->format = text;
-      }
-    } else if (arg == "--threads") {
-      long parsed = 0;
-      if (!value(&text) || !mvod::cli::parseLong(text, 0, 256, &parsed)) {
-        return "--threads needs an integer in [0, 256]";
-      }
-      options->threads = static_cast<int>(parsed);
-    } else if (arg == "--max-detections") {
-      long parsed = 0;
-      if (!value(&text) ||
-          !mvod::cli::parseLong(text, 1, std::numeric_limits<int>::max(), &parsed)) {
-        return "--max-detections needs an integer >= 1";
-      }
-      options->max_detections = static_cast<int>(parsed);
-    } else if (arg == "--every" || arg == "--first" || arg == "--last") {
-      long parsed = 0;
-      if (!value(&text) || !mvod::cli::parseLong(text, std::numeric_limits<int>::min(),
-                                                 std::numeric_limits<int>::max(), &parsed)) {
-        return arg + " needs an integer";
-      }
-      const int number = static_cast<int>(parsed);
-      if (arg == "--every") {
-        if (number < 1) return "--every must be >= 1";
-        options->every = number;
-      }
-      if (arg == "--first") options->first = number;
-      if (arg == "--last") options->last = number;
-    } else if (arg == "--score-threshold") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->score_threshold)) {
-        return "--score-threshold needs a number";
-      }
-    } else if (arg == "--min-probability") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->min_probability)) {
-        return "--min-probability needs a number";
-      }
-      if (options->min_probability < 0.0 || options->min_probability > 1.0) {
-        return "--min-probability must be in [0, 1]";
-      }
-    } else {
-      return "unknown argument '" + arg + "'";
+// Input, detector and output options.
+void addInputOptions(CLI::App* app, Options* options) {
+  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset),
+                                    std::make_pair("--detections", &options->detections),
+                                    std::make_pair("--detector", &options->detector),
+                                    std::make_pair("--model-dir", &options->model_dir),
+                                    std::make_pair("--output", &options->output),
+                                    std::make_pair("--save-clouds", &options->save_clouds),
+                                    std::make_pair("--overlays", &options->overlays),
+                                    std::make_pair("--timings", &options->timings),
+                                    std::make_pair("--priors", &options->priors),
+                                    std::make_pair("--backend", &options->backend)}) {
+    cli::addText(app, name, value, std::string(name) + " needs a value");
+  }
+  cli::addValue(app, "--format", [options](const std::string& text) {
+    if (text.empty()) return std::string("--format needs a value");
+    if (text != "auto" && text != "7scenes" && text != "scenenn") {
+      return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
     }
+    options->format = text;
+    return std::string();
+  });
+  cli::addInteger(app, "--simulated-seed", 0, std::numeric_limits<unsigned int>::max(),
+                  &options->simulated_seed, "--simulated-seed needs an integer >= 0");
+  cli::addFlag(app, "--simulated-perfect", &options->simulated_perfect);
+  cli::addNumber(
+      app, "--score-threshold", &options->score_threshold, [](double) { return true; },
+      "--score-threshold needs a number");
+  cli::addInteger(app, "--max-detections", 1, std::numeric_limits<int>::max(),
+                  &options->max_detections, "--max-detections needs an integer >= 1");
+  cli::addInteger(app, "--threads", 0, 256, &options->threads,
+                  "--threads needs an integer in [0, 256]");
+  cli::addValue(app, "--every", [options](const std::string& text) {
+    long every = 0;
+    if (!cli::parseLong(text, std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                        &every)) {
+      return std::string("--every needs an integer");
+    }
+    if (every < 1) return std::string("--every must be >= 1");
+    options->every = static_cast<int>(every);
+    return std::string();
+  });
+  cli::addInteger(app, "--first", std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                  &options->first, "--first needs an integer");
+  cli::addInteger(app, "--last", std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                  &options->last, "--last needs an integer");
+  cli::addFlag(app, "--quiet", &options->quiet);
+}
+
+// The method's options: Eq. 5's lambda, the ablations and the paper's variants.
+void addMethodOptions(CLI::App* app, Options* options) {
+  cli::addValue(app, "--min-probability", [options](const std::string& text) {
+    if (!cli::parseDouble(text, &options->min_probability)) {
+      return std::string("--min-probability needs a number");
+    }
+    if (options->min_probability < 0.0 || options->min_probability > 1.0) {
+      return std::string("--min-probability must be in [0, 1]");
+    }
+    return std::string();
+  });
+  cli::addFlag(app, "--no-filter", &options->no_filter);
+  cli::addFlag(app, "--no-lccp", &options->no_lccp);
+  cli::addFlag(app, "--single-frame", &options->single_frame);
+  cli::addFlag(app, "--paper", &options->paper);
+  cli::addFlag(app, "--no-floor", &options->no_floor);
+  cli::addFlag(app, "--no-amodal", &options->no_amodal);
+  cli::addFlag(app, "--estimate-gravity", &options->estimate_gravity);
+  cli::addChoice(app, "--selection", {"largest", "consistent"}, &options->selection,
+                 "--selection needs largest or consistent");
+  cli::addChoice(app, "--fusion", {"paper", "evidence"}, &options->fusion,
+                 "--fusion needs paper or evidence");
+  cli::addChoice(app, "--normal-estimation", {"cells", "radius"}, &options->normal_estimation,
+                 "--normal-estimation needs cells or radius");
+  cli::addChoice(app, "--lccp-implementation", {"voxel_grid", "pcl"}, &options->lccp_implementation,
+                 "--lccp-implementation needs voxel_grid or pcl");
+  cli::addChoice(
+      app, "--outlier-removal", {"statistical", "statistical_centres", "voxel_neighbours", "none"},
+      &options->outlier_removal,
+      "--outlier-removal needs statistical, statistical_centres, voxel_neighbours or none");
+}
+
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  addInputOptions(&app, options);
+  addMethodOptions(&app, options);
+  const int parsed = cli::parse(&app, argc, argv, "offline_detection", kUsage);
+  if (parsed >= 0) return parsed;
+  std::string error;
+  if (options->dataset.empty()) {
+    error = "--dataset is required";
+  } else if (options->first > options->last) {
+    error = "--first is after --last";
+  } else if (options->detector == "files" && options->detections.empty()) {
+    error = "--detector files needs --detections DIR";
   }
-  if (options->help) return "";
-  if (options->dataset.empty()) return "--dataset is required";
-  if (options->first > options->last) return "--first is after --last";
-  if (options->detector == "files" && options->detections.empty()) {
-    return "--detector files needs --detections DIR";
-  }
-  return "";
+  return error.empty() ? -1 : cli::usageError("offline_detection", error, kUsage);
 }
 
 // config/class_priors.yaml of the package: next to the sources (catkin devel space: the workspace's
@@ -378,15 +345,8 @@ namespace {
 // main() without the last-resort catch.
 int run(int argc, char** argv) {
   Options options;
-  const std::string bad_arguments = parseArguments(argc, argv, &options);
-  if (options.help) {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  if (!bad_arguments.empty()) {
-    std::cerr << "offline_detection: " << bad_arguments << "\n\n" << kUsage;
-    return kExitUsage;
-  }
+  const int parsed = parseArguments(argc, argv, &options);
+  if (parsed >= 0) return parsed;
 
   // Bad options are usage errors (exit 2), found before any file is touched.
   mvod::BenchmarkSegmenterOptions segmenter_options;
