@@ -47,19 +47,27 @@ std::vector<Eigen::Vector2d> footprint(const OrientedBox& box, const Eigen::Vect
   return corners;
 }
 
-}  // namespace
+// The plan's axes: up, and e1, e2 spanning the floor plane (image right = e1, image up = e2).
+struct PlanAxes {
+  Eigen::Vector3d up, e1, e2;
+};
 
-cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
-                        const std::vector<EvaluatedPrediction>& predictions,
-                        const Eigen::Vector3d& up_W, const BirdsEyeConfig& config) {
-  const Eigen::Vector3d up = up_W.norm() > 1e-9 ? up_W.normalized() : Eigen::Vector3d::UnitZ();
+PlanAxes planAxes(const Eigen::Vector3d& up_W) {
+  PlanAxes axes;
+  axes.up = up_W.norm() > 1e-9 ? up_W.normalized() : Eigen::Vector3d::UnitZ();
   Eigen::Index axis = 0;
-  up.cwiseAbs().minCoeff(&axis);
-  Eigen::Vector3d e1 = Eigen::Vector3d::Unit(axis);
-  e1 = (e1 - e1.dot(up) * up).normalized();
-  const Eigen::Vector3d e2 = up.cross(e1);
+  axes.up.cwiseAbs().minCoeff(&axis);
+  axes.e1 = Eigen::Vector3d::Unit(axis);
+  axes.e1 = (axes.e1 - axes.e1.dot(axes.up) * axes.up).normalized();
+  axes.e2 = axes.up.cross(axes.e1);
+  return axes;
+}
 
-  // Context points: the ground truth's, else the predicted clouds.
+// Context points in the plan: the ground truth's, else the predicted clouds, at most about
+// max_points (every stride-th).
+std::vector<Eigen::Vector2d> contextPoints(const std::vector<GroundTruthObject>& ground_truth,
+                                           const std::vector<EvaluatedPrediction>& predictions,
+                                           const PlanAxes& axes, int max_points) {
   std::vector<Eigen::Vector2d> points;
   size_t total = 0;
   for (const GroundTruthObject& g : ground_truth) total += g.points_W.size();
@@ -67,13 +75,13 @@ cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
   if (!gt_points) {
     for (const EvaluatedPrediction& p : predictions) total += p.points_W.size();
   }
-  const size_t stride = std::max<size_t>(1, total / std::max(1, config.max_points));
+  const size_t stride = std::max<size_t>(1, total / std::max(1, max_points));
   size_t counter = 0;
   auto add_points = [&](const PointCloud& cloud) {
     for (const Eigen::Vector3f& p : cloud) {
       if (counter++ % stride != 0 || !p.allFinite()) continue;
       const Eigen::Vector3d q = p.cast<double>();
-      points.emplace_back(q.dot(e1), q.dot(e2));
+      points.emplace_back(q.dot(axes.e1), q.dot(axes.e2));
     }
   };
   if (gt_points) {
@@ -81,13 +89,32 @@ cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
   } else {
     for (const EvaluatedPrediction& p : predictions) add_points(p.points_W);
   }
+  return points;
+}
 
-  std::vector<std::vector<Eigen::Vector2d>> gt_boxes, pred_boxes;
-  for (const GroundTruthObject& g : ground_truth) gt_boxes.push_back(footprint(g.box, up, e1, e2));
-  for (const EvaluatedPrediction& p : predictions) {
-    pred_boxes.push_back(footprint(p.box, up, e1, e2));
+using Polygon2d = std::vector<Eigen::Vector2d>;
+
+// The image: the plan's extent [lo, hi] at `scale` pixels per metre below a legend strip.
+struct Canvas {
+  Eigen::Vector2d lo, hi;
+  double scale = 1.0;
+  int legend_px = 28;
+  int width = 0, height = 0;
+  cv::Point pixel(const Eigen::Vector2d& q) const {
+    return cv::Point(static_cast<int>(std::lround((q.x() - lo.x()) * scale)),
+                     legend_px + static_cast<int>(std::lround((hi.y() - q.y()) * scale)));
   }
+  std::vector<cv::Point> polygon(const Polygon2d& box) const {
+    std::vector<cv::Point> pts;
+    for (const auto& q : box) pts.push_back(pixel(q));
+    return pts;
+  }
+};
 
+// The extent of everything drawn plus the margin, scaled to fit max_size_px. False: nothing finite.
+bool fitCanvas(const std::vector<Eigen::Vector2d>& points, const std::vector<Polygon2d>& gt_boxes,
+               const std::vector<Polygon2d>& pred_boxes, const BirdsEyeConfig& config,
+               Canvas* canvas) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo;
   auto extend = [&](const Eigen::Vector2d& q) {
@@ -100,66 +127,64 @@ cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
     for (const auto& q : box) extend(q);
   for (const auto& box : pred_boxes)
     for (const auto& q : box) extend(q);
-  if (!(lo.x() <= hi.x())) {
-    cv::Mat blank(240, 480, CV_8UC3, cv::Scalar(255, 255, 255));
-    cv::putText(blank, "no objects", cv::Point(20, 120), cv::FONT_HERSHEY_SIMPLEX, 0.8,
-                cv::Scalar(80, 80, 80), 2, cv::LINE_AA);
-    return blank;
-  }
+  if (!(lo.x() <= hi.x())) return false;
   lo -= Eigen::Vector2d::Constant(config.margin_m);
   hi += Eigen::Vector2d::Constant(config.margin_m);
   const Eigen::Vector2d extent = hi - lo;
   double scale = config.pixels_per_m;
   const double longest = std::max(extent.x(), extent.y());
   if (longest * scale > config.max_size_px) scale = config.max_size_px / longest;
-  const int legend_px = 28;
-  const int width = std::max(320, static_cast<int>(std::ceil(extent.x() * scale)));
-  const int height = static_cast<int>(std::ceil(extent.y() * scale)) + legend_px;
-  cv::Mat image(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
-  auto pixel = [&](const Eigen::Vector2d& q) {
-    return cv::Point(static_cast<int>(std::lround((q.x() - lo.x()) * scale)),
-                     legend_px + static_cast<int>(std::lround((hi.y() - q.y()) * scale)));
-  };
+  canvas->lo = lo;
+  canvas->hi = hi;
+  canvas->scale = scale;
+  canvas->width = std::max(320, static_cast<int>(std::ceil(extent.x() * scale)));
+  canvas->height = static_cast<int>(std::ceil(extent.y() * scale)) + canvas->legend_px;
+  return true;
+}
 
-  if (config.grid_spacing_m > 0.0) {
-    const cv::Scalar grid(235, 235, 235);
-    for (double x = std::ceil(lo.x() / config.grid_spacing_m) * config.grid_spacing_m; x <= hi.x();
-         x += config.grid_spacing_m) {
-      cv::line(image, pixel({x, lo.y()}), pixel({x, hi.y()}), grid, 1);
-    }
-    for (double y = std::ceil(lo.y() / config.grid_spacing_m) * config.grid_spacing_m; y <= hi.y();
-         y += config.grid_spacing_m) {
-      cv::line(image, pixel({lo.x(), y}), pixel({hi.x(), y}), grid, 1);
-    }
+void drawGrid(const Canvas& canvas, double spacing_m, cv::Mat* image) {
+  if (!(spacing_m > 0.0)) return;
+  const cv::Scalar grid(235, 235, 235);
+  const Eigen::Vector2d& lo = canvas.lo;
+  const Eigen::Vector2d& hi = canvas.hi;
+  for (double x = std::ceil(lo.x() / spacing_m) * spacing_m; x <= hi.x(); x += spacing_m) {
+    cv::line(*image, canvas.pixel({x, lo.y()}), canvas.pixel({x, hi.y()}), grid, 1);
   }
+  for (double y = std::ceil(lo.y() / spacing_m) * spacing_m; y <= hi.y(); y += spacing_m) {
+    cv::line(*image, canvas.pixel({lo.x(), y}), canvas.pixel({hi.x(), y}), grid, 1);
+  }
+}
+
+void drawPoints(const Canvas& canvas, const std::vector<Eigen::Vector2d>& points, cv::Mat* image) {
   for (const auto& q : points) {
-    const cv::Point p = pixel(q);
-    if (p.x >= 0 && p.y >= legend_px && p.x < width && p.y < height) {
-      image.at<cv::Vec3b>(p) = cv::Vec3b(185, 185, 185);
+    const cv::Point p = canvas.pixel(q);
+    if (p.x >= 0 && p.y >= canvas.legend_px && p.x < canvas.width && p.y < canvas.height) {
+      image->at<cv::Vec3b>(p) = cv::Vec3b(185, 185, 185);
     }
   }
-  auto polygon = [&](const std::vector<Eigen::Vector2d>& box) {
-    std::vector<cv::Point> pts;
-    for (const auto& q : box) pts.push_back(pixel(q));
-    return pts;
-  };
-  // Ground truth: translucent green footprints with a dark outline.
-  if (!gt_boxes.empty()) {
-    cv::Mat overlay = image.clone();
-    for (const auto& box : gt_boxes) {
-      cv::fillConvexPoly(overlay, polygon(box), cv::Scalar(150, 220, 150), cv::LINE_AA);
-    }
-    cv::addWeighted(overlay, 0.45, image, 0.55, 0.0, image);
-    for (size_t i = 0; i < gt_boxes.size(); ++i) {
-      cv::polylines(image, std::vector<std::vector<cv::Point>>{polygon(gt_boxes[i])}, true,
-                    cv::Scalar(60, 140, 60), 1, cv::LINE_AA);
-    }
+}
+
+// Ground truth: translucent green footprints with a dark outline.
+void drawGroundTruth(const Canvas& canvas, const std::vector<Polygon2d>& gt_boxes, cv::Mat* image) {
+  if (gt_boxes.empty()) return;
+  cv::Mat overlay = image->clone();
+  for (const auto& box : gt_boxes) {
+    cv::fillConvexPoly(overlay, canvas.polygon(box), cv::Scalar(150, 220, 150), cv::LINE_AA);
   }
-  // Predictions: class-coloured outlines, an arrow-free heading mark, and "id class p" labels.
+  cv::addWeighted(overlay, 0.45, *image, 0.55, 0.0, *image);
+  for (size_t i = 0; i < gt_boxes.size(); ++i) {
+    cv::polylines(*image, std::vector<std::vector<cv::Point>>{canvas.polygon(gt_boxes[i])}, true,
+                  cv::Scalar(60, 140, 60), 1, cv::LINE_AA);
+  }
+}
+
+// Predictions: class-coloured outlines, then "id class p" labels over all of them.
+void drawPredictions(const Canvas& canvas, const std::vector<EvaluatedPrediction>& predictions,
+                     const std::vector<Polygon2d>& pred_boxes, cv::Mat* image) {
   for (size_t i = 0; i < pred_boxes.size(); ++i) {
     const cv::Scalar color = classColorBgr(predictions[i].class_name);
-    cv::polylines(image, std::vector<std::vector<cv::Point>>{polygon(pred_boxes[i])}, true, color,
-                  2, cv::LINE_AA);
+    cv::polylines(*image, std::vector<std::vector<cv::Point>>{canvas.polygon(pred_boxes[i])}, true,
+                  color, 2, cv::LINE_AA);
   }
   for (size_t i = 0; i < pred_boxes.size(); ++i) {
     const cv::Scalar color = classColorBgr(predictions[i].class_name);
@@ -168,16 +193,45 @@ cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
     char text[96];
     std::snprintf(text, sizeof(text), "%d %s %.2f", predictions[i].id,
                   predictions[i].class_name.c_str(), predictions[i].probability);
-    const cv::Point p = pixel(centre);
+    const cv::Point p = canvas.pixel(centre);
     int baseline = 0;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &baseline);
-    const cv::Point origin(std::clamp(p.x - size.width / 2, 0, std::max(0, width - size.width)),
-                           std::clamp(p.y + size.height / 2, legend_px + size.height, height - 2));
-    cv::putText(image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 3,
+    const cv::Point origin(
+        std::clamp(p.x - size.width / 2, 0, std::max(0, canvas.width - size.width)),
+        std::clamp(p.y + size.height / 2, canvas.legend_px + size.height, canvas.height - 2));
+    cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 3,
                 cv::LINE_AA);
-    cv::putText(image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, color, 1, cv::LINE_AA);
+    cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, color, 1, cv::LINE_AA);
   }
+}
 
+}  // namespace
+
+cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
+                        const std::vector<EvaluatedPrediction>& predictions,
+                        const Eigen::Vector3d& up_W, const BirdsEyeConfig& config) {
+  const PlanAxes axes = planAxes(up_W);
+  const std::vector<Eigen::Vector2d> points =
+      contextPoints(ground_truth, predictions, axes, config.max_points);
+  std::vector<Polygon2d> gt_boxes, pred_boxes;
+  for (const GroundTruthObject& g : ground_truth) {
+    gt_boxes.push_back(footprint(g.box, axes.up, axes.e1, axes.e2));
+  }
+  for (const EvaluatedPrediction& p : predictions) {
+    pred_boxes.push_back(footprint(p.box, axes.up, axes.e1, axes.e2));
+  }
+  Canvas canvas;
+  if (!fitCanvas(points, gt_boxes, pred_boxes, config, &canvas)) {
+    cv::Mat blank(240, 480, CV_8UC3, cv::Scalar(255, 255, 255));
+    cv::putText(blank, "no objects", cv::Point(20, 120), cv::FONT_HERSHEY_SIMPLEX, 0.8,
+                cv::Scalar(80, 80, 80), 2, cv::LINE_AA);
+    return blank;
+  }
+  cv::Mat image(canvas.height, canvas.width, CV_8UC3, cv::Scalar(255, 255, 255));
+  drawGrid(canvas, config.grid_spacing_m, &image);
+  drawPoints(canvas, points, &image);
+  drawGroundTruth(canvas, gt_boxes, &image);
+  drawPredictions(canvas, predictions, pred_boxes, &image);
   char legend[160];
   std::snprintf(legend, sizeof(legend),
                 "%zu detected (coloured, id class probability)%s  grid %.0f m", predictions.size(),

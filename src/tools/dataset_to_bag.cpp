@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
@@ -124,71 +124,8 @@ BenchmarkSegmenterOptions segmenterOptions(const Options& options) {
   return segmenter;
 }
 
-// Returns -1 when the options are fine, else the exit status.
-int parseOptions(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "-h" || arg == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (arg == "--lz4") {
-      options->lz4 = true;
-      continue;
-    }
-    if (arg == "--quiet") {
-      options->quiet = true;
-      continue;
-    }
-    if (i + 1 >= argc) return usageError(arg + " needs a value");
-    const std::string value = argv[++i];
-    long number = 0;
-    if (arg == "--dataset") {
-      options->dataset_dir = value;
-    } else if (arg == "--output") {
-      options->output_path = value;
-    } else if (arg == "--format") {
-      if (value != "auto" && value != "7scenes" && value != "scenenn") {
-        return usageError("--format must be auto, 7scenes or scenenn, not '" + value + "'");
-      }
-      options->format = value;
-    } else if (arg == "--detector") {
-      options->detector = value;
-    } else if (arg == "--detections") {
-      options->detections_dir = value;
-    } else if (arg == "--model-dir") {
-      options->model_dir = value;
-    } else if (arg == "--detections-topic") {
-      if (value.empty()) return usageError("--detections-topic must not be empty");
-      options->detections_topic = value;
-    } else if (arg == "--camera") {
-      options->camera = value;
-    } else if (arg == "--world-frame") {
-      options->world_frame = value;
-    } else if (arg == "--pose-topic") {
-      options->pose_topic = value;
-    } else if (arg == "--rate-hz") {
-      if (!cli::parseDouble(value, &options->rate_hz) || !(options->rate_hz > 0.0)) {
-        return usageError("--rate-hz needs a number > 0, not '" + value + "'");
-      }
-    } else if (arg == "--time-offset") {
-      if (!cli::parseDouble(value, &options->time_offset_s) || options->time_offset_s < 0.0) {
-        return usageError("--time-offset needs a number >= 0, not '" + value + "'");
-      }
-    } else if (arg == "--first") {
-      if (!cli::parseLong(value, 0, 999999999, &number)) {
-        return usageError("--first needs a frame number >= 0, not '" + value + "'");
-      }
-      options->first = number;
-    } else if (arg == "--last") {
-      if (!cli::parseLong(value, 0, 999999999, &number)) {
-        return usageError("--last needs a frame number >= 0, not '" + value + "'");
-      }
-      options->last = number;
-    } else {
-      return usageError("unknown option '" + arg + "'");
-    }
-  }
+// The options together: required ones, ROS names, the frame range, the detector.
+int checkOptions(const Options* options) {
   if (options->dataset_dir.empty()) return usageError("--dataset is required");
   if (options->output_path.empty()) return usageError("--output is required");
   if (options->camera.empty() || options->world_frame.empty() || options->pose_topic.empty()) {
@@ -219,6 +156,70 @@ int parseOptions(int argc, char** argv, Options* options) {
     return usageError("--detections needs --detector");
   }
   return -1;
+}
+
+// A number for which `valid` holds; the message names the text given.
+void addNumber(CLI::App* app, const std::string& name, double* value,
+               std::function<bool(double)> valid, const std::string& expected) {
+  cli::addValue(app, name, [=](const std::string& text) {
+    double parsed = 0.0;
+    if (!cli::parseDouble(text, &parsed) || !valid(parsed)) {
+      return name + " needs " + expected + ", not '" + text + "'";
+    }
+    *value = parsed;
+    return std::string();
+  });
+}
+
+// A frame number >= 0; the message names the text given.
+void addFrameNumber(CLI::App* app, const std::string& name, long* value) {
+  cli::addValue(app, name, [=](const std::string& text) {
+    if (!cli::parseLong(text, 0, 999999999, value)) {
+      return name + " needs a frame number >= 0, not '" + text + "'";
+    }
+    return std::string();
+  });
+}
+
+void addOptions(CLI::App* app, Options* options) {
+  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset_dir),
+                                    std::make_pair("--output", &options->output_path),
+                                    std::make_pair("--detector", &options->detector),
+                                    std::make_pair("--detections", &options->detections_dir),
+                                    std::make_pair("--model-dir", &options->model_dir),
+                                    std::make_pair("--camera", &options->camera),
+                                    std::make_pair("--world-frame", &options->world_frame),
+                                    std::make_pair("--pose-topic", &options->pose_topic)}) {
+    cli::addText(app, name, value);
+  }
+  cli::addValue(app, "--format", [options](const std::string& text) {
+    if (text != "auto" && text != "7scenes" && text != "scenenn") {
+      return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
+    }
+    options->format = text;
+    return std::string();
+  });
+  cli::addText(app, "--detections-topic", &options->detections_topic,
+               "--detections-topic must not be empty");
+  addNumber(
+      app, "--rate-hz", &options->rate_hz, [](double v) { return v > 0.0; }, "a number > 0");
+  addNumber(
+      app, "--time-offset", &options->time_offset_s, [](double v) { return v >= 0.0; },
+      "a number >= 0");
+  addFrameNumber(app, "--first", &options->first);
+  addFrameNumber(app, "--last", &options->last);
+  cli::addFlag(app, "--lz4", &options->lz4);
+  cli::addFlag(app, "--quiet", &options->quiet);
+}
+
+// Returns -1 when the options are fine, else the exit status.
+int parseOptions(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  addOptions(&app, options);
+  const int parsed = cli::parse(&app, argc, argv, "dataset_to_bag", kUsage, "\n");
+  if (parsed >= 0) return parsed;
+  return checkOptions(options);
 }
 
 // The dataset, with what a user must tell the node to replay it.
@@ -274,29 +275,29 @@ void printProgress(size_t done, size_t total, double elapsed_s) {
   std::fflush(stderr);
 }
 
-// Writes every selected frame; returns the exit status.
-int convert(const Options& options) {
-  DatasetSource source;
+constexpr int kContinue = -1;  // a phase of convert() went through
+
+// The dataset and the frames to convert: those in [--first, --last], each with its files.
+int selectFrames(const Options& options, DatasetSource* source, std::vector<int>* indices) {
   std::vector<std::string> notes;
-  Status status = openDataset(options, &source, &notes);
+  Status status = openDataset(options, source, &notes);
   if (!status) {
     std::cerr << "dataset_to_bag: " << status.message() << "\n";
     return kExitData;
   }
-  std::vector<int> indices;
-  for (int index : source.indices) {
+  for (int index : source->indices) {
     if (index >= options.first && (options.last < 0 || index <= options.last)) {
-      indices.push_back(index);
+      indices->push_back(index);
     }
   }
-  if (indices.empty()) {
+  if (indices->empty()) {
     std::cerr << "dataset_to_bag: " << options.dataset_dir << ": no frames in the range --first "
               << options.first << " --last " << options.last << " (the dataset has "
-              << source.indices.size() << " frames)\n";
+              << source->indices.size() << " frames)\n";
     return kExitData;
   }
-  for (int index : indices) {
-    status = source.check(index);
+  for (int index : *indices) {
+    status = source->check(index);
     if (!status) {
       std::cerr << "dataset_to_bag: " << status.message() << " (use --first/--last to convert "
                 << "the frames that have one)\n";
@@ -304,154 +305,215 @@ int convert(const Options& options) {
     }
   }
   if (!options.quiet) {
-    std::cerr << "dataset_to_bag: " << options.dataset_dir << " (" << source.format << "), "
-              << indices.size() << " frames -> " << options.output_path << "\n";
+    std::cerr << "dataset_to_bag: " << options.dataset_dir << " (" << source->format << "), "
+              << indices->size() << " frames -> " << options.output_path << "\n";
     for (const std::string& note : notes) std::cerr << "dataset_to_bag: " << note << "\n";
   }
+  return kContinue;
+}
 
-  std::unique_ptr<InstanceSegmenter> segmenter;
-  if (!options.detector.empty()) {
-    status = createBenchmarkSegmenter(segmenterOptions(options), &segmenter);
-    if (!status) {
-      std::cerr << "dataset_to_bag: detector " << options.detector << ": " << status.message()
-                << "\n";
-      return kExitData;
-    }
-    if (!options.quiet) {
-      std::cerr << "dataset_to_bag: recording " << segmenter->name() << " detections on "
-                << options.detections_topic << " (replay with detector:=topic)\n";
-    }
-  }
-
-  const std::string ns = "/" + options.camera;
-  const std::string color_topic = ns + "/rgb/image_raw";
-  const std::string depth_topic = ns + "/depth_registered/image_raw";
-  const std::string color_info_topic = ns + "/rgb/camera_info";
-  const std::string depth_info_topic = ns + "/depth_registered/camera_info";
-  const std::string optical_frame = options.camera + "_rgb_optical_frame";
-
-  rosbag::Bag bag;
-  try {
-    bag.open(options.output_path, rosbag::bagmode::Write);
-    if (options.lz4) bag.setCompression(rosbag::compression::LZ4);
-  } catch (const std::exception& e) {
-    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot write the bag: " << e.what()
+// With --detector: the detector whose detections are recorded.
+int createSegmenter(const Options& options, std::unique_ptr<InstanceSegmenter>* segmenter) {
+  if (options.detector.empty()) return kContinue;
+  const Status status = createBenchmarkSegmenter(segmenterOptions(options), segmenter);
+  if (!status) {
+    std::cerr << "dataset_to_bag: detector " << options.detector << ": " << status.message()
               << "\n";
     return kExitData;
   }
-  auto fail = [&](const std::string& message) {
-    if (!options.quiet) std::cerr << "\n";
-    std::cerr << "dataset_to_bag: " << message << "\n";
+  if (!options.quiet) {
+    std::cerr << "dataset_to_bag: recording " << (*segmenter)->name() << " detections on "
+              << options.detections_topic << " (replay with detector:=topic)\n";
+  }
+  return kContinue;
+}
+
+// A frame's stamp in the bag: the dataset's time (or index / --rate-hz) + --time-offset; it must be
+// > 0 and must not go back in time.
+Status frameStamp(const Options& options, const DatasetSource& source, const RgbdFrame& frame,
+                  double previous_stamp_s, double* stamp_s) {
+  const double dataset_stamp_s =
+      source.has_timestamps
+          ? frame.stamp_s
+          : (source.format == "scenenn" ? frame.index - 1 : frame.index) / options.rate_hz;
+  *stamp_s = dataset_stamp_s + options.time_offset_s;
+  if (!(*stamp_s > 0.0)) {
+    return Status::Error(frame.name + ": time stamp " + std::to_string(*stamp_s) +
+                         " s is not > 0 (rosbag needs positive times): use --time-offset");
+  }
+  if (*stamp_s < previous_stamp_s) {
+    return Status::Error(frame.name + ": time stamp " + std::to_string(*stamp_s) +
+                         " s goes back in time (previous frame " +
+                         std::to_string(previous_stamp_s) + " s)");
+  }
+  return Status::Ok();
+}
+
+// Depth in the colour camera (16-bit millimetres) and the colour camera's intrinsics.
+Status colorCameraDepth(const RgbdFrame& frame, cv::Mat* depth_mm, CameraIntrinsics* K_color) {
+  *K_color = frame.registered ? frame.K_depth : frame.K_color;
+  K_color->width = frame.color_bgr.cols;
+  K_color->height = frame.color_bgr.rows;
+  if (!frame.registered) {
+    const Status status =
+        registerDepthToColor(frame.depth, frame.K_depth, *K_color, frame.T_C_D, depth_mm);
+    return status ? Status::Ok() : Status::Error(frame.name + ": " + status.message());
+  }
+  if (frame.depth.type() == CV_16UC1) {
+    *depth_mm = frame.depth;
+  } else {
+    frame.depth.convertTo(*depth_mm, CV_16UC1, 1e3);  // saturates; NaN -> 0
+  }
+  return Status::Ok();
+}
+
+// The bag being written: per frame TF, pose, camera infos, images (and detections). A failure
+// removes the partial bag.
+class BagWriter {
+ public:
+  BagWriter(const Options& options, const DatasetSource& source, InstanceSegmenter* segmenter)
+      : options_(options),
+        source_(source),
+        segmenter_(segmenter),
+        ns_("/" + options.camera),
+        optical_frame_(options.camera + "_rgb_optical_frame") {}
+
+  int open() {
     try {
-      bag.close();
-    } catch (const std::exception&) {
+      bag_.open(options_.output_path, rosbag::bagmode::Write);
+      if (options_.lz4) bag_.setCompression(rosbag::compression::LZ4);
+    } catch (const std::exception& e) {
+      std::cerr << "dataset_to_bag: " << options_.output_path
+                << ": cannot write the bag: " << e.what() << "\n";
+      return kExitData;
     }
-    std::error_code error;
-    fs::remove(options.output_path, error);  // no half-written bag that looks complete
-    return kExitData;
-  };
+    return kContinue;
+  }
 
-  const auto start = std::chrono::steady_clock::now();
-  double previous_stamp_s = -1.0;
-  for (size_t i = 0; i < indices.size(); ++i) {
+  // Frame `index`, the seq-th of the bag.
+  int writeFrame(size_t seq, int index) {
     RgbdFrame frame;
-    status = source.load(indices[i], &frame);
+    Status status = source_.load(index, &frame);
     if (!status) return fail(status.message());
-    const double dataset_stamp_s =
-        source.has_timestamps
-            ? frame.stamp_s
-            : (source.format == "scenenn" ? frame.index - 1 : frame.index) / options.rate_hz;
-    const double stamp_s = dataset_stamp_s + options.time_offset_s;
-    if (!(stamp_s > 0.0)) {
-      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
-                  " s is not > 0 (rosbag needs positive times): use --time-offset");
+    double stamp_s = 0.0;
+    if (!(status = frameStamp(options_, source_, frame, previous_stamp_s_, &stamp_s))) {
+      return fail(status.message());
     }
-    if (stamp_s < previous_stamp_s) {
-      return fail(frame.name + ": time stamp " + std::to_string(stamp_s) +
-                  " s goes back in time (previous frame " + std::to_string(previous_stamp_s) +
-                  " s)");
-    }
-    previous_stamp_s = stamp_s;
-
-    // Depth in the colour camera, and the colour camera's pose.
+    previous_stamp_s_ = stamp_s;
     cv::Mat depth_mm;
-    CameraIntrinsics K_color = frame.registered ? frame.K_depth : frame.K_color;
-    K_color.width = frame.color_bgr.cols;
-    K_color.height = frame.color_bgr.rows;
-    if (frame.registered) {
-      if (frame.depth.type() == CV_16UC1) {
-        depth_mm = frame.depth;
-      } else {
-        frame.depth.convertTo(depth_mm, CV_16UC1, 1e3);  // saturates; NaN -> 0
-      }
-    } else {
-      status = registerDepthToColor(frame.depth, frame.K_depth, K_color, frame.T_C_D, &depth_mm);
-      if (!status) return fail(frame.name + ": " + status.message());
-    }
-    const Eigen::Isometry3d T_W_C = frame.T_W_D * frame.T_C_D.inverse();
-
+    CameraIntrinsics K_color;
+    if (!(status = colorCameraDepth(frame, &depth_mm, &K_color))) return fail(status.message());
     std_msgs::Header header;
-    header.seq = static_cast<uint32_t>(i);
+    header.seq = static_cast<uint32_t>(seq);
     header.stamp = ros::Time(stamp_s);
-    header.frame_id = optical_frame;
+    header.frame_id = optical_frame_;
+    try {
+      writeCamera(frame, depth_mm, K_color, header);
+    } catch (const std::exception& e) {
+      return fail(options_.output_path + ": cannot write: " + e.what());
+    }
+    return segmenter_ == nullptr ? kContinue : writeDetections(frame, index, header);
+  }
 
+  int close() {
+    try {
+      bag_.close();
+    } catch (const std::exception& e) {
+      std::cerr << "dataset_to_bag: " << options_.output_path << ": cannot close: " << e.what()
+                << "\n";
+      return kExitData;
+    }
+    return kContinue;
+  }
+
+ private:
+  // TF and pose first: a node that receives the images can already look the pose up.
+  void writeCamera(const RgbdFrame& frame, const cv::Mat& depth_mm, const CameraIntrinsics& K_color,
+                   const std_msgs::Header& header) {
+    const Eigen::Isometry3d T_W_C = frame.T_W_D * frame.T_C_D.inverse();
     geometry_msgs::PoseStamped pose;
     pose.header = header;
-    pose.header.frame_id = options.world_frame;
+    pose.header.frame_id = options_.world_frame;
     pose.pose = poseToMsg(T_W_C);
-
     geometry_msgs::TransformStamped transform;
     transform.header = pose.header;
-    transform.child_frame_id = optical_frame;
+    transform.child_frame_id = optical_frame_;
     transform.transform = transformToMsg(T_W_C);
     tf2_msgs::TFMessage tf;
     tf.transforms.push_back(transform);
+    bag_.write("/tf", header.stamp, tf);
+    bag_.write(options_.pose_topic, header.stamp, pose);
+    bag_.write(ns_ + "/rgb/camera_info", header.stamp, cameraInfoMsg(K_color, header));
+    bag_.write(ns_ + "/depth_registered/camera_info", header.stamp, cameraInfoMsg(K_color, header));
+    bag_.write(ns_ + "/rgb/image_raw", header.stamp, *colorImageToMsg(frame.color_bgr, header));
+    bag_.write(ns_ + "/depth_registered/image_raw", header.stamp,
+               *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
+                    .toImageMsg());
+  }
 
+  int writeDetections(const RgbdFrame& frame, int index, const std_msgs::Header& header) {
+    std::vector<Detection2D> detections;
+    std::vector<std::string> warnings;
+    const Status status =
+        segmenter_->detect(frame.color_bgr, source_.frame_name(index), &detections, &warnings);
+    if (!status) {
+      return fail(frame.name + ": detector " + segmenter_->name() + ": " + status.message());
+    }
+    if (!options_.quiet) {
+      for (const std::string& warning : warnings) {
+        std::cerr << "\ndataset_to_bag: " << frame.name << ": " << warning << "\n";
+      }
+    }
     try {
-      // TF and pose first: a node that receives the images can already look the pose up.
-      bag.write("/tf", header.stamp, tf);
-      bag.write(options.pose_topic, header.stamp, pose);
-      bag.write(color_info_topic, header.stamp, cameraInfoMsg(K_color, header));
-      bag.write(depth_info_topic, header.stamp, cameraInfoMsg(K_color, header));
-      bag.write(color_topic, header.stamp, *colorImageToMsg(frame.color_bgr, header));
-      bag.write(depth_topic, header.stamp,
-                *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
-                     .toImageMsg());
+      bag_.write(options_.detections_topic, header.stamp,
+                 detectionsToMsg(detections, frame.color_bgr.size(), header));
     } catch (const std::exception& e) {
-      return fail(options.output_path + ": cannot write: " + e.what());
+      return fail(options_.output_path + ": cannot write: " + e.what());
     }
-    if (segmenter) {
-      std::vector<Detection2D> detections;
-      std::vector<std::string> warnings;
-      status =
-          segmenter->detect(frame.color_bgr, source.frame_name(indices[i]), &detections, &warnings);
-      if (!status)
-        return fail(frame.name + ": detector " + segmenter->name() + ": " + status.message());
-      if (!options.quiet) {
-        for (const std::string& warning : warnings) {
-          std::cerr << "\ndataset_to_bag: " << frame.name << ": " << warning << "\n";
-        }
-      }
-      try {
-        bag.write(options.detections_topic, header.stamp,
-                  detectionsToMsg(detections, frame.color_bgr.size(), header));
-      } catch (const std::exception& e) {
-        return fail(options.output_path + ": cannot write: " + e.what());
-      }
+    return kContinue;
+  }
+
+  int fail(const std::string& message) {
+    if (!options_.quiet) std::cerr << "\n";
+    std::cerr << "dataset_to_bag: " << message << "\n";
+    try {
+      bag_.close();
+    } catch (const std::exception&) {
     }
+    std::error_code error;
+    fs::remove(options_.output_path, error);  // no half-written bag that looks complete
+    return kExitData;
+  }
+
+  const Options& options_;
+  const DatasetSource& source_;
+  InstanceSegmenter* segmenter_;
+  const std::string ns_;
+  const std::string optical_frame_;
+  rosbag::Bag bag_;
+  double previous_stamp_s_ = -1.0;
+};
+
+// Writes every selected frame; returns the exit status.
+int convert(const Options& options) {
+  DatasetSource source;
+  std::vector<int> indices;
+  int status = selectFrames(options, &source, &indices);
+  if (status != kContinue) return status;
+  std::unique_ptr<InstanceSegmenter> segmenter;
+  if ((status = createSegmenter(options, &segmenter)) != kContinue) return status;
+  BagWriter writer(options, source, segmenter.get());
+  if ((status = writer.open()) != kContinue) return status;
+  const auto start = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < indices.size(); ++i) {
+    if ((status = writer.writeFrame(i, indices[i])) != kContinue) return status;
     if (!options.quiet) {
       const double elapsed_s =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       printProgress(i + 1, indices.size(), elapsed_s);
     }
   }
-  try {
-    bag.close();
-  } catch (const std::exception& e) {
-    std::cerr << "dataset_to_bag: " << options.output_path << ": cannot close: " << e.what()
-              << "\n";
-    return kExitData;
-  }
+  if ((status = writer.close()) != kContinue) return status;
   if (!options.quiet) {
     std::cerr << "dataset_to_bag: wrote " << indices.size() << " frames to " << options.output_path
               << "\n";

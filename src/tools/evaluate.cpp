@@ -8,12 +8,14 @@
 #include <string>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
 #include "multiview_object_detection/io/json_io.h"
 
 namespace fs = std::filesystem;
+namespace cli = mvod::cli;
 
 namespace {
 
@@ -65,7 +67,6 @@ struct Options {
   std::string csv;
   std::string up = "auto";
   double voxel_size_m = 0.05;
-  bool help = false;
 };
 
 bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
@@ -85,56 +86,56 @@ bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
   return true;
 }
 
-// Returns an empty string on success, else what is wrong.
-std::string parseArguments(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string* out) {
-      if (i + 1 >= argc) return false;
-      *out = argv[++i];
-      return true;
-    };
-    std::string text;
-    if (arg == "--help" || arg == "-h") {
-      options->help = true;
-    } else if (arg == "--objects" || arg == "--ground-truth" || arg == "--clouds" ||
-               arg == "--markdown" || arg == "--csv" || arg == "--up" || arg == "--plot") {
-      if (!value(&text) || text.empty()) return arg + " needs a value";
-      if (arg == "--objects") options->objects.push_back(text);
-      if (arg == "--ground-truth") options->ground_truth.push_back(text);
-      if (arg == "--clouds") options->clouds.push_back(text);
-      if (arg == "--plot") options->plot = text;
-      if (arg == "--markdown") options->markdown = text;
-      if (arg == "--csv") options->csv = text;
-      if (arg == "--up") {
-        Eigen::Vector3d axis;
-        if (text != "auto" && !parseAxis(text, &axis)) {
-          return "--up must be x, y, z, -x, -y, -z or auto";
-        }
-        options->up = text;
-      }
-    } else if (arg == "--voxel-size") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->voxel_size_m) ||
-          !(options->voxel_size_m > 0.0)) {
-        return "--voxel-size needs a number > 0 (metres)";
-      }
-    } else {
-      return "unknown argument '" + arg + "'";
-    }
+// What is missing or inconsistent after parsing, "" when nothing.
+std::string checkArguments(const Options& options) {
+  if (options.objects.empty()) return "--objects is required";
+  if (options.ground_truth.empty()) {
+    if (options.plot.empty()) return "--ground-truth is required";
+    if (options.objects.size() > 1) return "several --objects need one --ground-truth each";
+  } else if (options.ground_truth.size() != options.objects.size()) {
+    return "give one --ground-truth per --objects (" + std::to_string(options.objects.size()) +
+           " --objects, " + std::to_string(options.ground_truth.size()) + " --ground-truth)";
   }
-  if (options->help) return "";
-  if (options->objects.empty()) return "--objects is required";
-  if (options->ground_truth.empty()) {
-    if (options->plot.empty()) return "--ground-truth is required";
-    if (options->objects.size() > 1) return "several --objects need one --ground-truth each";
-  } else if (options->ground_truth.size() != options->objects.size()) {
-    return "give one --ground-truth per --objects (" + std::to_string(options->objects.size()) +
-           " --objects, " + std::to_string(options->ground_truth.size()) + " --ground-truth)";
-  }
-  if (!options->clouds.empty() && options->clouds.size() != options->objects.size()) {
+  if (!options.clouds.empty() && options.clouds.size() != options.objects.size()) {
     return "give --clouds once per --objects, or not at all";
   }
   return "";
+}
+
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  for (const auto& [name, list] : {std::make_pair("--objects", &options->objects),
+                                   std::make_pair("--ground-truth", &options->ground_truth),
+                                   std::make_pair("--clouds", &options->clouds)}) {
+    cli::addValue(&app, name, [name = std::string(name), list](const std::string& text) {
+      if (text.empty()) return name + " needs a value";
+      list->push_back(text);
+      return std::string();
+    });
+  }
+  for (const auto& [name, value] :
+       {std::make_pair("--plot", &options->plot), std::make_pair("--markdown", &options->markdown),
+        std::make_pair("--csv", &options->csv)}) {
+    cli::addText(&app, name, value, std::string(name) + " needs a value");
+  }
+  cli::addValue(&app, "--up", [options](const std::string& text) {
+    Eigen::Vector3d axis;
+    if (text.empty()) return std::string("--up needs a value");
+    if (text != "auto" && !parseAxis(text, &axis)) {
+      return std::string("--up must be x, y, z, -x, -y, -z or auto");
+    }
+    options->up = text;
+    return std::string();
+  });
+  cli::addNumber(
+      &app, "--voxel-size", &options->voxel_size_m, [](double v) { return v > 0.0; },
+      "--voxel-size needs a number > 0 (metres)");
+  const int parsed = cli::parse(&app, argc, argv, "evaluate", kUsage);
+  if (parsed >= 0) return parsed;
+  const std::string error = checkArguments(*options);
+  return error.empty() ? -1 : cli::usageError("evaluate", error, kUsage);
 }
 
 bool endsWith(const std::string& text, const std::string& suffix) {
@@ -142,23 +143,13 @@ bool endsWith(const std::string& text, const std::string& suffix) {
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-}  // namespace
+constexpr int kContinue = -1;  // a phase of main() went through
 
-int main(int argc, char** argv) {
-  Options options;
-  const std::string error = parseArguments(argc, argv, &options);
-  if (options.help) {
-    std::fputs(kUsage, stdout);
-    return kExitOk;
-  }
-  if (!error.empty()) {
-    std::cerr << "evaluate: " << error << "\n\n" << kUsage;
-    return kExitUsage;
-  }
-
-  // A synthetic dataset folder holds its ground_truth.json; a SceneNN folder holds <id>.ply/.xml.
+// A synthetic dataset folder holds its ground_truth.json (the path becomes it); a SceneNN folder
+// holds <id>.ply/.xml. The world's up: --up, else z for .json and y for SceneNN (not mixed).
+int resolveGroundTruth(Options* options, mvod::EvaluationOptions* evaluation) {
   std::error_code fs_error;
-  for (std::string& path : options.ground_truth) {
+  for (std::string& path : options->ground_truth) {
     if (!fs::exists(path, fs_error)) {
       std::cerr << "evaluate: " << path << ": no such file or folder\n";
       return kExitFailure;
@@ -169,93 +160,120 @@ int main(int argc, char** argv) {
     }
   }
   const bool synthetic =
-      options.ground_truth.empty() || endsWith(options.ground_truth.front(), ".json");
-  for (const std::string& path : options.ground_truth) {
-    if (endsWith(path, ".json") != synthetic && options.up == "auto") {
+      options->ground_truth.empty() || endsWith(options->ground_truth.front(), ".json");
+  for (const std::string& path : options->ground_truth) {
+    if (endsWith(path, ".json") != synthetic && options->up == "auto") {
       std::cerr << "evaluate: the scenes mix synthetic (.json, z-up) and SceneNN (y-up) ground "
                    "truth: give --up\n";
       return kExitUsage;
     }
   }
-  mvod::EvaluationOptions evaluation;
-  evaluation.voxel_size_m = options.voxel_size_m;
-  if (options.up == "auto") {
-    evaluation.up_W = synthetic ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
+  evaluation->voxel_size_m = options->voxel_size_m;
+  if (options->up == "auto") {
+    evaluation->up_W = synthetic ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
   } else {
-    parseAxis(options.up, &evaluation.up_W);
+    parseAxis(options->up, &evaluation->up_W);
   }
+  return kContinue;
+}
 
-  std::vector<mvod::EvaluationScene> scenes(options.objects.size());
-  size_t num_ground_truth = 0;
-  size_t num_predictions = 0;
+struct SceneCounts {
+  size_t ground_truth = 0;
+  size_t predictions = 0;
   int with_clouds = 0;
-  for (size_t k = 0; k < scenes.size(); ++k) {
-    if (!options.ground_truth.empty()) {
-      const std::string& path = options.ground_truth[k];
-      const mvod::Status loaded =
-          endsWith(path, ".json")
-              ? mvod::loadSyntheticGroundTruth(path, evaluation.surface_spacing_m, evaluation.up_W,
-                                               &scenes[k].ground_truth)
-              : mvod::loadSceneNNGroundTruth(path, evaluation.up_W, &scenes[k].ground_truth);
-      if (!loaded) {
-        std::cerr << "evaluate: " << loaded.message() << "\n";
-        return kExitFailure;
-      }
-    }
-    int clouds = 0;
-    const mvod::Status read = mvod::loadPredictions(
-        options.objects[k], options.clouds.empty() ? std::string() : options.clouds[k],
-        &scenes[k].predictions, &clouds);
-    if (!read) {
-      std::cerr << "evaluate: " << read.message() << "\n";
+};
+
+// Scene k's ground truth (when given) and predictions.
+int loadScene(const Options& options, size_t k, const mvod::EvaluationOptions& evaluation,
+              mvod::EvaluationScene* scene, SceneCounts* counts) {
+  if (!options.ground_truth.empty()) {
+    const std::string& path = options.ground_truth[k];
+    const mvod::Status loaded =
+        endsWith(path, ".json")
+            ? mvod::loadSyntheticGroundTruth(path, evaluation.surface_spacing_m, evaluation.up_W,
+                                             &scene->ground_truth)
+            : mvod::loadSceneNNGroundTruth(path, evaluation.up_W, &scene->ground_truth);
+    if (!loaded) {
+      std::cerr << "evaluate: " << loaded.message() << "\n";
       return kExitFailure;
     }
-    with_clouds += clouds;
-    num_ground_truth += scenes[k].ground_truth.size();
-    num_predictions += scenes[k].predictions.size();
   }
-
-  int exit_code = kExitOk;
-  if (!options.plot.empty()) {
-    const cv::Mat image = mvod::drawBirdsEyeMap(scenes.front().ground_truth,
-                                                scenes.front().predictions, evaluation.up_W);
-    bool written = false;
-    try {
-      written = cv::imwrite(options.plot, image);
-    } catch (const cv::Exception& e) {
-      std::cerr << "evaluate: " << options.plot << ": " << e.what() << "\n";
-    }
-    if (!written) {
-      std::cerr << "evaluate: cannot write " << options.plot << "\n";
-      exit_code = kExitFailure;
-    } else {
-      std::fprintf(stderr, "wrote %s\n", options.plot.c_str());
-    }
+  int clouds = 0;
+  const mvod::Status read = mvod::loadPredictions(
+      options.objects[k], options.clouds.empty() ? std::string() : options.clouds[k],
+      &scene->predictions, &clouds);
+  if (!read) {
+    std::cerr << "evaluate: " << read.message() << "\n";
+    return kExitFailure;
   }
-  if (options.ground_truth.empty()) return exit_code;
+  counts->with_clouds += clouds;
+  counts->ground_truth += scene->ground_truth.size();
+  counts->predictions += scene->predictions.size();
+  return kContinue;
+}
 
-  const mvod::EvaluationResult result = mvod::evaluateScenes(std::move(scenes), evaluation);
+// --plot: the first scene from above. False when it cannot be written.
+bool writePlot(const std::string& path, const mvod::EvaluationScene& scene,
+               const Eigen::Vector3d& up_W) {
+  const cv::Mat image = mvod::drawBirdsEyeMap(scene.ground_truth, scene.predictions, up_W);
+  bool written = false;
+  try {
+    written = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    std::cerr << "evaluate: " << path << ": " << e.what() << "\n";
+  }
+  if (!written) {
+    std::cerr << "evaluate: cannot write " << path << "\n";
+    return false;
+  }
+  std::fprintf(stderr, "wrote %s\n", path.c_str());
+  return true;
+}
+
+// The table on stdout (and --markdown, --csv). False when a file cannot be written.
+bool report(const Options& options, const mvod::EvaluationResult& result, const SceneCounts& counts,
+            double voxel_size_m) {
   const std::string markdown = mvod::evaluationToMarkdown(result);
   std::fputs(markdown.c_str(), stdout);
   std::fprintf(stderr,
                "%zu scene(s): %zu ground-truth objects, %zu predictions (%d with clouds; the "
                "others segment the ground truth inside their box); voxel %.3f m\n",
-               options.objects.size(), num_ground_truth, num_predictions, with_clouds,
-               evaluation.voxel_size_m);
+               options.objects.size(), counts.ground_truth, counts.predictions, counts.with_clouds,
+               voxel_size_m);
+  bool all_written = true;
+  for (const auto& [path, text] : {std::make_pair(options.markdown, markdown),
+                                   std::make_pair(options.csv, mvod::evaluationToCsv(result))}) {
+    if (path.empty()) continue;
+    const mvod::Status written = mvod::writeFileAtomic(path, text);
+    if (!written) {
+      std::cerr << "evaluate: " << written.message() << "\n";
+      all_written = false;
+    }
+  }
+  return all_written;
+}
 
-  if (!options.markdown.empty()) {
-    const mvod::Status written = mvod::writeFileAtomic(options.markdown, markdown);
-    if (!written) {
-      std::cerr << "evaluate: " << written.message() << "\n";
-      exit_code = kExitFailure;
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  int status = parseArguments(argc, argv, &options);
+  if (status != kContinue) return status;
+  mvod::EvaluationOptions evaluation;
+  if ((status = resolveGroundTruth(&options, &evaluation)) != kContinue) return status;
+  std::vector<mvod::EvaluationScene> scenes(options.objects.size());
+  SceneCounts counts;
+  for (size_t k = 0; k < scenes.size(); ++k) {
+    if ((status = loadScene(options, k, evaluation, &scenes[k], &counts)) != kContinue) {
+      return status;
     }
   }
-  if (!options.csv.empty()) {
-    const mvod::Status written = mvod::writeFileAtomic(options.csv, mvod::evaluationToCsv(result));
-    if (!written) {
-      std::cerr << "evaluate: " << written.message() << "\n";
-      exit_code = kExitFailure;
-    }
+  int exit_code = kExitOk;
+  if (!options.plot.empty() && !writePlot(options.plot, scenes.front(), evaluation.up_W)) {
+    exit_code = kExitFailure;
   }
+  if (options.ground_truth.empty()) return exit_code;
+  const mvod::EvaluationResult result = mvod::evaluateScenes(std::move(scenes), evaluation);
+  if (!report(options, result, counts, evaluation.voxel_size_m)) exit_code = kExitFailure;
   return exit_code;
 }

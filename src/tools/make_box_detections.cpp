@@ -8,8 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/box_detections.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 
@@ -17,8 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+namespace cli = mvod::cli;
+
 constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
 
 const char* const kUsage =
     "usage: make_box_detections --dataset DIR --ground-truth FILE --output DIR [options]\n"
@@ -34,45 +36,45 @@ const char* const kUsage =
     "\n"
     "exit status: 0 ok, 1 an input cannot be read or an output written, 2 bad arguments\n";
 
+struct Options {
+  std::string dataset_dir;
+  std::string truth_path;
+  std::string output_dir;
+  long every = 1;
+  double min_inside = 0.1;
+};
+
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  cli::addText(&app, "--dataset", &options->dataset_dir);
+  cli::addText(&app, "--ground-truth", &options->truth_path);
+  cli::addText(&app, "--output", &options->output_dir);
+  cli::addInteger(&app, "--every", 1, 100000, &options->every, "--every needs an integer >= 1");
+  cli::addNumber(
+      &app, "--min-inside", &options->min_inside, [](double f) { return f >= 0 && f <= 1; },
+      "--min-inside needs a number in [0, 1]");
+  const int parsed = cli::parse(&app, argc, argv, "make_box_detections", kUsage, "\n");
+  if (parsed >= 0) return parsed;
+  if (options->dataset_dir.empty() || options->truth_path.empty() || options->output_dir.empty()) {
+    return cli::usageError("make_box_detections",
+                           "--dataset, --ground-truth and --output are required", kUsage, "\n");
+  }
+  return -1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string dataset_dir, truth_path, output_dir;
-  long every = 1;
-  double min_inside = 0.1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
-      return 0;
-    } else if (arg == "--dataset" && has_value) {
-      dataset_dir = argv[++i];
-    } else if (arg == "--ground-truth" && has_value) {
-      truth_path = argv[++i];
-    } else if (arg == "--output" && has_value) {
-      output_dir = argv[++i];
-    } else if (arg == "--every" && has_value) {
-      if (!mvod::cli::parseLong(argv[++i], 1, 100000, &every)) {
-        std::cerr << "make_box_detections: --every needs an integer >= 1\n" << kUsage;
-        return kExitUsage;
-      }
-    } else if (arg == "--min-inside" && has_value) {
-      if (!mvod::cli::parseDouble(argv[++i], &min_inside) ||
-          !(min_inside >= 0 && min_inside <= 1)) {
-        std::cerr << "make_box_detections: --min-inside needs a number in [0, 1]\n" << kUsage;
-        return kExitUsage;
-      }
-    } else {
-      std::cerr << "make_box_detections: unknown or incomplete option '" << arg << "'\n" << kUsage;
-      return kExitUsage;
-    }
-  }
-  if (dataset_dir.empty() || truth_path.empty() || output_dir.empty()) {
-    std::cerr << "make_box_detections: --dataset, --ground-truth and --output are required\n"
-              << kUsage;
-    return kExitUsage;
-  }
+  Options args;
+  const int parsed = parseArguments(argc, argv, &args);
+  if (parsed >= 0) return parsed;
+  const std::string& dataset_dir = args.dataset_dir;
+  const std::string& truth_path = args.truth_path;
+  const std::string& output_dir = args.output_dir;
+  const long every = args.every;
+  const double min_inside = args.min_inside;
   mvod::DatasetSource dataset;
   mvod::Status status = mvod::openDatasetSource(dataset_dir, "auto", &dataset);
   if (!status) {

@@ -10,10 +10,12 @@
 #include <limits>
 #include <string>
 
-#include "cli_args.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
+#include "cli_options.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 
 namespace {
+
+namespace cli = mvod::cli;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;  // a folder or file cannot be written
@@ -64,75 +66,42 @@ struct Options {
   std::string id;
   bool noise_given = false;
   mvod::SyntheticSceneConfig scene;
-  bool help = false;
 };
 
-// Returns an empty string on success, else what is wrong.
-std::string parseArguments(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    std::string text;
-    const bool has_value = i + 1 < argc;
-    if (arg == "--help" || arg == "-h") {
-      options->help = true;
-      continue;
+// The scene's options: room, frames, seed, depth noise.
+void addSceneOptions(CLI::App* app, Options* options) {
+  mvod::SyntheticSceneConfig* scene = &options->scene;
+  cli::addChoice(app, "--room", {"default", "living", "bedroom", "dining", "random"},
+                 &options->room, "--room needs default, living, bedroom, dining or random");
+  cli::addInteger(app, "--frames", 1, 1000000, &scene->num_frames,
+                  "--frames needs an integer >= 1");
+  cli::addInteger(app, "--seed", 0, std::numeric_limits<unsigned int>::max(), &scene->seed,
+                  "--seed needs an integer >= 0");
+  cli::addValue(app, "--noise-model", [scene](const std::string& text) {
+    if (text == "quadratic") {
+      scene->noise_model = mvod::DepthNoiseModel::kQuadratic;
+    } else if (text == "kinect") {
+      scene->noise_model = mvod::DepthNoiseModel::kKinect;
+    } else {
+      return std::string("--noise-model needs quadratic or kinect");
     }
-    if (arg != "--output" && arg != "--detections" && arg != "--frames" && arg != "--seed" &&
-        arg != "--noise" && arg != "--holes" && arg != "--layout" && arg != "--room" &&
-        arg != "--id" && arg != "--noise-model") {
-      return "unknown argument '" + arg + "'";
+    return std::string();
+  });
+  cli::addValue(app, "--noise", [options](const std::string& text) {
+    options->noise_given = true;
+    if (!cli::parseDouble(text, &options->scene.depth_noise_m_per_m2) ||
+        options->scene.depth_noise_m_per_m2 < 0.0) {
+      return std::string("--noise needs a number >= 0");
     }
-    if (!has_value) return arg + " needs a value";
-    text = argv[++i];
-    if (arg == "--layout") {
-      if (text != "7scenes" && text != "scenenn") return "--layout needs 7scenes or scenenn";
-      options->layout = text;
-    } else if (arg == "--room") {
-      if (text != "default" && text != "living" && text != "bedroom" && text != "dining" &&
-          text != "random") {
-        return "--room needs default, living, bedroom, dining or random";
-      }
-      options->room = text;
-    } else if (arg == "--id") {
-      if (text.empty() || text.find_first_of("/\\<>\"&") != std::string::npos) {
-        return "--id needs a name without / \\ < > \" &";
-      }
-      options->id = text;
-    } else if (arg == "--noise-model") {
-      if (text == "quadratic") {
-        options->scene.noise_model = mvod::DepthNoiseModel::kQuadratic;
-      } else if (text == "kinect") {
-        options->scene.noise_model = mvod::DepthNoiseModel::kKinect;
-      } else {
-        return "--noise-model needs quadratic or kinect";
-      }
-    } else if (arg == "--output" || arg == "--detections") {
-      if (text.empty()) return arg + " needs a value";
-      (arg == "--output" ? options->output : options->detections) = text;
-    } else if (arg == "--frames") {
-      long frames = 0;
-      if (!mvod::cli::parseLong(text, 1, 1000000, &frames)) return "--frames needs an integer >= 1";
-      options->scene.num_frames = static_cast<int>(frames);
-    } else if (arg == "--seed") {
-      long seed = 0;
-      if (!mvod::cli::parseLong(text, 0, std::numeric_limits<unsigned int>::max(), &seed)) {
-        return "--seed needs an integer >= 0";
-      }
-      options->scene.seed = static_cast<unsigned int>(seed);
-    } else if (arg == "--noise") {
-      options->noise_given = true;
-      if (!mvod::cli::parseDouble(text, &options->scene.depth_noise_m_per_m2) ||
-          options->scene.depth_noise_m_per_m2 < 0.0) {
-        return "--noise needs a number >= 0";
-      }
-    } else {  // --holes
-      if (!mvod::cli::parseDouble(text, &options->scene.hole_fraction) ||
-          options->scene.hole_fraction < 0.0 || options->scene.hole_fraction >= 1.0) {
-        return "--holes needs a number in [0, 1)";
-      }
-    }
-  }
-  if (options->help) return std::string();
+    return std::string();
+  });
+  cli::addNumber(
+      app, "--holes", &scene->hole_fraction, [](double f) { return f >= 0.0 && f < 1.0; },
+      "--holes needs a number in [0, 1)");
+}
+
+// What is inconsistent after parsing ("" when nothing); the default id.
+std::string checkArguments(Options* options) {
   if (options->output.empty()) return "--output is required";
   if (options->layout == "scenenn" && !options->detections.empty()) {
     return "--detections is for --layout 7scenes only (SceneNN sequences carry label images)";
@@ -147,19 +116,35 @@ std::string parseArguments(int argc, char** argv, Options* options) {
   return std::string();
 }
 
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  bool help = false;  // shown only when the whole command line parses, as before
+  cli::setUp(&app, &help);
+  cli::addText(&app, "--output", &options->output, "--output needs a value");
+  cli::addText(&app, "--detections", &options->detections, "--detections needs a value");
+  cli::addChoice(&app, "--layout", {"7scenes", "scenenn"}, &options->layout,
+                 "--layout needs 7scenes or scenenn");
+  cli::addValue(&app, "--id", [options](const std::string& text) {
+    if (text.empty() || text.find_first_of("/\\<>\"&") != std::string::npos) {
+      return std::string("--id needs a name without / \\ < > \" &");
+    }
+    options->id = text;
+    return std::string();
+  });
+  addSceneOptions(&app, options);
+  const int parsed = cli::parse(&app, argc, argv, "make_synthetic_dataset", kUsage, "\n\n", &help);
+  if (parsed >= 0) return parsed;
+  const std::string error = checkArguments(options);
+  return error.empty() ? -1 : cli::usageError("make_synthetic_dataset", error, kUsage);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Options options;
-  const std::string error = parseArguments(argc, argv, &options);
-  if (options.help && error.empty()) {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  if (!error.empty()) {
-    std::cerr << "make_synthetic_dataset: " << error << "\n\n" << kUsage;
-    return kExitUsage;
-  }
+  const int parsed = parseArguments(argc, argv, &options);
+  if (parsed >= 0) return parsed;
 
   mvod::SyntheticScene scene = mvod::SyntheticScene::makeDefault(options.scene);
   std::string room_name = "default";

@@ -23,14 +23,16 @@
 #include <utility>
 #include <vector>
 
-#include "cli_args.h"
+#include "cli_options.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/io/ply_writer.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace fs = std::filesystem;
+namespace cli = mvod::cli;
 
 namespace {
 
@@ -128,140 +130,106 @@ struct Options {
   bool simulated_perfect = false;
   long simulated_seed = 1;
   bool quiet = false;
-  bool help = false;
 };
 
-// Returns an empty string on success, else what is wrong.
-std::string parseArguments(int argc, char** argv, Options* options) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](std::string* out) {
-      if (i + 1 >= argc) return false;
-      *out = argv[++i];
-      return true;
-    };
-    std::string text;
-    if (arg == "--help" || arg == "-h") {
-      options->help = true;
-    } else if (arg == "--no-filter") {
-      options->no_filter = true;
-    } else if (arg == "--no-lccp") {
-      options->no_lccp = true;
-    } else if (arg == "--single-frame") {
-      options->single_frame = true;
-    } else if (arg == "--paper") {
-      options->paper = true;
-    } else if (arg == "--no-floor") {
-      options->no_floor = true;
-    } else if (arg == "--no-amodal") {
-      options->no_amodal = true;
-    } else if (arg == "--selection") {
-      if (!value(&options->selection) ||
-          (options->selection != "largest" && options->selection != "consistent")) {
-        return "--selection needs largest or consistent";
-      }
-    } else if (arg == "--fusion") {
-      if (!value(&options->fusion) ||
-          (options->fusion != "paper" && options->fusion != "evidence")) {
-        return "--fusion needs paper or evidence";
-      }
-    } else if (arg == "--normal-estimation") {
-      if (!value(&options->normal_estimation) ||
-          (options->normal_estimation != "cells" && options->normal_estimation != "radius")) {
-        return "--normal-estimation needs cells or radius";
-      }
-    } else if (arg == "--lccp-implementation") {
-      if (!value(&options->lccp_implementation) ||
-          (options->lccp_implementation != "voxel_grid" && options->lccp_implementation != "pcl")) {
-        return "--lccp-implementation needs voxel_grid or pcl";
-      }
-    } else if (arg == "--outlier-removal") {
-      if (!value(&options->outlier_removal) ||
-          (options->outlier_removal != "statistical" &&
-           options->outlier_removal != "statistical_centres" &&
-           options->outlier_removal != "voxel_neighbours" && options->outlier_removal != "none")) {
-        return "--outlier-removal needs statistical, statistical_centres, voxel_neighbours or none";
-      }
-    } else if (arg == "--simulated-perfect") {
-      options->simulated_perfect = true;
-    } else if (arg == "--simulated-seed") {
-      if (!value(&text) || !mvod::cli::parseLong(text, 0, std::numeric_limits<unsigned int>::max(),
-                                                 &options->simulated_seed)) {
-        return "--simulated-seed needs an integer >= 0";
-      }
-    } else if (arg == "--estimate-gravity") {
-      options->estimate_gravity = true;
-    } else if (arg == "--quiet") {
-      options->quiet = true;
-    } else if (arg == "--dataset" || arg == "--detections" || arg == "--detector" ||
-               arg == "--model-dir" || arg == "--output" || arg == "--save-clouds" ||
-               arg == "--overlays" || arg == "--priors" || arg == "--backend" ||
-               arg == "--timings" || arg == "--format") {
-      if (!value(&text) || text.empty()) return arg + " needs a value";
-      if (arg == "--dataset") options->dataset = text;
-      if (arg == "--detections") options->detections = text;
-      if (arg == "--detector") options->detector = text;
-      if (arg == "--model-dir") options->model_dir = text;
-      if (arg == "--output") options->output = text;
-      if (arg == "--save-clouds") options->save_clouds = text;
-      if (arg == "--overlays") options->overlays = text;
-      if (arg == "--timings") options->timings = text;
-      if (arg == "--priors") options->priors = text;
-      if (arg == "--backend") options->backend = text;
-      if (arg == "--format") {
-        if (text != "auto" && text != "7scenes" && text != "scenenn") {
-          return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
-        }
-        options->format = text;
-      }
-    } else if (arg == "--threads") {
-      long parsed = 0;
-      if (!value(&text) || !mvod::cli::parseLong(text, 0, 256, &parsed)) {
-        return "--threads needs an integer in [0, 256]";
-      }
-      options->threads = static_cast<int>(parsed);
-    } else if (arg == "--max-detections") {
-      long parsed = 0;
-      if (!value(&text) ||
-          !mvod::cli::parseLong(text, 1, std::numeric_limits<int>::max(), &parsed)) {
-        return "--max-detections needs an integer >= 1";
-      }
-      options->max_detections = static_cast<int>(parsed);
-    } else if (arg == "--every" || arg == "--first" || arg == "--last") {
-      long parsed = 0;
-      if (!value(&text) || !mvod::cli::parseLong(text, std::numeric_limits<int>::min(),
-                                                 std::numeric_limits<int>::max(), &parsed)) {
-        return arg + " needs an integer";
-      }
-      const int number = static_cast<int>(parsed);
-      if (arg == "--every") {
-        if (number < 1) return "--every must be >= 1";
-        options->every = number;
-      }
-      if (arg == "--first") options->first = number;
-      if (arg == "--last") options->last = number;
-    } else if (arg == "--score-threshold") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->score_threshold)) {
-        return "--score-threshold needs a number";
-      }
-    } else if (arg == "--min-probability") {
-      if (!value(&text) || !mvod::cli::parseDouble(text, &options->min_probability)) {
-        return "--min-probability needs a number";
-      }
-      if (options->min_probability < 0.0 || options->min_probability > 1.0) {
-        return "--min-probability must be in [0, 1]";
-      }
-    } else {
-      return "unknown argument '" + arg + "'";
+// Input, detector and output options.
+void addInputOptions(CLI::App* app, Options* options) {
+  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset),
+                                    std::make_pair("--detections", &options->detections),
+                                    std::make_pair("--detector", &options->detector),
+                                    std::make_pair("--model-dir", &options->model_dir),
+                                    std::make_pair("--output", &options->output),
+                                    std::make_pair("--save-clouds", &options->save_clouds),
+                                    std::make_pair("--overlays", &options->overlays),
+                                    std::make_pair("--timings", &options->timings),
+                                    std::make_pair("--priors", &options->priors),
+                                    std::make_pair("--backend", &options->backend)}) {
+    cli::addText(app, name, value, std::string(name) + " needs a value");
+  }
+  cli::addValue(app, "--format", [options](const std::string& text) {
+    if (text.empty()) return std::string("--format needs a value");
+    if (text != "auto" && text != "7scenes" && text != "scenenn") {
+      return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
     }
+    options->format = text;
+    return std::string();
+  });
+  cli::addInteger(app, "--simulated-seed", 0, std::numeric_limits<unsigned int>::max(),
+                  &options->simulated_seed, "--simulated-seed needs an integer >= 0");
+  cli::addFlag(app, "--simulated-perfect", &options->simulated_perfect);
+  cli::addNumber(
+      app, "--score-threshold", &options->score_threshold, [](double) { return true; },
+      "--score-threshold needs a number");
+  cli::addInteger(app, "--max-detections", 1, std::numeric_limits<int>::max(),
+                  &options->max_detections, "--max-detections needs an integer >= 1");
+  cli::addInteger(app, "--threads", 0, 256, &options->threads,
+                  "--threads needs an integer in [0, 256]");
+  cli::addValue(app, "--every", [options](const std::string& text) {
+    long every = 0;
+    if (!cli::parseLong(text, std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                        &every)) {
+      return std::string("--every needs an integer");
+    }
+    if (every < 1) return std::string("--every must be >= 1");
+    options->every = static_cast<int>(every);
+    return std::string();
+  });
+  cli::addInteger(app, "--first", std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                  &options->first, "--first needs an integer");
+  cli::addInteger(app, "--last", std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
+                  &options->last, "--last needs an integer");
+  cli::addFlag(app, "--quiet", &options->quiet);
+}
+
+// The method's options: Eq. 5's lambda, the ablations and the paper's variants.
+void addMethodOptions(CLI::App* app, Options* options) {
+  cli::addValue(app, "--min-probability", [options](const std::string& text) {
+    if (!cli::parseDouble(text, &options->min_probability)) {
+      return std::string("--min-probability needs a number");
+    }
+    if (options->min_probability < 0.0 || options->min_probability > 1.0) {
+      return std::string("--min-probability must be in [0, 1]");
+    }
+    return std::string();
+  });
+  cli::addFlag(app, "--no-filter", &options->no_filter);
+  cli::addFlag(app, "--no-lccp", &options->no_lccp);
+  cli::addFlag(app, "--single-frame", &options->single_frame);
+  cli::addFlag(app, "--paper", &options->paper);
+  cli::addFlag(app, "--no-floor", &options->no_floor);
+  cli::addFlag(app, "--no-amodal", &options->no_amodal);
+  cli::addFlag(app, "--estimate-gravity", &options->estimate_gravity);
+  cli::addChoice(app, "--selection", {"largest", "consistent"}, &options->selection,
+                 "--selection needs largest or consistent");
+  cli::addChoice(app, "--fusion", {"paper", "evidence"}, &options->fusion,
+                 "--fusion needs paper or evidence");
+  cli::addChoice(app, "--normal-estimation", {"cells", "radius"}, &options->normal_estimation,
+                 "--normal-estimation needs cells or radius");
+  cli::addChoice(app, "--lccp-implementation", {"voxel_grid", "pcl"}, &options->lccp_implementation,
+                 "--lccp-implementation needs voxel_grid or pcl");
+  cli::addChoice(
+      app, "--outlier-removal", {"statistical", "statistical_centres", "voxel_neighbours", "none"},
+      &options->outlier_removal,
+      "--outlier-removal needs statistical, statistical_centres, voxel_neighbours or none");
+}
+
+// -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
+int parseArguments(int argc, char** argv, Options* options) {
+  CLI::App app;
+  cli::setUp(&app);
+  addInputOptions(&app, options);
+  addMethodOptions(&app, options);
+  const int parsed = cli::parse(&app, argc, argv, "offline_detection", kUsage);
+  if (parsed >= 0) return parsed;
+  std::string error;
+  if (options->dataset.empty()) {
+    error = "--dataset is required";
+  } else if (options->first > options->last) {
+    error = "--first is after --last";
+  } else if (options->detector == "files" && options->detections.empty()) {
+    error = "--detector files needs --detections DIR";
   }
-  if (options->help) return "";
-  if (options->dataset.empty()) return "--dataset is required";
-  if (options->first > options->last) return "--first is after --last";
-  if (options->detector == "files" && options->detections.empty()) {
-    return "--detector files needs --detections DIR";
-  }
-  return "";
+  return error.empty() ? -1 : cli::usageError("offline_detection", error, kUsage);
 }
 
 // config/class_priors.yaml of the package: next to the sources (catkin devel space: the workspace's
@@ -357,18 +325,6 @@ std::string fileSafe(std::string name) {
   return name;
 }
 
-std::string plyText(const mvod::PointCloud& points) {
-  std::ostringstream out;
-  out << "ply\nformat ascii 1.0\nelement vertex " << points.size()
-      << "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-  char line[96];
-  for (const Eigen::Vector3f& p : points) {
-    std::snprintf(line, sizeof(line), "%.4f %.4f %.4f\n", p.x(), p.y(), p.z());
-    out << line;
-  }
-  return out.str();
-}
-
 void printTable(const std::vector<mvod::MapObject>& objects) {
   std::printf("%4s  %-16s %5s %4s  %-26s %-22s %8s\n", "id", "class", "prob", "obs", "centre (m)",
               "size (m)", "yaw (deg)");
@@ -386,105 +342,102 @@ void printTable(const std::vector<mvod::MapObject>& objects) {
 
 namespace {
 
-// main() without the last-resort catch.
-int run(int argc, char** argv) {
-  Options options;
-  const std::string bad_arguments = parseArguments(argc, argv, &options);
-  if (options.help) {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  if (!bad_arguments.empty()) {
-    std::cerr << "offline_detection: " << bad_arguments << "\n\n" << kUsage;
-    return kExitUsage;
-  }
+// run()'s phases return an exit status, or kContinue to go on.
+constexpr int kContinue = -1;
 
-  // Bad options are usage errors (exit 2), found before any file is touched.
-  mvod::BenchmarkSegmenterOptions segmenter_options;
-  segmenter_options.detector = options.detector;
-  segmenter_options.detections_dir = options.detections.empty() && options.detector == "simulated"
-                                         ? options.dataset
-                                         : options.detections;
-  segmenter_options.model_dir = options.model_dir;
-  segmenter_options.score_threshold = static_cast<float>(options.score_threshold);
-  segmenter_options.backend = options.backend;
-  segmenter_options.max_detections = options.max_detections;
+// The detector's options; bad ones are usage errors (exit 2), found before any file is touched.
+int segmenterOptions(const Options& options, mvod::BenchmarkSegmenterOptions* segmenter) {
+  segmenter->detector = options.detector;
+  segmenter->detections_dir = options.detections.empty() && options.detector == "simulated"
+                                  ? options.dataset
+                                  : options.detections;
+  segmenter->model_dir = options.model_dir;
+  segmenter->score_threshold = static_cast<float>(options.score_threshold);
+  segmenter->backend = options.backend;
+  segmenter->max_detections = options.max_detections;
   if (options.simulated_perfect) {
-    segmenter_options.simulated = mvod::SimulatedInstanceSegmenter::Config::perfect();
+    segmenter->simulated = mvod::SimulatedInstanceSegmenter::Config::perfect();
   }
-  segmenter_options.simulated.seed = static_cast<uint64_t>(options.simulated_seed);
-  const mvod::Status segmenter_options_valid = segmenter_options.isValid();
-  if (!segmenter_options_valid) {
-    std::cerr << "offline_detection: " << segmenter_options_valid.message() << "\n";
+  segmenter->simulated.seed = static_cast<uint64_t>(options.simulated_seed);
+  const mvod::Status valid = segmenter->isValid();
+  if (!valid) {
+    std::cerr << "offline_detection: " << valid.message() << "\n";
     return kExitUsage;
   }
+  return kContinue;
+}
 
-  mvod::DatasetSource dataset;
-  const mvod::Status opened = mvod::openDatasetSource(options.dataset, options.format, &dataset);
+// The dataset; its warnings, and its notes unless --quiet.
+int openDataset(const Options& options, mvod::DatasetSource* dataset) {
+  const mvod::Status opened = mvod::openDatasetSource(options.dataset, options.format, dataset);
   if (!opened) {
     std::cerr << "offline_detection: cannot open dataset " << options.dataset << ": "
               << opened.message() << "\n";
     return kExitFailure;
   }
-  for (const std::string& warning : dataset.warnings) {
+  for (const std::string& warning : dataset->warnings) {
     std::cerr << "offline_detection: warning: " << warning << "\n";
   }
   if (!options.quiet) {
-    std::cerr << "offline_detection: " << options.dataset << " (" << dataset.format << ", "
-              << dataset.indices.size() << " frames)\n";
-    for (const std::string& note : dataset.notes)
+    std::cerr << "offline_detection: " << options.dataset << " (" << dataset->format << ", "
+              << dataset->indices.size() << " frames)\n";
+    for (const std::string& note : dataset->notes) {
       std::cerr << "offline_detection: " << note << "\n";
+    }
   }
+  return kContinue;
+}
 
-  if (options.priors.empty()) {
-    options.priors = findDefaultPriors(argv[0]);
-    if (options.priors.empty()) {
+// --priors, else the package's config/class_priors.yaml.
+int loadPriors(Options* options, const char* argv0, mvod::ClassPriors* priors) {
+  if (options->priors.empty()) {
+    options->priors = findDefaultPriors(argv0);
+    if (options->priors.empty()) {
       std::cerr << "offline_detection: config/class_priors.yaml not found next to the package's "
                    "sources or install space; give it with --priors FILE\n";
       return kExitFailure;
     }
   }
-  mvod::ClassPriors priors;
-  const mvod::Status priors_loaded = mvod::ClassPriors::loadYaml(options.priors, &priors);
-  if (!priors_loaded) {
-    std::cerr << "offline_detection: " << priors_loaded.message() << "\n";
+  const mvod::Status loaded = mvod::ClassPriors::loadYaml(options->priors, priors);
+  if (!loaded) {
+    std::cerr << "offline_detection: " << loaded.message() << "\n";
     return kExitFailure;
   }
+  return kContinue;
+}
 
-  std::unique_ptr<mvod::InstanceSegmenter> segmenter;
-  const mvod::Status created = mvod::createBenchmarkSegmenter(segmenter_options, &segmenter);
-  if (!created) {
-    std::cerr << "offline_detection: " << created.message() << "\n";
-    return kExitFailure;
-  }
-
-  mvod::ObjectMapper::Config config;
-  if (options.paper) config.usePaperMethod();
-  if (!options.selection.empty()) config.selection.selection = options.selection;
-  if (!options.fusion.empty()) config.database.fusion = options.fusion;
-  if (!options.outlier_removal.empty()) config.filter.outlier_removal = options.outlier_removal;
-  if (!options.normal_estimation.empty()) config.box.normal_estimation = options.normal_estimation;
+// The mapper's configuration: the method's options, the dataset's gravity when it has one (else
+// estimated from the first frames' dominant plane). Invalid values are usage errors.
+int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
+                 mvod::ObjectMapper::Config* config) {
+  if (options.paper) config->usePaperMethod();
+  if (!options.selection.empty()) config->selection.selection = options.selection;
+  if (!options.fusion.empty()) config->database.fusion = options.fusion;
+  if (!options.outlier_removal.empty()) config->filter.outlier_removal = options.outlier_removal;
+  if (!options.normal_estimation.empty()) config->box.normal_estimation = options.normal_estimation;
   if (!options.lccp_implementation.empty()) {
-    config.lccp.implementation = options.lccp_implementation;
+    config->lccp.implementation = options.lccp_implementation;
   }
-  if (options.no_floor) config.floor.enable = false;
-  if (options.no_amodal) config.database.amodal.enable = false;
-  config.min_probability = options.min_probability;
-  config.num_threads = options.threads;
-  config.filter.enable = !options.no_filter;
-  config.lccp.enable = !options.no_lccp;
-  config.database.disable_fusion = options.single_frame;
-  // The dataset's gravity when it has one; else estimated from the first frames' dominant plane.
-  config.gravity_down_W = dataset.has_gravity && !options.estimate_gravity
-                              ? dataset.gravity_down_W
-                              : Eigen::Vector3d::Zero();
-  const mvod::Status config_valid = config.isValid();
-  if (!config_valid) {
-    std::cerr << "offline_detection: invalid configuration: " << config_valid.message() << "\n";
+  if (options.no_floor) config->floor.enable = false;
+  if (options.no_amodal) config->database.amodal.enable = false;
+  config->min_probability = options.min_probability;
+  config->num_threads = options.threads;
+  config->filter.enable = !options.no_filter;
+  config->lccp.enable = !options.no_lccp;
+  config->database.disable_fusion = options.single_frame;
+  config->gravity_down_W = dataset.has_gravity && !options.estimate_gravity
+                               ? dataset.gravity_down_W
+                               : Eigen::Vector3d::Zero();
+  const mvod::Status valid = config->isValid();
+  if (!valid) {
+    std::cerr << "offline_detection: invalid configuration: " << valid.message() << "\n";
     return kExitUsage;
   }
-  mvod::ObjectMapper mapper(config, priors);
+  return kContinue;
+}
 
+// The folders of --save-clouds and --overlays.
+int makeOutputFolders(const Options& options) {
   for (const std::string& dir : {options.save_clouds, options.overlays}) {
     std::error_code error;
     if (!dir.empty() && !fs::create_directories(dir, error) && error) {
@@ -492,7 +445,11 @@ int run(int argc, char** argv) {
       return kExitFailure;
     }
   }
+  return kContinue;
+}
 
+// The dataset's frames with an index in [--first, --last].
+std::vector<int> selectFrames(const Options& options, const mvod::DatasetSource& dataset) {
   std::vector<int> frames;
   for (const int index : dataset.indices) {
     if (index >= options.first && index <= options.last) frames.push_back(index);
@@ -500,100 +457,139 @@ int run(int argc, char** argv) {
   if (frames.empty()) {
     std::cerr << "offline_detection: no frames in " << options.dataset << " within the range\n";
   }
+  return frames;
+}
 
-  Progress progress(frames.size(), !options.quiet);
+// What the keyframes of a run gave.
+struct RunStats {
   std::vector<mvod::StageTimes> stage_times;  // keyframes that had detections to process
   std::vector<std::string> stage_frames;      // their names
   std::vector<double> detection_ms;
   int keyframes = 0;
   int errors = 0;
   mvod::MapSummary::Counts counts;
-  auto report_line = [&](const std::string& line, bool is_error) {
-    if (options.quiet && !is_error) return;
-    progress.breakLine();
-    std::cerr << line << "\n";
-  };
+};
 
-  for (size_t i = 0; i < frames.size(); ++i) {
-    if (i % static_cast<size_t>(options.every) != 0) {
-      progress.update(i + 1, keyframes, mapper.database().size());
-      continue;
+// Every N-th frame through load -> detect -> ObjectMapper::processKeyframe, with a progress line.
+class KeyframeLoop {
+ public:
+  KeyframeLoop(const Options& options, mvod::DatasetSource* dataset,
+               mvod::InstanceSegmenter* segmenter, mvod::ObjectMapper* mapper, size_t num_frames)
+      : options_(options),
+        dataset_(*dataset),
+        segmenter_(*segmenter),
+        mapper_(*mapper),
+        progress_(num_frames, !options.quiet) {}
+
+  void run(const std::vector<int>& frames) {
+    for (size_t i = 0; i < frames.size(); ++i) {
+      if (i % static_cast<size_t>(options_.every) == 0) processFrame(frames[i]);
+      progress_.update(i + 1, stats_.keyframes, mapper_.database().size());
     }
-    const std::string name = dataset.frame_name(frames[i]);
+    progress_.breakLine();
+  }
+  const RunStats& stats() const { return stats_; }
+
+ private:
+  void processFrame(int index) {
+    const std::string name = dataset_.frame_name(index);
     mvod::RgbdFrame frame;
-    const mvod::Status loaded = dataset.load(frames[i], &frame);
+    const mvod::Status loaded = dataset_.load(index, &frame);
     if (!loaded) {
-      ++errors;
-      report_line(name + ": error: " + loaded.message(), true);
-      progress.update(i + 1, keyframes, mapper.database().size());
-      continue;
+      ++stats_.errors;
+      report(name + ": error: " + loaded.message(), true);
+      return;
     }
     if (frame.name.empty()) frame.name = name;
-
     std::vector<mvod::Detection2D> detections;
-    std::vector<std::string> detector_warnings;
+    if (!detect(frame, name, &detections)) return;
+    if (!options_.overlays.empty()) writeOverlay(frame, name, detections);
+    mapKeyframe(frame, name, detections);
+  }
+
+  // The detector on the frame, timed; false (an error counted) when it fails.
+  bool detect(const mvod::RgbdFrame& frame, const std::string& name,
+              std::vector<mvod::Detection2D>* detections) {
+    std::vector<std::string> warnings;
     const auto t0 = std::chrono::steady_clock::now();
     const mvod::Status detected =
-        segmenter->detect(frame.color_bgr, frame.name, &detections, &detector_warnings);
-    detection_ms.push_back(
+        segmenter_.detect(frame.color_bgr, frame.name, detections, &warnings);
+    stats_.detection_ms.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    for (const std::string& warning : detector_warnings) {
-      report_line(name + ": warning: " + warning, false);
-    }
+    for (const std::string& warning : warnings) report(name + ": warning: " + warning, false);
     if (!detected) {
-      ++errors;
-      report_line(name + ": error: detection failed: " + detected.message(), true);
-      progress.update(i + 1, keyframes, mapper.database().size());
-      continue;
+      ++stats_.errors;
+      report(name + ": error: detection failed: " + detected.message(), true);
+      return false;
     }
-
-    if (!options.overlays.empty()) {
-      const std::string path = options.overlays + "/" + name + ".overlay.png";
-      try {
-        if (!cv::imwrite(path, mvod::drawDetections(frame.color_bgr, detections))) {
-          report_line(name + ": warning: cannot write " + path, false);
-        }
-      } catch (const cv::Exception& e) {
-        report_line(name + ": warning: cannot write " + path + ": " + e.what(), false);
-      }
-    }
-
-    mvod::KeyframeReport report;
-    const mvod::Status processed = mapper.processKeyframe(frame, detections, &report);
-    if (!processed) {
-      ++errors;
-      report_line(name + ": error: " + processed.message(), true);
-    } else {
-      ++keyframes;
-      counts.detections += report.detections;
-      counts.above_threshold += report.above_threshold;
-      counts.with_box += report.with_box;
-      counts.inserted += report.inserted;
-      counts.fused += report.fused;
-      if (report.above_threshold > 0 && !report.waiting_for_gravity) {
-        stage_times.push_back(report.times);
-        stage_frames.push_back(name);
-      }
-    }
-    for (const std::string& warning : report.warnings) report_line("warning: " + warning, false);
-    progress.update(i + 1, keyframes, mapper.database().size());
+    return true;
   }
-  progress.breakLine();
 
-  counts.before_refinement = static_cast<int>(mapper.database().size());
-  const mvod::ObjectMapper::RefinementReport refinement = mapper.refine();
+  void writeOverlay(const mvod::RgbdFrame& frame, const std::string& name,
+                    const std::vector<mvod::Detection2D>& detections) {
+    const std::string path = options_.overlays + "/" + name + ".overlay.png";
+    try {
+      if (!cv::imwrite(path, mvod::drawDetections(frame.color_bgr, detections))) {
+        report(name + ": warning: cannot write " + path, false);
+      }
+    } catch (const cv::Exception& e) {
+      report(name + ": warning: cannot write " + path + ": " + e.what(), false);
+    }
+  }
 
-  // Table 5's split as medians per keyframe (over the keyframes that had detections to process).
+  void mapKeyframe(const mvod::RgbdFrame& frame, const std::string& name,
+                   const std::vector<mvod::Detection2D>& detections) {
+    mvod::KeyframeReport keyframe;
+    const mvod::Status processed = mapper_.processKeyframe(frame, detections, &keyframe);
+    if (!processed) {
+      ++stats_.errors;
+      report(name + ": error: " + processed.message(), true);
+    } else {
+      ++stats_.keyframes;
+      mvod::MapSummary::Counts& counts = stats_.counts;
+      counts.detections += keyframe.detections;
+      counts.above_threshold += keyframe.above_threshold;
+      counts.with_box += keyframe.with_box;
+      counts.inserted += keyframe.inserted;
+      counts.fused += keyframe.fused;
+      if (keyframe.above_threshold > 0 && !keyframe.waiting_for_gravity) {
+        stats_.stage_times.push_back(keyframe.times);
+        stats_.stage_frames.push_back(name);
+      }
+    }
+    for (const std::string& warning : keyframe.warnings) report("warning: " + warning, false);
+  }
+
+  // A line on stderr (not with --quiet unless it is an error), below the progress line.
+  void report(const std::string& line, bool is_error) {
+    if (options_.quiet && !is_error) return;
+    progress_.breakLine();
+    std::cerr << line << "\n";
+  }
+
+  const Options& options_;
+  mvod::DatasetSource& dataset_;
+  mvod::InstanceSegmenter& segmenter_;
+  mvod::ObjectMapper& mapper_;
+  Progress progress_;
+  RunStats stats_;
+};
+
+// The map's summary; Table 5's split as medians per keyframe (over the keyframes that had
+// detections to process).
+mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
+                           const mvod::ObjectMapper& mapper,
+                           const mvod::ObjectMapper::RefinementReport& refinement) {
   mvod::MapSummary summary;
-  summary.frames = static_cast<int>(frames.size());
-  summary.keyframes = keyframes;
+  summary.frames = static_cast<int>(num_frames);
+  summary.keyframes = stats.keyframes;
   summary.removed_atypical = static_cast<int>(refinement.atypical_ids.size());
   summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
   summary.gravity_down_W = -mapper.gravity().up;
-  summary.counts = counts;
+  summary.counts = stats.counts;
   auto stage_median = [&](double mvod::StageTimes::*field) {
     std::vector<double> values;
-    for (const mvod::StageTimes& t : stage_times) values.push_back(t.*field);
+    for (const mvod::StageTimes& t : stats.stage_times) values.push_back(t.*field);
     return median(values);
   };
   mvod::StageTimes& med = summary.stage_ms_median;
@@ -604,36 +600,90 @@ int run(int argc, char** argv) {
   med.fusion_ms = stage_median(&mvod::StageTimes::fusion_ms);
   med.total_ms = stage_median(&mvod::StageTimes::total_ms);
   med.refinement_ms = refinement.time_ms;
+  return summary;
+}
 
-  // Does the cost per keyframe grow with the map? The first and the last 20 keyframes.
-  if (stage_times.size() >= 40 && !options.quiet) {
-    std::vector<double> first, last;
-    for (size_t k = 0; k < 20; ++k) {
-      first.push_back(stage_times[k].total_ms);
-      last.push_back(stage_times[stage_times.size() - 20 + k].total_ms);
-    }
-    std::fprintf(stderr,
-                 "offline_detection: time per keyframe, median of the first 20: %.1f ms, of the "
-                 "last 20: %.1f ms\n",
-                 median(first), median(last));
+// Does the cost per keyframe grow with the map? The first and the last 20 keyframes.
+void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times) {
+  if (stage_times.size() < 40) return;
+  std::vector<double> first, last;
+  for (size_t k = 0; k < 20; ++k) {
+    first.push_back(stage_times[k].total_ms);
+    last.push_back(stage_times[stage_times.size() - 20 + k].total_ms);
   }
-  if (!options.timings.empty()) {
-    std::ofstream csv(options.timings);
-    csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms\n";
-    for (size_t k = 0; k < stage_times.size(); ++k) {
-      const mvod::StageTimes& t = stage_times[k];
-      csv << stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
-          << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "\n";
-    }
-    if (!csv) {
-      std::cerr << "offline_detection: cannot write " << options.timings << "\n";
-      return kExitFailure;
-    }
-  }
+  std::fprintf(stderr,
+               "offline_detection: time per keyframe, median of the first 20: %.1f ms, of the "
+               "last 20: %.1f ms\n",
+               median(first), median(last));
+}
 
-  const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper.database());
+// --timings: per-keyframe stage times as CSV.
+int writeTimings(const std::string& path, const RunStats& stats) {
+  std::ofstream csv(path);
+  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms\n";
+  for (size_t k = 0; k < stats.stage_times.size(); ++k) {
+    const mvod::StageTimes& t = stats.stage_times[k];
+    csv << stats.stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
+        << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "\n";
+  }
+  if (!csv) {
+    std::cerr << "offline_detection: cannot write " << path << "\n";
+    return kExitFailure;
+  }
+  return kContinue;
+}
+
+// --save-clouds: each object's fused cloud and LCCP segment as ASCII PLY. False if one fails.
+bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& objects) {
+  bool all_saved = true;
+  for (const mvod::MapObject& object : objects) {
+    const std::string stem =
+        dir + "/object_" + std::to_string(object.id) + "_" + fileSafe(object.class_name);
+    for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
+                             std::make_pair("_segment.ply", &object.segment_W)}) {
+      const mvod::Status saved =
+          mvod::writeFileAtomic(stem + part.first, mvod::plyAsciiXyz(*part.second));
+      if (!saved) {
+        std::cerr << "offline_detection: " << saved.message() << "\n";
+        all_saved = false;
+      }
+    }
+  }
+  return all_saved;
+}
+
+void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,
+                    const mvod::ObjectMapper::RefinementReport& refinement,
+                    const mvod::MapSummary& summary) {
+  const mvod::StageTimes& med = summary.stage_ms_median;
+  const mvod::MapSummary::Counts& counts = summary.counts;
+  std::fprintf(stderr,
+               "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
+               "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate)\n"
+               "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
+               "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n"
+               "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
+               "%d objects before refinement\n",
+               num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
+               refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
+               refinement.merged_ids.size(), median(stats.detection_ms), med.extraction_ms,
+               med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms, med.total_ms,
+               med.refinement_ms, counts.detections, counts.above_threshold, counts.with_box,
+               counts.inserted, counts.fused, counts.before_refinement);
+}
+
+// Refinement (Sec. 3.5), the printed table, objects.json, the clouds, the report.
+int finishMap(const Options& options, RunStats stats, size_t num_frames,
+              mvod::ObjectMapper* mapper) {
+  stats.counts.before_refinement = static_cast<int>(mapper->database().size());
+  const mvod::ObjectMapper::RefinementReport refinement = mapper->refine();
+  const mvod::MapSummary summary = summarize(stats, num_frames, *mapper, refinement);
+  if (!options.quiet) printCostGrowth(stats.stage_times);
+  if (!options.timings.empty() && writeTimings(options.timings, stats) != kContinue) {
+    return kExitFailure;
+  }
+  const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper->database());
   printTable(objects);
-
   int exit_code = kExitOk;
   const mvod::Status written =
       mvod::writeFileAtomic(options.output, mvod::objectsToJson(objects, summary, false));
@@ -641,38 +691,43 @@ int run(int argc, char** argv) {
     std::cerr << "offline_detection: " << written.message() << "\n";
     exit_code = kExitFailure;
   }
-  if (!options.save_clouds.empty()) {
-    for (const mvod::MapObject& object : objects) {
-      const std::string stem = options.save_clouds + "/object_" + std::to_string(object.id) + "_" +
-                               fileSafe(object.class_name);
-      for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
-                               std::make_pair("_segment.ply", &object.segment_W)}) {
-        const mvod::Status saved = mvod::writeFileAtomic(stem + part.first, plyText(*part.second));
-        if (!saved) {
-          std::cerr << "offline_detection: " << saved.message() << "\n";
-          exit_code = kExitFailure;
-        }
-      }
-    }
+  if (!options.save_clouds.empty() && !saveClouds(options.save_clouds, objects)) {
+    exit_code = kExitFailure;
   }
-
   if (!options.quiet) {
-    std::fprintf(stderr,
-                 "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
-                 "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate)\n"
-                 "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
-                 "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n"
-                 "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
-                 "%d objects before refinement\n",
-                 frames.size(), keyframes, stage_times.size(), errors, objects.size(),
-                 refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
-                 refinement.merged_ids.size(), median(detection_ms), med.extraction_ms,
-                 med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms, med.total_ms,
-                 med.refinement_ms, counts.detections, counts.above_threshold, counts.with_box,
-                 counts.inserted, counts.fused, counts.before_refinement);
+    printRunReport(stats, num_frames, objects.size(), refinement, summary);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
   }
   return exit_code;
+}
+
+// main() without the last-resort catch: parse, open the dataset, set up the detector and the
+// mapper, run the keyframes, finish the map.
+int run(int argc, char** argv) {
+  Options options;
+  int status = parseArguments(argc, argv, &options);
+  if (status != kContinue) return status;
+  mvod::BenchmarkSegmenterOptions segmenter_options;
+  if ((status = segmenterOptions(options, &segmenter_options)) != kContinue) return status;
+  mvod::DatasetSource dataset;
+  if ((status = openDataset(options, &dataset)) != kContinue) return status;
+  mvod::ClassPriors priors;
+  if ((status = loadPriors(&options, argv[0], &priors)) != kContinue) return status;
+  std::unique_ptr<mvod::InstanceSegmenter> segmenter;
+  const mvod::Status created = mvod::createBenchmarkSegmenter(segmenter_options, &segmenter);
+  if (!created) {
+    std::cerr << "offline_detection: " << created.message() << "\n";
+    return kExitFailure;
+  }
+  mvod::ObjectMapper::Config config;
+  if ((status = mapperConfig(options, dataset, &config)) != kContinue) return status;
+  mvod::ObjectMapper mapper(config, priors);
+  if ((status = makeOutputFolders(options)) != kContinue) return status;
+
+  const std::vector<int> frames = selectFrames(options, dataset);
+  KeyframeLoop keyframes(options, &dataset, segmenter.get(), &mapper, frames.size());
+  keyframes.run(frames);
+  return finishMap(options, keyframes.stats(), frames.size(), &mapper);
 }
 
 }  // namespace

@@ -24,8 +24,8 @@
 #include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 
 #ifndef MVOD_DATASET_TO_BAG_BIN
 #error "MVOD_DATASET_TO_BAG_BIN must be the path of the dataset_to_bag executable"

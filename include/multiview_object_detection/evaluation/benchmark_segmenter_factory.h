@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
-#include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
+#include "multiview_object_detection/simulation/simulated_instance_segmenter.h"
 
 namespace mvod {
 

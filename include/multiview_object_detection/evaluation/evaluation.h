@@ -1,25 +1,18 @@
 // Evaluation against ground truth (Sec. 4.1): per-class AP of object segmentation by the 3D IoU of
 // voxelised point sets (Tables 1 and 2), and oriented-box mAP@0.25 / mAP@0.5.
 //
-// Ground truth comes from this project's synthetic ground_truth.json (boxes, z-up) or from a
-// SceneNN sequence (<id>.ply mesh with a per-vertex `label` + <id>.xml annotation, y-up mesh
-// frame).
+// Ground truth (GroundTruthObject) and its loaders are datasets/ground_truth.h.
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/common.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
-
-struct GroundTruthObject {
-  std::string class_name;  // canonical evaluation class (see canonicalClassName)
-  OrientedBox box;         // gravity-aligned: its footprint lies in the floor plane of `up`
-  PointCloud points_W;     // may be empty: the evaluation then samples the box surface
-};
 
 // One predicted object as the evaluation sees it.
 struct EvaluatedPrediction {
@@ -59,15 +52,6 @@ struct EvaluationResult {
 
 // ---- Pure metric functions ----
 
-// Maps dataset / detector class names to one evaluation class: COCO names stay (sofa -> couch,
-// table -> dining table, television / monitor -> tv, books -> book, fridge -> refrigerator, ...),
-// and NYU's "bag" plus COCO's backpack / handbag / suitcase all become "bag" (no single COCO
-// class). Lower-cased and trimmed; an unknown name is returned as it is (lower-cased, trimmed).
-std::string canonicalClassName(const std::string& name);
-// SceneNN / NYU label text -> evaluation class, or "" for labels that are not evaluated (walls,
-// floor, desk, unknown ...): the nine classes the paper's Table 1 shares between COCO and NYU.
-std::string sceneNNClassName(const std::string& label_text);
-
 // PASCAL VOC all-point interpolated AP: `true_positive` is the ranked list (highest confidence
 // first); precision is made monotone from the right and integrated over every recall step. 0 when
 // num_gt is 0 or the list has no true positive.
@@ -85,17 +69,6 @@ double orientedBoxIoU(const OrientedBox& a, const OrientedBox& b, const Eigen::V
 // prediction of an already matched object is a false positive. iou[p][g].
 std::vector<bool> matchRankedPredictions(const std::vector<std::vector<double>>& iou,
                                          double threshold);
-
-// Points on the box surface, on a grid of `spacing_m`; the face whose outward normal is -up is left
-// out (it rests on the floor or is seen by no camera above it, and the ground-truth mesh has none).
-PointCloud sampleBoxSurface(const OrientedBox& box, double spacing_m, const Eigen::Vector3d& up_W);
-
-// Gravity-aligned box of a cloud (an object's observed surface): the yaw of the surfaces' Manhattan
-// frame (Eq. 3, as the predictions' boxes), the extents min/max, third column = up_W. A partly seen
-// object shows two perpendicular faces: their minimum-area rectangle would be diagonal and wrong,
-// their normals give the object's axes. Where the normals show no box structure (cylinders, too few
-// points), the minimum-area rectangle of the footprint (rotating calipers).
-OrientedBox fitGravityAlignedBox(const PointCloud& points_W, const Eigen::Vector3d& up_W);
 
 EvaluationResult evaluate(const std::vector<GroundTruthObject>& ground_truth,
                           const std::vector<EvaluatedPrediction>& predictions,
@@ -117,36 +90,7 @@ EvaluationResult evaluateScenes(std::vector<EvaluationScene> scenes,
 std::string evaluationToMarkdown(const EvaluationResult& result);
 std::string evaluationToCsv(const EvaluationResult& result);
 
-// ---- Loaders (errors name the file) ----
-
-// PLY vertices (ascii or binary_little_endian; any scalar types). With labels non-null, the vertex
-// property `label` is required and returned per vertex.
-Status readPlyVertices(const std::string& path, PointCloud* points, std::vector<int>* labels);
-
-struct SceneNNLabel {
-  int id = 0;
-  std::string text;
-  std::string nyu_class;  // empty when absent
-  Eigen::Vector3d aabb_min = Eigen::Vector3d::Zero();
-  Eigen::Vector3d aabb_max = Eigen::Vector3d::Zero();
-  bool has_obbox = false;
-  Eigen::Matrix<double, 10, 1> obbox;  // cx cy cz dx dy dz qx qy qz qw, as in the file
-};
-Status readSceneNNXml(const std::string& path, std::vector<SceneNNLabel>* labels);
-
-// The synthetic ground_truth.json (SyntheticScene::writeSevenScenes). Points: an object's optional
-// "points" ([[x, y, z], ...], e.g. its observed surface), else the box surface (sampleBoxSurface at
-// spacing_m, bottom face left out): what a depth camera can see of the rendered box. Objects with
-// an empty class_name (clutter) are skipped.
-Status loadSyntheticGroundTruth(const std::string& path, double spacing_m,
-                                const Eigen::Vector3d& up_W,
-                                std::vector<GroundTruthObject>* objects);
-// A SceneNN sequence: `path` is the <id> folder (with <id>.ply and <id>.xml) or the .ply itself
-// (the .xml next to it). Points: the mesh vertices of each label with an evaluated class; box: the
-// gravity-aligned box of those vertices (the XML obbox is documented as inaccurate). Labels with no
-// vertex are skipped. The mesh frame is y-up: pass up_W = (0, 1, 0).
-Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up_W,
-                              std::vector<GroundTruthObject>* objects);
+// ---- Predictions (errors name the file) ----
 
 // objects.json -> predictions. Points, the paper's "segmented object points": the LCCP segment
 // stored in the file ("segment", written with include_clouds; else its "points", the fused cloud),

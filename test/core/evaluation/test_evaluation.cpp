@@ -8,8 +8,13 @@
 #include <filesystem>
 #include <fstream>
 
+#include "multiview_object_detection/datasets/class_names.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
+#include "multiview_object_detection/datasets/ground_truth_geometry.h"
+#include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/ply_reader.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <opencv2/core.hpp>
 
+#include "multiview_object_detection/datasets/ground_truth_geometry.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
 

@@ -12,9 +12,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {

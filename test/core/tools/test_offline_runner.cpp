@@ -15,9 +15,9 @@
 #include <sstream>
 
 #include "multiview_object_detection/datasets/dataset.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "shared_data.h"
 #include "test_files.h"
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "multiview_object_detection/datasets/dataset.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/box_detections.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"

@@ -5,7 +5,7 @@
 // (Irwin-Hall): plain IEEE arithmetic, the same on every platform. Morphology on binary masks
 // (max/min) is exact too; the jitter field is interpolated here rather than by cv::resize, whose
 // SIMD paths may round differently.
-#include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
+#include "multiview_object_detection/simulation/simulated_instance_segmenter.h"
 
 #include <algorithm>
 #include <cctype>
@@ -16,10 +16,11 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
-#include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/evaluation/split_mix.h"
+#include "multiview_object_detection/datasets/class_names.h"
+#include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/io/image_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/simulation/split_mix.h"
 
 namespace mvod {
 namespace {
@@ -321,16 +322,8 @@ void degradeMask(const SimulatedInstanceSegmenter::Config& config, SplitMix64* b
   }
 }
 
-}  // namespace
-
-Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string& frame_name,
-                                          std::vector<Detection2D>* detections,
-                                          std::vector<std::string>* warnings) {
-  if (detections == nullptr) return Status::Error("detect: detections is null");
-  detections->clear();
-  if (image_bgr.empty()) {
-    return Status::Error("simulated detector: " + frame_name + ": empty image");
-  }
+// The frame number a frame name ends with ("image00001" -> 1).
+Status frameNumberOf(const std::string& frame_name, int* frame_number) {
   size_t digits_begin = frame_name.size();
   while (digits_begin > 0 &&
          std::isdigit(static_cast<unsigned char>(frame_name[digits_begin - 1])) != 0) {
@@ -341,31 +334,36 @@ Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::s
     return Status::Error("simulated detector: frame name '" + frame_name +
                          "' does not end with a frame number (expected e.g. image00001)");
   }
-  const int frame_number = std::stoi(frame_name.substr(digits_begin));
-  const std::string path = labelImagePath(frame_number);
+  *frame_number = std::stoi(frame_name.substr(digits_begin));
+  return Status::Ok();
+}
 
+// The frame's 16-bit label image, of the colour image's size. The size is checked from the PNG
+// header before decoding (a small file can claim 20000x20000).
+Status readLabelImage(const std::string& path, const cv::Size& image_size, cv::Mat* labels) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) {
     return Status::Error(path +
                          ": no such file (the simulated detector needs the frame's "
                          "instance label image)");
   }
-  // The size is checked from the PNG header before decoding (a small file can claim 20000x20000).
-  cv::Mat labels;
-  const Status read = readImageChecked(path, cv::IMREAD_UNCHANGED, image_bgr.size(),
-                                       int64_t{image_bgr.cols} * image_bgr.rows, &labels,
+  const Status read = readImageChecked(path, cv::IMREAD_UNCHANGED, image_size,
+                                       int64_t{image_size.width} * image_size.height, labels,
                                        "the colour image's size");
   if (!read) return read;
-  if (labels.type() != CV_16UC1) {
-    return Status::Error(path + ": label image is " + typeText(labels) +
+  if (labels->type() != CV_16UC1) {
+    return Status::Error(path + ": label image is " + typeText(*labels) +
                          ", expected a 16-bit single-channel PNG (CV_16UC1)");
   }
-  if (labels.size() != image_bgr.size()) {
-    return Status::Error(path + ": label image is " + sizeText(labels.size()) +
-                         ", expected the colour image's " + sizeText(image_bgr.size()));
+  if (labels->size() != image_size) {
+    return Status::Error(path + ": label image is " + sizeText(labels->size()) +
+                         ", expected the colour image's " + sizeText(image_size));
   }
+  return Status::Ok();
+}
 
-  // Area and bounding box of every label id in one pass.
+// Area and bounding box of every label id in one pass.
+std::vector<InstanceStats> instanceStats(const cv::Mat& labels) {
   std::vector<InstanceStats> stats(65536);
   for (int y = 0; y < labels.rows; ++y) {
     const uint16_t* row = labels.ptr<uint16_t>(y);
@@ -382,21 +380,105 @@ Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::s
       }
     }
   }
+  return stats;
+}
 
-  const Config& c = config_;
-  const auto clipScore = [&c](double score) {
-    return static_cast<float>(std::min(c.max_score, std::max(c.min_score, score)));
-  };
-  const auto makeDetection = [](const std::string& class_name, float score, cv::Mat mask) {
-    Detection2D detection;
-    detection.class_name = class_name;
-    detection.class_id = cocoClassId(class_name);
-    detection.score = score;
-    detection.box_px = cv::boundingRect(mask);
-    detection.mask = std::move(mask);
-    return detection;
-  };
+// What the detector reports instance `id` as: its class (maybe confused), or for clutter (empty
+// true_class) a false positive. False: missed, or clutter taken for nothing.
+bool reportedClass(const SimulatedInstanceSegmenter::Config& c, int frame_number, int id, int count,
+                   const std::string& true_class, const std::string& label_text,
+                   std::string* detected_class, bool* confused) {
+  *detected_class = true_class;
+  *confused = false;
+  if (true_class.empty()) {
+    SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kFalsePositive);
+    const ClassConfusion* fp = pickConfusion(c.false_positives, label_text, rng.uniform());
+    if (fp == nullptr) return false;
+    *detected_class = fp->to;
+    *confused = true;
+    return true;
+  }
+  SplitMix64 miss_rng = stream(c.seed, frame_number, id, Draw::kMiss);
+  double miss_probability = c.miss_probability;
+  if (count < c.small_area_px && c.small_area_px > c.min_pixels) {
+    const double t = static_cast<double>(c.small_area_px - count) /
+                     static_cast<double>(c.small_area_px - c.min_pixels);
+    miss_probability += (c.small_miss_probability - c.miss_probability) * t;
+  }
+  if (miss_rng.bernoulli(miss_probability)) return false;
+  SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kConfusion);
+  const ClassConfusion* confusion = pickConfusion(c.confusions, true_class, rng.uniform());
+  if (confusion != nullptr) {
+    *detected_class = confusion->to;
+    *confused = true;
+  }
+  return true;
+}
 
+float clipScore(const SimulatedInstanceSegmenter::Config& c, double score) {
+  return static_cast<float>(std::min(c.max_score, std::max(c.min_score, score)));
+}
+
+Detection2D makeDetection(const std::string& class_name, float score, cv::Mat mask) {
+  Detection2D detection;
+  detection.class_name = class_name;
+  detection.class_id = cocoClassId(class_name);
+  detection.score = score;
+  detection.box_px = cv::boundingRect(mask);
+  detection.mask = std::move(mask);
+  return detection;
+}
+
+// A part of a real object as a separate detection of a confusable class (an empty mask when
+// none); with part_removed_probability it is also cut out of *mask.
+Detection2D partDetection(const SimulatedInstanceSegmenter::Config& c, int frame_number, int id,
+                          const std::string& true_class, float score, double part_score,
+                          cv::Mat* mask) {
+  SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kPart);
+  const bool split = rng.bernoulli(c.part_probability);
+  const int side = rng.uniformInt(0, 3);  // top, bottom, left, right
+  const double fraction =
+      c.min_part_fraction + (c.max_part_fraction - c.min_part_fraction) * rng.uniform();
+  const bool removed = rng.bernoulli(c.part_removed_probability);
+  const auto part_class = c.part_classes.find(true_class);
+  if (!split || part_class == c.part_classes.end()) return Detection2D();
+  const cv::Rect extent = cv::boundingRect(*mask);
+  cv::Rect strip = extent;
+  if (side <= 1) {
+    strip.height = std::max(1, static_cast<int>(std::lround(fraction * extent.height)));
+    if (side == 1) strip.y = extent.y + extent.height - strip.height;
+  } else {
+    strip.width = std::max(1, static_cast<int>(std::lround(fraction * extent.width)));
+    if (side == 3) strip.x = extent.x + extent.width - strip.width;
+  }
+  cv::Mat part_mask = cv::Mat::zeros(mask->size(), CV_8UC1);
+  (*mask)(strip).copyTo(part_mask(strip));
+  const int part_pixels = cv::countNonZero(part_mask);
+  if (part_pixels < std::max(1, c.min_pixels)) return Detection2D();
+  // Never above the instance's own score: the part is the less convincing reading.
+  Detection2D part = makeDetection(part_class->second,
+                                   std::min(clipScore(c, part_score), 0.9f * score), part_mask);
+  if (removed && part_pixels < cv::countNonZero(*mask)) (*mask)(strip).setTo(0);
+  return part;
+}
+
+}  // namespace
+
+Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string& frame_name,
+                                          std::vector<Detection2D>* detections,
+                                          std::vector<std::string>* warnings) {
+  if (detections == nullptr) return Status::Error("detect: detections is null");
+  detections->clear();
+  if (image_bgr.empty()) {
+    return Status::Error("simulated detector: " + frame_name + ": empty image");
+  }
+  int frame_number = 0;
+  Status status = frameNumberOf(frame_name, &frame_number);
+  if (!status) return status;
+  const std::string path = labelImagePath(frame_number);
+  cv::Mat labels;
+  if (!(status = readLabelImage(path, image_bgr.size(), &labels))) return status;
+  const std::vector<InstanceStats> stats = instanceStats(labels);
   for (int id = 1; id < static_cast<int>(stats.size()); ++id) {
     const InstanceStats& s = stats[id];
     if (s.count == 0) continue;
@@ -410,85 +492,45 @@ Status SimulatedInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::s
       continue;
     }
     const std::string& true_class = class_it->second;
-    if (s.count < c.min_pixels) continue;  // too small for any detector
-
-    // What the detector reports this instance as: its class, or (clutter) a false positive.
-    std::string detected_class = true_class;
-    bool confused = false;
-    if (true_class.empty()) {
-      SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kFalsePositive);
-      const ClassConfusion* fp = pickConfusion(c.false_positives, label_texts_[id], rng.uniform());
-      if (fp == nullptr) continue;
-      detected_class = fp->to;
-      confused = true;
-    } else {
-      SplitMix64 miss_rng = stream(c.seed, frame_number, id, Draw::kMiss);
-      double miss_probability = c.miss_probability;
-      if (s.count < c.small_area_px && c.small_area_px > c.min_pixels) {
-        const double t = static_cast<double>(c.small_area_px - s.count) /
-                         static_cast<double>(c.small_area_px - c.min_pixels);
-        miss_probability += (c.small_miss_probability - c.miss_probability) * t;
-      }
-      if (miss_rng.bernoulli(miss_probability)) continue;
-      SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kConfusion);
-      const ClassConfusion* confusion = pickConfusion(c.confusions, true_class, rng.uniform());
-      if (confusion != nullptr) {
-        detected_class = confusion->to;
-        confused = true;
-      }
-    }
-
-    const cv::Rect box = s.box();
-    cv::Mat mask = cv::Mat::zeros(labels.size(), CV_8UC1);
-    cv::Mat(labels(box) == id).copyTo(mask(box));
-    SplitMix64 bleed_rng = stream(c.seed, frame_number, id, Draw::kBleed);
-    SplitMix64 jitter_rng = stream(c.seed, frame_number, id, Draw::kJitter);
-    degradeMask(c, &bleed_rng, &jitter_rng, box, &mask);
-    if (cv::countNonZero(mask) == 0) continue;  // jitter ate a sliver
-
-    SplitMix64 score_rng = stream(c.seed, frame_number, id, Draw::kScore);
-    const double true_score = score_rng.irwinHallNormal(c.true_score_mean, c.true_score_stddev);
-    const double confused_score =
-        score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
-    const double part_score =
-        score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
-    const float score = clipScore(confused ? confused_score : true_score);
-
-    // A part of a real object as a separate detection of a confusable class.
-    Detection2D part;
-    if (!true_class.empty()) {
-      SplitMix64 rng = stream(c.seed, frame_number, id, Draw::kPart);
-      const bool split = rng.bernoulli(c.part_probability);
-      const int side = rng.uniformInt(0, 3);  // top, bottom, left, right
-      const double fraction =
-          c.min_part_fraction + (c.max_part_fraction - c.min_part_fraction) * rng.uniform();
-      const bool removed = rng.bernoulli(c.part_removed_probability);
-      const auto part_class = c.part_classes.find(true_class);
-      if (split && part_class != c.part_classes.end()) {
-        const cv::Rect extent = cv::boundingRect(mask);
-        cv::Rect strip = extent;
-        if (side <= 1) {
-          strip.height = std::max(1, static_cast<int>(std::lround(fraction * extent.height)));
-          if (side == 1) strip.y = extent.y + extent.height - strip.height;
-        } else {
-          strip.width = std::max(1, static_cast<int>(std::lround(fraction * extent.width)));
-          if (side == 3) strip.x = extent.x + extent.width - strip.width;
-        }
-        cv::Mat part_mask = cv::Mat::zeros(mask.size(), CV_8UC1);
-        mask(strip).copyTo(part_mask(strip));
-        const int part_pixels = cv::countNonZero(part_mask);
-        if (part_pixels >= std::max(1, c.min_pixels)) {
-          // Never above the instance's own score: the part is the less convincing reading.
-          part = makeDetection(part_class->second, std::min(clipScore(part_score), 0.9f * score),
-                               part_mask);
-          if (removed && part_pixels < cv::countNonZero(mask)) mask(strip).setTo(0);
-        }
-      }
-    }
-    detections->push_back(makeDetection(detected_class, score, std::move(mask)));
-    if (!part.mask.empty()) detections->push_back(std::move(part));
+    if (s.count < config_.min_pixels) continue;  // too small for any detector
+    detectInstance(labels, frame_number, id, s.box(), s.count, true_class, detections);
   }
   return Status::Ok();
+}
+
+void SimulatedInstanceSegmenter::detectInstance(const cv::Mat& labels, int frame_number, int id,
+                                                const cv::Rect& box, int count,
+                                                const std::string& true_class,
+                                                std::vector<Detection2D>* detections) {
+  const Config& c = config_;
+  std::string detected_class;
+  bool confused = false;
+  static const std::string kNoText;
+  const std::string& label_text = true_class.empty() ? label_texts_[id] : kNoText;
+  if (!reportedClass(c, frame_number, id, count, true_class, label_text, &detected_class,
+                     &confused)) {
+    return;
+  }
+  cv::Mat mask = cv::Mat::zeros(labels.size(), CV_8UC1);
+  cv::Mat(labels(box) == id).copyTo(mask(box));
+  SplitMix64 bleed_rng = stream(c.seed, frame_number, id, Draw::kBleed);
+  SplitMix64 jitter_rng = stream(c.seed, frame_number, id, Draw::kJitter);
+  degradeMask(c, &bleed_rng, &jitter_rng, box, &mask);
+  if (cv::countNonZero(mask) == 0) return;  // jitter ate a sliver
+
+  SplitMix64 score_rng = stream(c.seed, frame_number, id, Draw::kScore);
+  const double true_score = score_rng.irwinHallNormal(c.true_score_mean, c.true_score_stddev);
+  const double confused_score =
+      score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
+  const double part_score =
+      score_rng.irwinHallNormal(c.confused_score_mean, c.confused_score_stddev);
+  const float score = clipScore(c, confused ? confused_score : true_score);
+  Detection2D part;
+  if (!true_class.empty()) {
+    part = partDetection(c, frame_number, id, true_class, score, part_score, &mask);
+  }
+  detections->push_back(makeDetection(detected_class, score, std::move(mask)));
+  if (!part.mask.empty()) detections->push_back(std::move(part));
 }
 
 }  // namespace mvod

@@ -43,4 +43,11 @@ class SplitMix64 {
   uint64_t state_;
 };
 
+// A new seed from a seed and a salt (one splitmix64 step): each use of a seed (a room's layout,
+// the camera's wobble, the noise of frame i) draws from its own stream.
+inline uint64_t mixSeed(uint64_t a, uint64_t b) {
+  SplitMix64 rng(a * 0x2545f4914f6cdd1dULL + b + 0x632be59bd9b4e019ULL);
+  return rng.next();
+}
+
 }  // namespace mvod

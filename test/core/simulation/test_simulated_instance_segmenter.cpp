@@ -13,8 +13,8 @@
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
-#include "multiview_object_detection/evaluation/simulated_instance_segmenter.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/simulation/simulated_instance_segmenter.h"
 
 namespace mvod {
 namespace {

@@ -13,9 +13,14 @@
 #include <set>
 #include <sstream>
 
+#include "multiview_object_detection/datasets/class_names.h"
+#include "multiview_object_detection/datasets/ground_truth.h"
+#include "multiview_object_detection/datasets/ground_truth_geometry.h"
+#include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
+#include "multiview_object_detection/io/ply_reader.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {

@@ -128,6 +128,11 @@ class SimulatedInstanceSegmenter : public InstanceSegmenter {
 
  private:
   SimulatedInstanceSegmenter(std::string directory, Config config);
+  // Instance `id` (its pixels' bounding box and count) as the detector reports it, with its
+  // failures: appended to detections (then its part detection), or nothing when missed.
+  void detectInstance(const cv::Mat& labels, int frame_number, int id, const cv::Rect& box,
+                      int count, const std::string& true_class,
+                      std::vector<Detection2D>* detections);
 
   std::string directory_;
   Config config_;

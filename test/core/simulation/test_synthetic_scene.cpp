@@ -14,8 +14,8 @@
 #include <sstream>
 
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "test_files.h"
 
 namespace mvod {
