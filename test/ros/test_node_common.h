@@ -28,7 +28,7 @@
 
 #include "multiview_object_detection/InstanceDetections.h"
 #include "multiview_object_detection/ObjectArray.h"
-#include "multiview_object_detection/evaluation/synthetic_scene.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod_test {
