@@ -7,8 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
 
 namespace {

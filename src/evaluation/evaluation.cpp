@@ -17,7 +17,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 
 namespace mvod {
 namespace {

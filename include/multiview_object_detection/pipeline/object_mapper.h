@@ -9,14 +9,14 @@
 #include <utility>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/map/refinement.h"
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 #include "multiview_object_detection/pipeline/stages/floor_estimator.h"
 #include "multiview_object_detection/pipeline/stages/gravity_estimator.h"
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
 #include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
-#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
-#include "multiview_object_detection/pipeline/map/refinement.h"
 #include "multiview_object_detection/pipeline/stages/segment_selector.h"
 
 namespace mvod {
