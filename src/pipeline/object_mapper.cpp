@@ -11,6 +11,8 @@
 #include <thread>
 #include <utility>
 
+#include "multiview_object_detection/pipeline/utils/parallel.h"
+
 namespace mvod {
 namespace {
 
@@ -37,26 +39,6 @@ Status checkSection(const std::string& section, const Status& status) {
 std::string frameLabel(const RgbdFrame& frame) {
   return frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
 }
-
-// A thread that is joined when it goes out of scope (every early return of its owner).
-class JoiningThread {
- public:
-  JoiningThread() = default;
-  JoiningThread(const JoiningThread&) = delete;
-  JoiningThread& operator=(const JoiningThread&) = delete;
-  ~JoiningThread() { join(); }
-  template <typename Job>
-  void start(Job&& job) {
-    join();
-    thread_ = std::thread(std::forward<Job>(job));
-  }
-  void join() {
-    if (thread_.joinable()) thread_.join();
-  }
-
- private:
-  std::thread thread_;
-};
 
 // The view's points from the depth rows that `box` grown by margin_m can project to: every point
 // of the box projects inside the hull of its corners' projections when all of them lie in front of
@@ -401,13 +383,7 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
     }
     clouds.clouds_D = extractClouds(frame, kept, label, warnings);
   };
-  parallelForEach(2, threadCount(), [&](size_t job) {
-    if (job == 0) {
-      view_and_floor();
-    } else {
-      depth_and_clouds();
-    }
-  });
+  parallelInvoke(threadCount(), view_and_floor, depth_and_clouds);
   return clouds;
 }
 
@@ -489,7 +465,7 @@ std::vector<ObjectMapper::SingleView> ObjectMapper::runSingleViews(
   std::stable_sort(by_size.begin(), by_size.end(), [&clouds_D](size_t a, size_t b) {
     return clouds_D[a].size() > clouds_D[b].size();
   });
-  parallelFor(views.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
+  parallelForEach(views.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
   return views;
 }
 
@@ -574,11 +550,6 @@ void ObjectMapper::reboxPending(StageTimes* times) {
 
 int ObjectMapper::threadCount() const { return poolSize(config_); }
 
-void ObjectMapper::parallelFor(size_t count, int threads, const std::function<void(size_t)>& job) {
-  // Detections differ a lot in size: each worker takes the next one as it finishes.
-  parallelForEach(count, threads, job);
-}
-
 bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                                      ObjectObservation* observation, StageTimes* times) const {
   return runSingleView(points_D, T_W_D, ViewContext(), observation, times).ok();
@@ -632,7 +603,7 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   const GravityFrame gravity_frame = gravity();
 
   // The selection's image work (the detection's mask, core and ring) does not depend on the
-  // cloud: for a large detection, when the mapper has more than one thread, it runs on a thread of
+  // cloud: for a large detection, when the mapper has more than one thread, it runs as a job of
   // its own beside the filter and LCCP (the same masks select() would compute).
   SegmentSelector::DetectionMasks masks;
   const bool masks_beside = config_.selection.consistent() && context.detection != nullptr &&
@@ -641,16 +612,20 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   PointCloud filtered_D;
   LccpSegmenter::Result segmentation;
   Status segmented;
-  {
-    JoiningThread masks_thread;
-    if (masks_beside) {
-      masks_thread.start([this, &masks, &context] {
-        masks = selector_.detectionMasks(*context.detection, context.frame->color_bgr.size());
-      });
-    }
+  const auto filter_and_segment = [&] {
     segmented = filterView(points_D, T_W_D, gravity_frame, &filtered_D, &stage);
     if (segmented) segmented = segmentView(filtered_D, &segmentation, &stage);
-  }  // the masks' thread joined
+  };
+  if (masks_beside) {
+    parallelInvoke(
+        threadCount(),
+        [this, &masks, &context] {
+          masks = selector_.detectionMasks(*context.detection, context.frame->color_bgr.size());
+        },
+        filter_and_segment);
+  } else {
+    filter_and_segment();
+  }
   if (!segmented) return segmented;
 
   PointCloud cut_D;

@@ -48,8 +48,9 @@ struct KeyframeReport {
 class ObjectMapper {
  public:
   // A detection's cloud with at least this many points has its selection masks (mask, core,
-  // ring: a few milliseconds of erosion for ~100 000 pixels) computed on a thread of their own
-  // beside its filter and LCCP, when num_threads allows more than one; the same masks either way.
+  // ring: a few milliseconds of erosion for ~100 000 pixels) computed as a job of their own on the
+  // pool beside its filter and LCCP, when num_threads allows more than one; the same masks either
+  // way.
   static constexpr size_t kMinPointsForMasksThread = 20000;
 
   struct Config {
@@ -188,9 +189,6 @@ class ObjectMapper {
     const SegmentSelector::FrameView* view = nullptr;
   };
   int threadCount() const;
-  // job(0) ... job(count - 1) on up to `threads` threads (the caller's included); returns when all
-  // are done.
-  static void parallelFor(size_t count, int threads, const std::function<void(size_t)>& job);
   // processSingleView with the reason a detection was dropped.
   Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                        const ViewContext& context, ObjectObservation* observation,

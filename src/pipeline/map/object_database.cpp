@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/point_moments.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "multiview_object_detection/pipeline/utils/flat_hash_map.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/point_moments.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 
@@ -146,7 +147,7 @@ Eigen::Matrix3d neighbourCovariance(const PointCloud& points, const Eigen::Vecto
   return sum_sq / count - mean * mean.transpose();
 }
 
-// The cells of half the normal radius that normalsOnCells sums around a query's cell: those
+// The cells of half the normal radius that estimateCellNormalsAt sums around a query's cell: those
 // whose centres lie within the radius of its centre (33 cells).
 const std::vector<Eigen::Vector3i>& cellsWithinRadius() {
   static const std::vector<Eigen::Vector3i> kOffsets = [] {
@@ -163,8 +164,8 @@ const std::vector<Eigen::Vector3i>& cellsWithinRadius() {
   return kOffsets;
 }
 
-// normalsOnCells' grid: cells of cell_m, keyed relative to a point of the cloud, each holding the
-// moments of its points.
+// estimateCellNormalsAt's grid: cells of cell_m, keyed relative to a point of the cloud, each
+// holding the moments of its points.
 class CellMoments {
  public:
   CellMoments(const PointCloud& points, double cell_m) : cell_m_(cell_m) {

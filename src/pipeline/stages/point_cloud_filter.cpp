@@ -16,6 +16,8 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "multiview_object_detection/pipeline/utils/parallel.h"
+
 namespace mvod {
 namespace {
 
