@@ -16,7 +16,7 @@
 #include "multiview_object_detection/datasets/ground_truth_geometry.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/ply_reader.h"
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 
 namespace mvod {
 namespace {

@@ -11,6 +11,8 @@
 #include <thread>
 #include <utility>
 
+#include "multiview_object_detection/pipeline/utils/parallel.h"
+
 namespace mvod {
 namespace {
 
@@ -37,26 +39,6 @@ Status checkSection(const std::string& section, const Status& status) {
 std::string frameLabel(const RgbdFrame& frame) {
   return frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
 }
-
-// A thread that is joined when it goes out of scope (every early return of its owner).
-class JoiningThread {
- public:
-  JoiningThread() = default;
-  JoiningThread(const JoiningThread&) = delete;
-  JoiningThread& operator=(const JoiningThread&) = delete;
-  ~JoiningThread() { join(); }
-  template <typename Job>
-  void start(Job&& job) {
-    join();
-    thread_ = std::thread(std::forward<Job>(job));
-  }
-  void join() {
-    if (thread_.joinable()) thread_.join();
-  }
-
- private:
-  std::thread thread_;
-};
 
 // The view's points from the depth rows that `box` grown by margin_m can project to: every point
 // of the box projects inside the hull of its corners' projections when all of them lie in front of
@@ -88,6 +70,30 @@ std::string detectionLabel(size_t index, const Detection2D& detection) {
   std::ostringstream out;
   out << "detection " << index << " ('" << detection.class_name << "' " << detection.score << ")";
   return out.str();
+}
+
+// Evidence fusion: the view's surface points within 0.3 m of the box (in the box's frame), which
+// vote on the voxels they see. frame: the view's, for its depth rows around the box (null: all).
+void addSeenAroundBox(const SegmentSelector::FrameView& view, const RgbdFrame* frame,
+                      const Eigen::Isometry3d& T_W_D, const OrientedBox& box, PointCloud* seen_W) {
+  const Eigen::Matrix3f R_B_W = box.rotation.transpose().cast<float>();
+  const Eigen::Vector3f centre = box.center_m.cast<float>();
+  const Eigen::Vector3f half = (0.5 * box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
+  const std::pair<size_t, size_t> range =
+      frame != nullptr ? viewRowsAround(view, frame->K_depth, T_W_D, box, 0.3)
+                       : std::make_pair(size_t{0}, view.points_W.size());
+  for (size_t k = range.first; k < range.second; ++k) {
+    const Eigen::Vector3f& p_W = view.points_W[k];
+    if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) seen_W->push_back(p_W);
+  }
+}
+
+// The single-view stages' times (filter, LCCP, box) of `from` added to *to: summed over
+// detections (CPU time where they ran in parallel).
+void addStageTimes(const StageTimes& from, StageTimes* to) {
+  to->filter_ms += from.filter_ms;
+  to->lccp_ms += from.lccp_ms;
+  to->manhattan_ms += from.manhattan_ms;
 }
 
 }  // namespace
@@ -278,131 +284,169 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     return Status::Ok();
   }
 
+  const KeptDetections kept = keepDetections(frame, detections, label, &out);
+  // Eq. 1: one cloud per detection, back-projected once for the whole frame.
+  Clock::time_point t = Clock::now();
+  const KeyframeClouds clouds = prepareKeyframe(frame, kept, label, &out.warnings);
+  out.times.extraction_ms = msSince(t);
+  std::vector<SingleView> views = runSingleViews(frame, kept, clouds);
+  fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
+  out.times.total_ms = msSince(start);
+  return Status::Ok();
+}
+
+ObjectMapper::KeptDetections ObjectMapper::keepDetections(
+    const RgbdFrame& frame, const std::vector<Detection2D>& detections, const std::string& label,
+    KeyframeReport* out) const {
   // Eq. 5: only detections with ψ >= λ, of a class we can name.
-  std::vector<Detection2D> kept;
-  std::vector<size_t> kept_index;
-  const std::vector<std::string>& coco = cocoClassNames();
+  KeptDetections kept;
   for (size_t i = 0; i < detections.size(); ++i) {
     const Detection2D& detection = detections[i];
     if (!(detection.score >= 0.f && detection.score <= 1.f)) {
       // A probability is what the map stores and averages (Eq. 8); a percentage would make a map
       // that cannot be reloaded.
-      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
-                             ": score is not a probability in [0, 1], skipped");
+      out->warnings.push_back(label + ": " + detectionLabel(i, detection) +
+                              ": score is not a probability in [0, 1], skipped");
       continue;
     }
     if (!(detection.score >= config_.min_probability)) continue;
-    ++out.above_threshold;
+    ++out->above_threshold;
     Detection2D named = detection;
-    if (named.class_id < 0 || named.class_id >= static_cast<int>(coco.size())) {
-      named.class_id = cocoClassId(named.class_name);
-    }
-    if (named.class_name.empty() && named.class_id >= 0) named.class_name = coco[named.class_id];
-    if (named.class_id < 0 || named.class_name.empty()) {
-      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
-                             ": unknown class (not a COCO class name), skipped");
+    if (!nameClass(&named)) {
+      out->warnings.push_back(label + ": " + detectionLabel(i, detection) +
+                              ": unknown class (not a COCO class name), skipped");
       continue;
     }
-    // The consistent cut refuses a box over (nearly) the whole image; it is refused here already,
-    // before its cloud (the whole view) is extracted.
-    const cv::Rect image_rect(cv::Point(0, 0), frame.color_bgr.size());
-    const cv::Rect box = named.box_px & image_rect;
-    if (config_.selection.consistent() &&
-        box.area() > config_.selection.max_box_image_fraction * image_rect.area()) {
-      out.warnings.push_back(label + ": " + detectionLabel(i, detection) +
-                             ": no object in the cut: the box covers the whole image (" +
-                             std::to_string(100 * box.area() / std::max(1, image_rect.area())) +
-                             " %): no background to cut the object from");
+    std::string problem;
+    if (!boxLeavesBackground(frame, named, &problem)) {
+      out->warnings.push_back(label + ": " + detectionLabel(i, detection) + ": " + problem);
       continue;
     }
-    kept.push_back(std::move(named));
-    kept_index.push_back(i);
+    kept.detections.push_back(std::move(named));
+    kept.index.push_back(i);
   }
+  return kept;
+}
 
-  // Eq. 1: one cloud per detection, back-projected once for the whole frame.
-  Clock::time_point t = Clock::now();
+bool ObjectMapper::nameClass(Detection2D* detection) {
+  const std::vector<std::string>& coco = cocoClassNames();
+  if (detection->class_id < 0 || detection->class_id >= static_cast<int>(coco.size())) {
+    detection->class_id = cocoClassId(detection->class_name);
+  }
+  if (detection->class_name.empty() && detection->class_id >= 0) {
+    detection->class_name = coco[detection->class_id];
+  }
+  return detection->class_id >= 0 && !detection->class_name.empty();
+}
+
+bool ObjectMapper::boxLeavesBackground(const RgbdFrame& frame, const Detection2D& detection,
+                                       std::string* problem) const {
+  // The consistent cut refuses a box over (nearly) the whole image; it is refused here already,
+  // before its cloud (the whole view) is extracted.
+  const cv::Rect image_rect(cv::Point(0, 0), frame.color_bgr.size());
+  const cv::Rect box = detection.box_px & image_rect;
+  if (config_.selection.consistent() &&
+      box.area() > config_.selection.max_box_image_fraction * image_rect.area()) {
+    *problem = "no object in the cut: the box covers the whole image (" +
+               std::to_string(100 * box.area() / std::max(1, image_rect.area())) +
+               " %): no background to cut the object from";
+    return false;
+  }
+  return true;
+}
+
+ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& frame,
+                                                           const KeptDetections& kept,
+                                                           const std::string& label,
+                                                           std::vector<std::string>* warnings) {
   // The whole view, once: the floor's height, and the surfaces around each detection for the
   // consistent selection and the evidence fusion.
-  const bool need_view = config_.floor.enable || config_.selection.consistent() ||
-                         config_.database.fusion == "evidence";
-  SegmentSelector::FrameView view;
-  std::shared_ptr<DepthView> depth_view;
-  std::vector<PointCloud> clouds_D;
+  KeyframeClouds clouds;
+  clouds.has_view = config_.floor.enable || config_.selection.consistent() ||
+                    config_.database.fusion == "evidence";
   // Two independent jobs on the pool: the view (and the floor from it), and the keyframe's depth
   // in metres plus the detections' clouds. Each writes only its own results.
   const auto view_and_floor = [&]() {
-    if (need_view) {
-      view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
-                                            config_.extractor.max_valid_depth_m);
+    if (clouds.has_view) {
+      clouds.view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
+                                                   config_.extractor.max_valid_depth_m);
     }
-    if (config_.floor.enable) {
-      // Every 2nd point of the view is plenty for the floor's layer.
-      PointCloud sample_W;
-      sample_W.reserve(view.points_W.size() / 2 + 1);
-      for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
-      floor_.addFrame(sample_W, gravity());
-    }
+    if (config_.floor.enable) addFloorSample(clouds.view);
   };
   const auto depth_and_clouds = [&]() {
     // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
     // Also amodal completion's free space.
     if (config_.database.fusion == "evidence" &&
         (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
-        !kept.empty()) {
-      depth_view = std::make_shared<DepthView>();
-      // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
-      frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
-                            frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
-      const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
-      const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
-      for (int v = 0; v < depth_view->depth_m.rows; ++v) {
-        float* row = depth_view->depth_m.ptr<float>(v);
-        for (int u = 0; u < depth_view->depth_m.cols; ++u) {
-          row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
-        }
-      }
-      // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
-      depth_view->prepareNeighbourhoods();
-      depth_view->K = frame.K_depth;
-      depth_view->T_D_W = frame.T_W_D.inverse();
-      // The band, plus three depth steps: what lies further behind the measured surface is hidden.
-      depth_view->truncation_m = config_.database.surface_band_m;
-      depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
+        !kept.detections.empty()) {
+      clouds.depth_view = makeDepthView(frame);
     }
-    const Status extracted = extractor_.extract(frame, kept, &clouds_D);
-    if (!extracted || clouds_D.size() != kept.size()) {
-      // One bad detection (a mask of the wrong size, say) must not cost the others: retry one by
-      // one.
-      clouds_D.assign(kept.size(), PointCloud());
-      for (size_t k = 0; k < kept.size(); ++k) {
-        std::vector<PointCloud> single;
-        const Status status = extractor_.extract(frame, {kept[k]}, &single);
-        if (!status || single.size() != 1) {
-          out.warnings.push_back(label + ": " + detectionLabel(kept_index[k], kept[k]) + ": " +
-                                 (status ? std::string("extraction failed") : status.message()));
-          continue;
-        }
-        clouds_D[k] = std::move(single[0]);
-      }
-    }
+    clouds.clouds_D = extractClouds(frame, kept, label, warnings);
   };
-  parallelForEach(2, threadCount(), [&](size_t job) {
-    if (job == 0) {
-      view_and_floor();
-    } else {
-      depth_and_clouds();
-    }
-  });
-  out.times.extraction_ms = msSince(t);
+  parallelInvoke(threadCount(), view_and_floor, depth_and_clouds);
+  return clouds;
+}
 
+void ObjectMapper::addFloorSample(const SegmentSelector::FrameView& view) {
+  // Every 2nd point of the view is plenty for the floor's layer.
+  PointCloud sample_W;
+  sample_W.reserve(view.points_W.size() / 2 + 1);
+  for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
+  floor_.addFrame(sample_W, gravity());
+}
+
+std::shared_ptr<DepthView> ObjectMapper::makeDepthView(const RgbdFrame& frame) const {
+  auto depth_view = std::make_shared<DepthView>();
+  // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
+  frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
+                        frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
+  const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
+  const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
+  for (int v = 0; v < depth_view->depth_m.rows; ++v) {
+    float* row = depth_view->depth_m.ptr<float>(v);
+    for (int u = 0; u < depth_view->depth_m.cols; ++u) {
+      row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
+    }
+  }
+  // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
+  depth_view->prepareNeighbourhoods();
+  depth_view->K = frame.K_depth;
+  depth_view->T_D_W = frame.T_W_D.inverse();
+  // The band, plus three depth steps: what lies further behind the measured surface is hidden.
+  depth_view->truncation_m = config_.database.surface_band_m;
+  depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
+  return depth_view;
+}
+
+std::vector<PointCloud> ObjectMapper::extractClouds(const RgbdFrame& frame,
+                                                    const KeptDetections& kept,
+                                                    const std::string& label,
+                                                    std::vector<std::string>* warnings) const {
+  const std::vector<Detection2D>& detections = kept.detections;
+  std::vector<PointCloud> clouds_D;
+  const Status extracted = extractor_.extract(frame, detections, &clouds_D);
+  if (extracted && clouds_D.size() == detections.size()) return clouds_D;
+  // One bad detection (a mask of the wrong size, say) must not cost the others: retry one by one.
+  clouds_D.assign(detections.size(), PointCloud());
+  for (size_t k = 0; k < detections.size(); ++k) {
+    std::vector<PointCloud> single;
+    const Status status = extractor_.extract(frame, {detections[k]}, &single);
+    if (!status || single.size() != 1) {
+      warnings->push_back(label + ": " + detectionLabel(kept.index[k], detections[k]) + ": " +
+                          (status ? std::string("extraction failed") : status.message()));
+      continue;
+    }
+    clouds_D[k] = std::move(single[0]);
+  }
+  return clouds_D;
+}
+
+std::vector<ObjectMapper::SingleView> ObjectMapper::runSingleViews(
+    const RgbdFrame& frame, const KeptDetections& kept, const KeyframeClouds& clouds) const {
   // Sec. 3.2-3.3 for each detection, on the thread pool: each reads the frame and the mapper's
   // settings only, and writes its own slot.
-  struct SingleView {
-    Status status;
-    ObjectObservation observation;
-    StageTimes times;
-  };
-  std::vector<SingleView> views(kept.size());
+  const std::vector<PointCloud>& clouds_D = clouds.clouds_D;
+  std::vector<SingleView> views(kept.detections.size());
   const auto run_one = [&](size_t k) {
     if (clouds_D[k].empty()) {
       views[k].status = Status::Error("no valid depth inside the mask");
@@ -410,19 +454,25 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     }
     ViewContext context;
     context.frame = &frame;
-    context.detection = &kept[k];
-    context.view = need_view ? &view : nullptr;
+    context.detection = &kept.detections[k];
+    context.view = clouds.has_view ? &clouds.view : nullptr;
     views[k].status =
         runSingleView(clouds_D[k], frame.T_W_D, context, &views[k].observation, &views[k].times);
   };
   // Largest clouds first: the pool then ends with small jobs instead of waiting on one big one.
-  std::vector<size_t> by_size(kept.size());
+  std::vector<size_t> by_size(views.size());
   for (size_t k = 0; k < by_size.size(); ++k) by_size[k] = k;
   std::stable_sort(by_size.begin(), by_size.end(), [&clouds_D](size_t a, size_t b) {
     return clouds_D[a].size() > clouds_D[b].size();
   });
-  parallelFor(kept.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
+  parallelForEach(views.size(), threadCount(), [&](size_t j) { run_one(by_size[j]); });
+  return views;
+}
 
+void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const KeptDetections& kept,
+                                const std::string& label,
+                                const std::shared_ptr<const DepthView>& depth_view,
+                                std::vector<SingleView>* views, KeyframeReport* out) {
   // Eq. 5-8 in detection order: the same map whatever the thread count. Evidence fusion counts
   // each detection's votes in that order and boxes the objects that changed once, at the end of
   // the keyframe, in parallel.
@@ -431,82 +481,74 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
   database_.setGravityUp(gravity().up);
-  for (size_t k = 0; k < kept.size(); ++k) {
-    const Detection2D& detection = kept[k];
-    const std::string what = label + ": " + detectionLabel(kept_index[k], detection);
+  for (size_t k = 0; k < kept.detections.size(); ++k) {
+    const Detection2D& detection = kept.detections[k];
+    SingleView& view = (*views)[k];
     // Stage times are summed over detections (CPU time when they ran in parallel).
-    out.times.filter_ms += views[k].times.filter_ms;
-    out.times.lccp_ms += views[k].times.lccp_ms;
-    out.times.manhattan_ms += views[k].times.manhattan_ms;
-    if (!views[k].status) {
-      out.warnings.push_back(what + ": " + views[k].status.message());
+    addStageTimes(view.times, &out->times);
+    if (!view.status) {
+      out->warnings.push_back(label + ": " + detectionLabel(kept.index[k], detection) + ": " +
+                              view.status.message());
       continue;
     }
-    ObjectObservation& observation = views[k].observation;
-    ++out.with_box;
+    ObjectObservation& observation = view.observation;
+    ++out->with_box;
     observation.class_id = detection.class_id;
     observation.class_name = detection.class_name;
     observation.probability = detection.score;
     observation.keyframe = keyframe;
     observation.stamp_s = frame.stamp_s;
     observation.depth_view = depth_view;
-
-    // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
-    t = Clock::now();
-    StageTimes fused_times;
-    const FusedCloudProcessor process =
-        [this, &fused_times](const std::string& class_name, const PointCloud& points_W,
-                             const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
-                             OrientedBox* box, double* yaw_rad) {
-          return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad,
-                              &fused_times);
-        };
     const ObjectDatabase::FusionResult result =
-        database_.fuseOrInsert(observation, process, defer_rebox);
-    out.times.fusion_ms += msSince(t);
-    out.times.filter_ms += fused_times.filter_ms;
-    out.times.lccp_ms += fused_times.lccp_ms;
-    out.times.manhattan_ms += fused_times.manhattan_ms;
+        fuseObservation(observation, defer_rebox, &out->times);
     if (result.decision == ObjectDatabase::Decision::kFused) {
-      ++out.fused;
+      ++out->fused;
     } else {
-      ++out.inserted;
+      ++out->inserted;
     }
   }
-  if (!database_.pendingRebox().empty()) {
-    t = Clock::now();
-    std::mutex times_mutex;
-    StageTimes rebox_times;
-    const FusedCloudProcessor rebox = [this, &rebox_times, &times_mutex](
-                                          const std::string& class_name, const PointCloud& points_W,
-                                          const std::vector<Eigen::Vector3f>& normals_W,
-                                          PointCloud* segment_W, OrientedBox* box,
-                                          double* yaw_rad) {
-      StageTimes times;
-      const bool ok =
-          processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &times);
-      const std::lock_guard<std::mutex> lock(times_mutex);
-      rebox_times.filter_ms += times.filter_ms;
-      rebox_times.lccp_ms += times.lccp_ms;
-      rebox_times.manhattan_ms += times.manhattan_ms;
-      return ok;
-    };
-    database_.reboxPending(rebox, threadCount());
-    out.times.fusion_ms += msSince(t);
-    out.times.filter_ms += rebox_times.filter_ms;
-    out.times.lccp_ms += rebox_times.lccp_ms;
-    out.times.manhattan_ms += rebox_times.manhattan_ms;
-  }
-  out.times.total_ms = msSince(start);
-  return Status::Ok();
+  if (!database_.pendingRebox().empty()) reboxPending(&out->times);
+}
+
+ObjectDatabase::FusionResult ObjectMapper::fuseObservation(const ObjectObservation& observation,
+                                                           bool defer_rebox, StageTimes* times) {
+  // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
+  const Clock::time_point t = Clock::now();
+  StageTimes fused_times;
+  const FusedCloudProcessor process =
+      [this, &fused_times](const std::string& class_name, const PointCloud& points_W,
+                           const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
+                           OrientedBox* box, double* yaw_rad) {
+        return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &fused_times);
+      };
+  const ObjectDatabase::FusionResult result =
+      database_.fuseOrInsert(observation, process, defer_rebox);
+  times->fusion_ms += msSince(t);
+  addStageTimes(fused_times, times);
+  return result;
+}
+
+void ObjectMapper::reboxPending(StageTimes* times) {
+  const Clock::time_point t = Clock::now();
+  std::mutex times_mutex;
+  StageTimes rebox_times;
+  const FusedCloudProcessor rebox = [this, &rebox_times, &times_mutex](
+                                        const std::string& class_name, const PointCloud& points_W,
+                                        const std::vector<Eigen::Vector3f>& normals_W,
+                                        PointCloud* segment_W, OrientedBox* box, double* yaw_rad) {
+    StageTimes object_times;
+    const bool ok =
+        processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &object_times);
+    const std::lock_guard<std::mutex> lock(times_mutex);
+    addStageTimes(object_times, &rebox_times);
+    return ok;
+  };
+  database_.reboxPending(rebox, threadCount());
+  times->fusion_ms += msSince(t);
+  addStageTimes(rebox_times, times);
 }
 
 int ObjectMapper::threadCount() const { return poolSize(config_); }
-
-void ObjectMapper::parallelFor(size_t count, int threads, const std::function<void(size_t)>& job) {
-  // Detections differ a lot in size: each worker takes the next one as it finishes.
-  parallelForEach(count, threads, job);
-}
 
 bool ObjectMapper::processSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                                      ObjectObservation* observation, StageTimes* times) const {
@@ -561,72 +603,136 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
   const GravityFrame gravity_frame = gravity();
 
   // The selection's image work (the detection's mask, core and ring) does not depend on the
-  // cloud: for a large detection, when the mapper has more than one thread, it runs on a thread of
+  // cloud: for a large detection, when the mapper has more than one thread, it runs as a job of
   // its own beside the filter and LCCP (the same masks select() would compute).
   SegmentSelector::DetectionMasks masks;
   const bool masks_beside = config_.selection.consistent() && context.detection != nullptr &&
                             context.frame != nullptr && threadCount() > 1 &&
                             points_D.size() >= kMinPointsForMasksThread;
-  JoiningThread masks_thread;
+  PointCloud filtered_D;
+  LccpSegmenter::Result segmentation;
+  Status segmented;
+  const auto filter_and_segment = [&] {
+    segmented = filterView(points_D, T_W_D, gravity_frame, &filtered_D, &stage);
+    if (segmented) segmented = segmentView(filtered_D, &segmentation, &stage);
+  };
   if (masks_beside) {
-    masks_thread.start([this, &masks, &context] {
-      masks = selector_.detectionMasks(*context.detection, context.frame->color_bgr.size());
-    });
+    parallelInvoke(
+        threadCount(),
+        [this, &masks, &context] {
+          masks = selector_.detectionMasks(*context.detection, context.frame->color_bgr.size());
+        },
+        filter_and_segment);
+  } else {
+    filter_and_segment();
   }
+  if (!segmented) return segmented;
 
+  PointCloud cut_D;
+  const Status selected = selectCut(filtered_D, segmentation, context, gravity_frame,
+                                    masks_beside ? &masks : nullptr, &cut_D, &stage);
+  if (!selected) return selected;
+
+  // Eq. 1: into the world frame, then Eq. 3/4 on the segment.
+  PointCloud points_W = transformCloud(filtered_D, T_W_D);
+  PointCloud segment_W = transformCloud(cut_D, T_W_D);
+  OrientedBox box;
+  const bool evidence = config_.database.fusion == "evidence";
+  std::vector<Eigen::Vector3f> normals_W;
+  const Status boxed =
+      boxCut(cut_D, segment_W, T_W_D,
+             context.detection != nullptr ? context.detection->class_name : std::string(),
+             gravity_frame, &box, evidence ? &normals_W : nullptr, &stage);
+  if (!boxed) return boxed;
+
+  if (evidence) {
+    // Evidence fusion: the view's surface around the box votes on the voxels it sees.
+    if (context.view != nullptr) {
+      addSeenAroundBox(*context.view, context.frame, T_W_D, box, &observation->seen_W);
+    }
+    // The voxels this view votes on, here on the pool rather than in the ordered fusion.
+    observation->fusion_keys = std::make_shared<const FusionKeys>(
+        makeFusionKeys(segment_W, observation->seen_W, config_.database.fusion_voxel_size_m));
+  }
+  observation->points_W = std::move(points_W);
+  observation->segment_W = std::move(segment_W);
+  observation->segment_normals_W = std::move(normals_W);
+  observation->box = box;
+  observation->yaw_rad = gravity_frame.yawOf(box.rotation.col(0));
+  return Status::Ok();
+}
+
+Status ObjectMapper::filterView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                                const GravityFrame& gravity_frame, PointCloud* filtered_D,
+                                StageTimes* stage) const {
   // Sec. 3.2: pass-through, voxel grid and outlier removal in the camera frame; before them the
   // floor cut: points just above the floor are floor, whatever the mask says.
-  Clock::time_point t = Clock::now();
+  const Clock::time_point t = Clock::now();
   PointCloud above_floor_D;
   const PointCloud* input_D = &points_D;
   if (floorCutActive()) {
-    const Eigen::Vector3f up_D = (T_W_D.linear().transpose() * gravity_frame.up).cast<float>();
-    const float up_offset = static_cast<float>(gravity_frame.up.dot(T_W_D.translation()));
-    const float floor_m = static_cast<float>(floor_.floorHeight_m());
-    const float clearance_m = static_cast<float>(config_.floor.clearance_m);
-    const float per_m2 = static_cast<float>(config_.floor.clearance_per_m2);
-    // With the filter, its pass-through in the same pass: one copy of the cloud, not two.
-    const bool pass_through = config_.filter.enable;
-    const double min_depth_m = config_.filter.min_depth_m;
-    const double max_depth_m = config_.filter.max_depth_m;
-    above_floor_D.reserve(points_D.size());
-    size_t above = 0;
-    for (const Eigen::Vector3f& p : points_D) {
-      const float height_m = up_D.dot(p) + up_offset - floor_m;
-      if (!(height_m >= clearance_m + per_m2 * p.z() * p.z())) continue;
-      ++above;
-      if (!pass_through || PointCloudFilter::inDepthRange(p, min_depth_m, max_depth_m)) {
-        above_floor_D.push_back(p);
-      }
-    }
-    if (above == 0) {
-      stage.filter_ms += msSince(t);
+    if (!cutFloor(points_D, T_W_D, gravity_frame, &above_floor_D)) {
+      stage->filter_ms += msSince(t);
       return Status::Error("every point lies on the floor (" + std::to_string(points_D.size()) +
                            " points)");
     }
     input_D = &above_floor_D;
   }
-  const PointCloud filtered_D = !config_.filter.enable ? *input_D
-                                : floorCutActive()     ? filter_.filterPassedThrough(*input_D)
-                                                       : filter_.filterCameraFrame(*input_D);
-  stage.filter_ms += msSince(t);
-  if (static_cast<int>(filtered_D.size()) < config_.min_object_points) {
-    return Status::Error("only " + std::to_string(filtered_D.size()) + " of " +
+  *filtered_D = !config_.filter.enable ? *input_D
+                : floorCutActive()     ? filter_.filterPassedThrough(*input_D)
+                                       : filter_.filterCameraFrame(*input_D);
+  stage->filter_ms += msSince(t);
+  if (static_cast<int>(filtered_D->size()) < config_.min_object_points) {
+    return Status::Error("only " + std::to_string(filtered_D->size()) + " of " +
                          std::to_string(points_D.size()) +
                          " points left after filtering (min_object_points " +
                          std::to_string(config_.min_object_points) + ")");
   }
+  return Status::Ok();
+}
 
+bool ObjectMapper::cutFloor(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                            const GravityFrame& gravity_frame, PointCloud* above_floor_D) const {
+  const Eigen::Vector3f up_D = (T_W_D.linear().transpose() * gravity_frame.up).cast<float>();
+  const float up_offset = static_cast<float>(gravity_frame.up.dot(T_W_D.translation()));
+  const float floor_m = static_cast<float>(floor_.floorHeight_m());
+  const float clearance_m = static_cast<float>(config_.floor.clearance_m);
+  const float per_m2 = static_cast<float>(config_.floor.clearance_per_m2);
+  // With the filter, its pass-through in the same pass: one copy of the cloud, not two.
+  const bool pass_through = config_.filter.enable;
+  const double min_depth_m = config_.filter.min_depth_m;
+  const double max_depth_m = config_.filter.max_depth_m;
+  above_floor_D->reserve(points_D.size());
+  size_t above = 0;
+  for (const Eigen::Vector3f& p : points_D) {
+    const float height_m = up_D.dot(p) + up_offset - floor_m;
+    if (!(height_m >= clearance_m + per_m2 * p.z() * p.z())) continue;
+    ++above;
+    if (!pass_through || PointCloudFilter::inDepthRange(p, min_depth_m, max_depth_m)) {
+      above_floor_D->push_back(p);
+    }
+  }
+  return above > 0;
+}
+
+Status ObjectMapper::segmentView(const PointCloud& filtered_D, LccpSegmenter::Result* segmentation,
+                                 StageTimes* stage) const {
   // Eq. 2 in the camera frame, where LCCP's log-depth transform applies.
-  t = Clock::now();
-  LccpSegmenter::Result segmentation;
-  const Status segmented = lccp_.segment(filtered_D, true, &segmentation);
-  stage.lccp_ms += msSince(t);
+  const Clock::time_point t = Clock::now();
+  const Status segmented = lccp_.segment(filtered_D, true, segmentation);
+  stage->lccp_ms += msSince(t);
   if (!segmented) return Status::Error("LCCP failed: " + segmented.message());
-  if (segmentation.largest_segment.empty()) return Status::Error("LCCP left no segment");
+  if (segmentation->largest_segment.empty()) return Status::Error("LCCP left no segment");
+  return Status::Ok();
+}
 
+Status ObjectMapper::selectCut(const PointCloud& filtered_D,
+                               const LccpSegmenter::Result& segmentation,
+                               const ViewContext& context, const GravityFrame& gravity_frame,
+                               const SegmentSelector::DetectionMasks* masks, PointCloud* cut_D,
+                               StageTimes* stage) const {
   // Eq. 2, or the segments consistent with the detection.
-  t = Clock::now();
+  const Clock::time_point t = Clock::now();
   SegmentSelector::Input selection_input;
   selection_input.points_D = &filtered_D;
   selection_input.segments = &segmentation.segments;
@@ -637,78 +743,43 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
                               ? database_.priors().find(context.detection->class_name)
                               : nullptr;
   selection_input.gravity = gravity_frame;
-  if (masks_beside) {
-    masks_thread.join();
-    selection_input.masks = &masks;
-  }
+  selection_input.masks = masks;
   SegmentSelector::Result selection;
   const Status selected = selector_.select(selection_input, &selection);
-  stage.lccp_ms += msSince(t);
+  stage->lccp_ms += msSince(t);
   if (!selected) return Status::Error("no object in the cut: " + selected.message());
-  PointCloud cut_D;
-  cut_D.reserve(selection.indices.size());
-  for (const int i : selection.indices) cut_D.push_back(filtered_D[i]);
-  if (static_cast<int>(cut_D.size()) < config_.box.min_points) {
-    return Status::Error("the cut holds only " + std::to_string(cut_D.size()) + " points");
+  cut_D->reserve(selection.indices.size());
+  for (const int i : selection.indices) cut_D->push_back(filtered_D[i]);
+  if (static_cast<int>(cut_D->size()) < config_.box.min_points) {
+    return Status::Error("the cut holds only " + std::to_string(cut_D->size()) + " points");
   }
+  return Status::Ok();
+}
 
-  // Eq. 1: into the world frame, then Eq. 3/4 on the segment.
-  PointCloud points_W = transformCloud(filtered_D, T_W_D);
-  PointCloud segment_W = transformCloud(cut_D, T_W_D);
-  t = Clock::now();
-  OrientedBox box;
-  const bool keep_normals = config_.database.fusion == "evidence";
-  std::vector<Eigen::Vector3f> normals_W;
+Status ObjectMapper::boxCut(const PointCloud& cut_D, const PointCloud& segment_W,
+                            const Eigen::Isometry3d& T_W_D, const std::string& class_name,
+                            const GravityFrame& gravity_frame, OrientedBox* box,
+                            std::vector<Eigen::Vector3f>* normals_W, StageTimes* stage) const {
+  const Clock::time_point t = Clock::now();
   // The cut's median depth sets the normal radius (the sensor's depth layers).
   std::vector<float> depths_m;
   depths_m.reserve(cut_D.size());
   for (const Eigen::Vector3f& p : cut_D) depths_m.push_back(p.z());
   std::nth_element(depths_m.begin(), depths_m.begin() + depths_m.size() / 2, depths_m.end());
   const double median_depth_m = depths_m[depths_m.size() / 2];
-  const Status boxed = box_estimator_.estimate(segment_W, gravity_frame, &box, nullptr,
-                                               keep_normals ? &normals_W : nullptr, median_depth_m);
-  if (boxed) {
-    groundBox(context.detection != nullptr ? context.detection->class_name : std::string(), &box);
-  }
-  if (keep_normals) {
+  const Status boxed =
+      box_estimator_.estimate(segment_W, gravity_frame, box, nullptr, normals_W, median_depth_m);
+  if (boxed) groundBox(class_name, box);
+  if (normals_W != nullptr) {
     // Turned towards the camera: every view of a surface then adds the same sign in a voxel.
     const Eigen::Vector3f camera_W = T_W_D.translation().cast<float>();
-    for (size_t i = 0; i < normals_W.size(); ++i) {
-      if (normals_W[i].allFinite() && normals_W[i].dot(camera_W - segment_W[i]) < 0.f) {
-        normals_W[i] = -normals_W[i];
-      }
+    for (size_t i = 0; i < normals_W->size(); ++i) {
+      Eigen::Vector3f& n = (*normals_W)[i];
+      if (n.allFinite() && n.dot(camera_W - segment_W[i]) < 0.f) n = -n;
     }
   }
-  stage.manhattan_ms += msSince(t);
+  stage->manhattan_ms += msSince(t);
   if (!boxed) return Status::Error("no box: " + boxed.message());
-
-  // Evidence fusion: the view's surface around the box votes on the voxels it sees.
-  if (config_.database.fusion == "evidence" && context.view != nullptr) {
-    const Eigen::Matrix3f R_B_W = box.rotation.transpose().cast<float>();
-    const Eigen::Vector3f centre = box.center_m.cast<float>();
-    const Eigen::Vector3f half = (0.5 * box.size_m).cast<float>() + Eigen::Vector3f::Constant(0.3f);
-    const SegmentSelector::FrameView& view = *context.view;
-    const std::pair<size_t, size_t> range =
-        context.frame != nullptr ? viewRowsAround(view, context.frame->K_depth, T_W_D, box, 0.3)
-                                 : std::make_pair(size_t{0}, view.points_W.size());
-    for (size_t k = range.first; k < range.second; ++k) {
-      const Eigen::Vector3f& p_W = view.points_W[k];
-      if (((R_B_W * (p_W - centre)).cwiseAbs() - half).maxCoeff() <= 0.f) {
-        observation->seen_W.push_back(p_W);
-      }
-    }
-  }
-
-  if (config_.database.fusion == "evidence") {
-    // The voxels this view votes on, here on the pool rather than in the ordered fusion.
-    observation->fusion_keys = std::make_shared<const FusionKeys>(
-        makeFusionKeys(segment_W, observation->seen_W, config_.database.fusion_voxel_size_m));
-  }
-  observation->points_W = std::move(points_W);
-  observation->segment_W = std::move(segment_W);
-  observation->segment_normals_W = std::move(normals_W);
-  observation->box = box;
-  observation->yaw_rad = gravity_frame.yawOf(box.rotation.col(0));
   return Status::Ok();
 }
 

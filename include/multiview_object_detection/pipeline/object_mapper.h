@@ -9,14 +9,14 @@
 #include <utility>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/map/refinement.h"
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 #include "multiview_object_detection/pipeline/stages/floor_estimator.h"
 #include "multiview_object_detection/pipeline/stages/gravity_estimator.h"
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
 #include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
-#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
-#include "multiview_object_detection/pipeline/map/refinement.h"
 #include "multiview_object_detection/pipeline/stages/segment_selector.h"
 
 namespace mvod {
@@ -48,8 +48,9 @@ struct KeyframeReport {
 class ObjectMapper {
  public:
   // A detection's cloud with at least this many points has its selection masks (mask, core,
-  // ring: a few milliseconds of erosion for ~100 000 pixels) computed on a thread of their own
-  // beside its filter and LCCP, when num_threads allows more than one; the same masks either way.
+  // ring: a few milliseconds of erosion for ~100 000 pixels) computed as a job of their own on the
+  // pool beside its filter and LCCP, when num_threads allows more than one; the same masks either
+  // way.
   static constexpr size_t kMinPointsForMasksThread = 20000;
 
   struct Config {
@@ -124,6 +125,60 @@ class ObjectMapper {
   void reset();
 
  private:
+  // A keyframe's detections that pass Eq. 5 (ψ >= λ, a class we can name, a box that leaves
+  // background), with their indices among the given detections.
+  struct KeptDetections {
+    std::vector<Detection2D> detections;
+    std::vector<size_t> index;
+  };
+  // What a keyframe's detections share, computed once: the whole view (has_view: computed), the
+  // depth in metres (evidence fusion; may be null) and each kept detection's cloud.
+  struct KeyframeClouds {
+    bool has_view = false;
+    SegmentSelector::FrameView view;
+    std::shared_ptr<DepthView> depth_view;
+    std::vector<PointCloud> clouds_D;
+  };
+  // One detection's single-view result; written by one job of the pool only.
+  struct SingleView {
+    Status status;
+    ObjectObservation observation;
+    StageTimes times;
+  };
+
+  // processKeyframe's phases, in order.
+  KeptDetections keepDetections(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
+                                const std::string& label, KeyframeReport* out) const;
+  // Fills in the class id or name from the other; false if neither names a COCO class.
+  static bool nameClass(Detection2D* detection);
+  // False (and why) for a box over (nearly) the whole image when the consistent cut is used.
+  bool boxLeavesBackground(const RgbdFrame& frame, const Detection2D& detection,
+                           std::string* problem) const;
+  // Eq. 1 and the shared inputs, on two jobs of the pool: the view and the floor from it; the
+  // depth view and the detections' clouds.
+  KeyframeClouds prepareKeyframe(const RgbdFrame& frame, const KeptDetections& kept,
+                                 const std::string& label, std::vector<std::string>* warnings);
+  void addFloorSample(const SegmentSelector::FrameView& view);
+  std::shared_ptr<DepthView> makeDepthView(const RgbdFrame& frame) const;
+  // One cloud per kept detection; a detection whose extraction fails gets an empty cloud and a
+  // warning, the others their clouds.
+  std::vector<PointCloud> extractClouds(const RgbdFrame& frame, const KeptDetections& kept,
+                                        const std::string& label,
+                                        std::vector<std::string>* warnings) const;
+  // Sec. 3.2-3.3 for every kept detection, in parallel (largest clouds first).
+  std::vector<SingleView> runSingleViews(const RgbdFrame& frame, const KeptDetections& kept,
+                                         const KeyframeClouds& clouds) const;
+  // Eq. 5-8 in detection order, then the deferred boxes of the objects that changed.
+  void fuseKeyframe(const RgbdFrame& frame, int keyframe, const KeptDetections& kept,
+                    const std::string& label, const std::shared_ptr<const DepthView>& depth_view,
+                    std::vector<SingleView>* views, KeyframeReport* out);
+  // One observation into the database (Eq. 6-8), its fused cloud processed by processFused; the
+  // times of that added to *times.
+  ObjectDatabase::FusionResult fuseObservation(const ObjectObservation& observation,
+                                               bool defer_rebox, StageTimes* times);
+  // Evidence fusion, once per keyframe: the objects that changed boxed, in parallel.
+  void reboxPending(StageTimes* times);
+
   bool processFused(const std::string& class_name, const PointCloud& points_W,
                     const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
                     OrientedBox* box, double* yaw_rad, StageTimes* times) const;
@@ -133,14 +188,31 @@ class ObjectMapper {
     const Detection2D* detection = nullptr;
     const SegmentSelector::FrameView* view = nullptr;
   };
-  // processSingleView with the reason a detection was dropped.
   int threadCount() const;
-  // job(0) ... job(count - 1) on up to `threads` threads (the caller's included); returns when all
-  // are done.
-  static void parallelFor(size_t count, int threads, const std::function<void(size_t)>& job);
+  // processSingleView with the reason a detection was dropped.
   Status runSingleView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
                        const ViewContext& context, ObjectObservation* observation,
                        StageTimes* times) const;
+  // runSingleView's phases: the floor cut and Sec. 3.2's filter; LCCP (Eq. 2); the segments that
+  // are the object (masks: the detection's, when computed already); the box (Eq. 3/4) with the
+  // cut's normals (null: none kept).
+  Status filterView(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                    const GravityFrame& gravity_frame, PointCloud* filtered_D,
+                    StageTimes* stage) const;
+  // The points above the floor (and, with the filter, within its depth range); false if every
+  // point lies on the floor.
+  bool cutFloor(const PointCloud& points_D, const Eigen::Isometry3d& T_W_D,
+                const GravityFrame& gravity_frame, PointCloud* above_floor_D) const;
+  Status segmentView(const PointCloud& filtered_D, LccpSegmenter::Result* segmentation,
+                     StageTimes* stage) const;
+  Status selectCut(const PointCloud& filtered_D, const LccpSegmenter::Result& segmentation,
+                   const ViewContext& context, const GravityFrame& gravity_frame,
+                   const SegmentSelector::DetectionMasks* masks, PointCloud* cut_D,
+                   StageTimes* stage) const;
+  Status boxCut(const PointCloud& cut_D, const PointCloud& segment_W,
+                const Eigen::Isometry3d& T_W_D, const std::string& class_name,
+                const GravityFrame& gravity_frame, OrientedBox* box,
+                std::vector<Eigen::Vector3f>* normals_W, StageTimes* stage) const;
   // Extends a box down to the floor when its bottom is near the floor, or wherever it is when its
   // class has a flat top on supports (ClassPrior::flat_top: a table whose legs are hidden).
   void groundBox(const std::string& class_name, OrientedBox* box) const;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
@@ -85,6 +86,19 @@ void addNormals(const ObjectObservation& observation, double voxel_size_m, Evide
     if (!n.allFinite()) continue;
     const auto it = evidence->find(voxelKeyOf(observation.segment_W[i], voxel_size_m));
     if (it != evidence->end()) it->second.normal_sum += n;
+  }
+}
+
+// One view's votes on an object's voxels (evidence, on the fusion grid): inside for the voxels of
+// its cut, with the cut's normals, and outside for the voxels of the object it saw surface in but
+// left out of the cut. Cost: the view's points, not the object's size.
+void addVotes(const ObjectObservation& observation, const FusionKeys& keys, double voxel_size_m,
+              EvidenceMap* evidence) {
+  countInside(keys.cut, evidence);
+  addNormals(observation, voxel_size_m, evidence);
+  for (const std::int64_t key : keys.outside) {
+    const auto it = evidence->find(key);
+    if (it != evidence->end() && it->second.outside < UINT16_MAX) ++it->second.outside;
   }
 }
 
@@ -185,172 +199,197 @@ PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
 ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservation& observation,
                                                           const FusedCloudProcessor& process,
                                                           bool defer_rebox) {
-  if (observation.keyframe != current_keyframe_) {
-    current_keyframe_ = observation.keyframe;
-    inserted_this_keyframe_.clear();
-  }
-
-  // Eq. 6: the nearest object of the same class, by box-centre distance.
+  beginKeyframe(observation.keyframe);
   FusionResult result;
-  result.distance_m = std::numeric_limits<double>::infinity();
-  MapObject* nearest = nullptr;
-  for (auto& entry : objects_) {
-    MapObject& object = entry.second;
-    if (object.class_name != observation.class_name) continue;
-    if (config_.no_fusion_within_keyframe &&
-        std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
-            inserted_this_keyframe_.end()) {
-      continue;  // Sec. 3.4.1: two detections of one image are two objects.
-    }
-    // A completed box's centre lies in the part no view saw: the views' own box is matched.
-    const double d = (object.seenBox().center_m - observation.box.center_m).norm();
-    if (d < result.distance_m) {
-      result.distance_m = d;
-      nearest = &object;
-    }
-  }
-
-  const double threshold_m = priors_.fusionDistance(observation.class_name);
-  const bool evidence = config_.fusion == "evidence";
+  MapObject* nearest = nearestSameClass(observation, &result.distance_m);
+  bool fuse =
+      nearest != nullptr && result.distance_m <= priors_.fusionDistance(observation.class_name);
   // Evidence fusion: the voxels of this view's cut and of what it saw around it, computed once
   // (by the single-view stage, or here).
-  std::shared_ptr<const FusionKeys> keys = observation.fusion_keys;
-  if (evidence && (keys == nullptr || keys->voxel_size_m != config_.fusion_voxel_size_m)) {
-    keys = std::make_shared<const FusionKeys>(
-        makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
-  }
-  const std::vector<std::int64_t> no_keys;
-  const std::vector<std::int64_t>& cut = evidence ? keys->cut : no_keys;
-  bool fuse = nearest != nullptr && result.distance_m <= threshold_m;
+  const bool evidence = config_.fusion == "evidence";
+  const std::shared_ptr<const FusionKeys> keys = evidence ? fusionKeysOf(observation) : nullptr;
   if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
     // Not near a same-class object: the object (any class) whose supported voxels hold most of
     // this cut, if enough of it.
-    double best_overlap = 0.0;
-    MapObject* best_object = nullptr;
-    for (auto& entry : objects_) {
-      MapObject& object = entry.second;
-      if (object.evidence.empty() || object.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
-        continue;
-      }
-      if (config_.no_fusion_within_keyframe &&
-          std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
-              inserted_this_keyframe_.end()) {
-        continue;
-      }
-      if ((object.box.center_m - observation.box.center_m).norm() >
-          0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
-        continue;  // the boxes cannot overlap
-      }
-      // The votes only: a new view's cut may lie in the shell of noise around the surface
-      // (surface_band_m selects the object's voxels, not what it can be matched on).
-      const auto voted = [&object](std::int64_t key) {
-        const auto it = object.evidence.find(key);
-        return it != object.evidence.end() && it->second.inside >= 1 &&
-               it->second.inside >= it->second.outside;
-      };
-      const int reach =
-          object.class_name == observation.class_name ? config_.same_class_overlap_voxels : 0;
-      int shared = 0;
-      for (const std::int64_t key : cut) {
-        if (voted(key)) {
-          ++shared;
-          continue;
-        }
-        if (reach == 0) continue;
-        const Eigen::Vector3i centre = unpackVoxel(key);
-        bool near = false;
-        for (int dx = -reach; dx <= reach && !near; ++dx) {
-          for (int dy = -reach; dy <= reach && !near; ++dy) {
-            for (int dz = -reach; dz <= reach && !near; ++dz) {
-              near = voted(packVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
-            }
-          }
-        }
-        if (near) ++shared;
-      }
-      const double overlap = cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
-      if (overlap > best_overlap) {
-        best_overlap = overlap;
-        best_object = &object;
-      }
-    }
-    if (best_object != nullptr && best_overlap >= config_.min_overlap_to_fuse) {
+    MapObject* overlapping = mostOverlapping(observation, keys->cut);
+    if (overlapping != nullptr) {
       fuse = true;
-      nearest = best_object;
+      nearest = overlapping;
       result.distance_m = (nearest->seenBox().center_m - observation.box.center_m).norm();
     }
   }
   if (!config_.disable_fusion && fuse) {
-    MapObject& object = *nearest;
     if (evidence) {
-      // The class: the largest summed probability of the detections fused here.
-      addClassScore(observation.class_name, observation.probability, &object);
-    }
-    // Eq. 8 taken literally: the mean of the new and the stored probability (a running pairwise
-    // mean, which weights recent views more than an average over all views would).
-    object.probability = 0.5 * (observation.probability + object.probability);
-    object.observations += 1;
-    object.last_keyframe = observation.keyframe;
-    object.last_seen_s = observation.stamp_s;
-    const PointCloud* to_process = &object.points_W;  // the paper's fusion: Eq. 7's cloud
-    if (config_.fusion == "evidence") {
-      // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
-      if (object.evidence_voxel_size_m != config_.fusion_voxel_size_m) object.evidence.clear();
-      object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
-      if (object.evidence.empty()) {
-        countInside(voxelKeys(object.segment_W, config_.fusion_voxel_size_m), &object.evidence);
-      }
-      // This view's votes: inside for the voxels of its cut, outside for the voxels it saw surface
-      // in but left out of the cut. Cost: the view's points, not the object's size.
-      countInside(cut, &object.evidence);
-      addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
-      for (const std::int64_t key : keys->outside) {
-        const auto it = object.evidence.find(key);
-        if (it != object.evidence.end() && it->second.outside < UINT16_MAX) ++it->second.outside;
-      }
-      const bool measure = observation.depth_view != nullptr && config_.surface_band_m > 0.0;
-      if (defer_rebox) {
-        const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
-        if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
-        // The keyframe's signed distances (and free space) once per object, however many of its
-        // detections fuse here, with the boxing (in parallel).
-        if (observation.depth_view != nullptr) {
-          pending_depth_views_[object.id] = observation.depth_view;
-        }
-        to_process = nullptr;
-      } else {
-        if (measure) {
-          addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m,
-                             &object.evidence);
-        }
-        rebox(&object, process, observation.depth_view.get());
-        to_process = nullptr;
-      }
+      fuseEvidence(observation, *keys, process, defer_rebox, nearest);
     } else {
-      // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface
-      // bounded.
-      PointCloud merged;
-      merged.reserve(object.points_W.size() + observation.points_W.size());
-      merged.insert(merged.end(), object.points_W.begin(), object.points_W.end());
-      merged.insert(merged.end(), observation.points_W.begin(), observation.points_W.end());
-      object.points_W = PointCloudFilter::voxelize(merged, config_.fusion_voxel_size_m);
+      fusePaper(observation, process, nearest);
     }
-
-    PointCloud segment_W;
-    OrientedBox box;
-    double yaw_rad = object.yaw_rad;
-    if (process && to_process != nullptr &&
-        process(object.class_name, *to_process, {}, &segment_W, &box, &yaw_rad)) {
-      object.segment_W = std::move(segment_W);
-      object.box = box;
-      object.yaw_rad = yaw_rad;
-    }  // else: nothing usable in the fused cloud, the previous segment and box stay.
-
     result.decision = Decision::kFused;
-    result.object_id = object.id;
+    result.object_id = nearest->id;
     return result;
   }
+  result.decision = Decision::kInserted;
+  result.object_id = insert(observation, keys.get());
+  return result;
+}
 
+void ObjectDatabase::beginKeyframe(int keyframe) {
+  if (keyframe == current_keyframe_) return;
+  current_keyframe_ = keyframe;
+  inserted_this_keyframe_.clear();
+}
+
+bool ObjectDatabase::insertedThisKeyframe(const MapObject& object) const {
+  // Sec. 3.4.1: two detections of one image are two objects.
+  return config_.no_fusion_within_keyframe &&
+         std::find(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), object.id) !=
+             inserted_this_keyframe_.end();
+}
+
+MapObject* ObjectDatabase::nearestSameClass(const ObjectObservation& observation,
+                                            double* distance_m) {
+  // Eq. 6: the nearest object of the same class, by box-centre distance.
+  *distance_m = std::numeric_limits<double>::infinity();
+  MapObject* nearest = nullptr;
+  for (auto& entry : objects_) {
+    MapObject& object = entry.second;
+    if (object.class_name != observation.class_name || insertedThisKeyframe(object)) continue;
+    // A completed box's centre lies in the part no view saw: the views' own box is matched.
+    const double d = (object.seenBox().center_m - observation.box.center_m).norm();
+    if (d < *distance_m) {
+      *distance_m = d;
+      nearest = &object;
+    }
+  }
+  return nearest;
+}
+
+std::shared_ptr<const FusionKeys> ObjectDatabase::fusionKeysOf(
+    const ObjectObservation& observation) const {
+  std::shared_ptr<const FusionKeys> keys = observation.fusion_keys;
+  if (keys == nullptr || keys->voxel_size_m != config_.fusion_voxel_size_m) {
+    keys = std::make_shared<const FusionKeys>(
+        makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
+  }
+  return keys;
+}
+
+MapObject* ObjectDatabase::mostOverlapping(const ObjectObservation& observation,
+                                           const std::vector<std::int64_t>& cut) {
+  double best_overlap = 0.0;
+  MapObject* best_object = nullptr;
+  for (auto& entry : objects_) {
+    MapObject& object = entry.second;
+    if (object.evidence.empty() || object.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
+      continue;
+    }
+    if (insertedThisKeyframe(object)) continue;
+    if ((object.box.center_m - observation.box.center_m).norm() >
+        0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
+      continue;  // the boxes cannot overlap
+    }
+    const int reach =
+        object.class_name == observation.class_name ? config_.same_class_overlap_voxels : 0;
+    const double overlap = overlapShare(object, cut, reach);
+    if (overlap > best_overlap) {
+      best_overlap = overlap;
+      best_object = &object;
+    }
+  }
+  return best_overlap >= config_.min_overlap_to_fuse ? best_object : nullptr;
+}
+
+double ObjectDatabase::overlapShare(const MapObject& object, const std::vector<std::int64_t>& cut,
+                                    int reach) {
+  // The votes only: a new view's cut may lie in the shell of noise around the surface
+  // (surface_band_m selects the object's voxels, not what it can be matched on).
+  const auto voted = [&object](std::int64_t key) {
+    const auto it = object.evidence.find(key);
+    return it != object.evidence.end() && it->second.inside >= 1 &&
+           it->second.inside >= it->second.outside;
+  };
+  int shared = 0;
+  for (const std::int64_t key : cut) {
+    if (voted(key)) {
+      ++shared;
+      continue;
+    }
+    if (reach == 0) continue;
+    const Eigen::Vector3i centre = unpackVoxel(key);
+    bool near = false;
+    for (int dx = -reach; dx <= reach && !near; ++dx) {
+      for (int dy = -reach; dy <= reach && !near; ++dy) {
+        for (int dz = -reach; dz <= reach && !near; ++dz) {
+          near = voted(packVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
+        }
+      }
+    }
+    if (near) ++shared;
+  }
+  return cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
+}
+
+void ObjectDatabase::addObservation(const ObjectObservation& observation, MapObject* object) {
+  // Eq. 8 taken literally: the mean of the new and the stored probability (a running pairwise
+  // mean, which weights recent views more than an average over all views would).
+  object->probability = 0.5 * (observation.probability + object->probability);
+  object->observations += 1;
+  object->last_keyframe = observation.keyframe;
+  object->last_seen_s = observation.stamp_s;
+}
+
+void ObjectDatabase::fuseEvidence(const ObjectObservation& observation, const FusionKeys& keys,
+                                  const FusedCloudProcessor& process, bool defer_rebox,
+                                  MapObject* object) {
+  // The class: the largest summed probability of the detections fused here.
+  addClassScore(observation.class_name, observation.probability, object);
+  addObservation(observation, object);
+  // A map saved before evidence fusion (or by the paper's fusion): its segment is the evidence.
+  if (object->evidence_voxel_size_m != config_.fusion_voxel_size_m) object->evidence.clear();
+  object->evidence_voxel_size_m = config_.fusion_voxel_size_m;
+  if (object->evidence.empty()) {
+    countInside(voxelKeys(object->segment_W, config_.fusion_voxel_size_m), &object->evidence);
+  }
+  addVotes(observation, keys, config_.fusion_voxel_size_m, &object->evidence);
+  if (defer_rebox) {
+    deferRebox(*object, observation.depth_view);
+    return;
+  }
+  if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
+    addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object->evidence);
+  }
+  rebox(object, process, observation.depth_view.get());
+}
+
+void ObjectDatabase::deferRebox(const MapObject& object,
+                                const std::shared_ptr<const DepthView>& depth_view) {
+  const auto at = std::lower_bound(pending_rebox_.begin(), pending_rebox_.end(), object.id);
+  if (at == pending_rebox_.end() || *at != object.id) pending_rebox_.insert(at, object.id);
+  // The keyframe's signed distances (and free space) once per object, however many of its
+  // detections fuse here, with the boxing (in parallel).
+  if (depth_view != nullptr) pending_depth_views_[object.id] = depth_view;
+}
+
+void ObjectDatabase::fusePaper(const ObjectObservation& observation,
+                               const FusedCloudProcessor& process, MapObject* object) const {
+  addObservation(observation, object);
+  // Eq. 7 on the unsegmented clouds; the voxel grid keeps repeated views of one surface bounded.
+  PointCloud merged;
+  merged.reserve(object->points_W.size() + observation.points_W.size());
+  merged.insert(merged.end(), object->points_W.begin(), object->points_W.end());
+  merged.insert(merged.end(), observation.points_W.begin(), observation.points_W.end());
+  object->points_W = PointCloudFilter::voxelize(merged, config_.fusion_voxel_size_m);
+  PointCloud segment_W;
+  OrientedBox box;
+  double yaw_rad = object->yaw_rad;
+  if (process && process(object->class_name, object->points_W, {}, &segment_W, &box, &yaw_rad)) {
+    object->segment_W = std::move(segment_W);
+    object->box = box;
+    object->yaw_rad = yaw_rad;
+  }  // else: nothing usable in the fused cloud, the previous segment and box stay.
+}
+
+int ObjectDatabase::insert(const ObjectObservation& observation, const FusionKeys* keys) {
   MapObject object;
   object.id = takeNextId();
   object.class_id = observation.class_id;
@@ -358,11 +397,11 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   object.probability = observation.probability;
   object.observations = 1;
   object.segment_W = observation.segment_W;
-  if (evidence) {
-    // The object is what the cut holds; its cloud is the voxels with evidence, as after fusions.
+  if (keys != nullptr) {
+    // Evidence fusion: the object is what the cut holds; its cloud is the voxels with evidence, as
+    // after fusions (the outside votes find none of its voxels yet).
     object.class_scores[observation.class_name] = observation.probability;
-    countInside(cut, &object.evidence);
-    addNormals(observation, config_.fusion_voxel_size_m, &object.evidence);
+    addVotes(observation, *keys, config_.fusion_voxel_size_m, &object.evidence);
     if (observation.depth_view != nullptr && config_.surface_band_m > 0.0) {
       addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
     }
@@ -373,17 +412,15 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   }
   object.box = observation.box;
   object.yaw_rad = observation.yaw_rad;
-  if (evidence) completeBox(&object, observation.depth_view.get());
+  if (keys != nullptr) completeBox(&object, observation.depth_view.get());
   object.first_keyframe = observation.keyframe;
   object.last_keyframe = observation.keyframe;
   object.first_seen_s = observation.stamp_s;
   object.last_seen_s = observation.stamp_s;
   inserted_this_keyframe_.push_back(object.id);
-
-  result.decision = Decision::kInserted;
-  result.object_id = object.id;
-  objects_.emplace(object.id, std::move(object));
-  return result;
+  const int id = object.id;
+  objects_.emplace(id, std::move(object));
+  return id;
 }
 
 int ObjectDatabase::reboxPending(const FusedCloudProcessor& process, int threads) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/point_moments.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 
@@ -199,6 +200,417 @@ struct Buckets {
   int size(int g) const { return begin[g + 1] - begin[g]; }
 };
 
+// 1. The voxels of the (log-depth) grid, placed as PCL's adjacency octree places them, in its
+// leaf order (Morton order), with their centroids and their occupied 27-neighbourhoods.
+struct VoxelGrid {
+  std::vector<std::uint64_t> key;
+  std::vector<Eigen::Vector3f> centroid;
+  std::vector<int> voxel_of_point;   // per input point; -1: none
+  std::vector<int> neighbour_begin;  // voxel v's neighbours: neighbours[begin[v] .. begin[v + 1])
+  std::vector<int> neighbours;       // itself included (as PCL's adjacency octree)
+  int size() const { return static_cast<int>(key.size()); }
+};
+
+// The cloud's points on the grid of `resolution` (in the log-depth space when log_transform):
+// the cloud's bounds centred in a power-of-two box of voxels.
+Status voxelKeys(const PointCloud& points, bool log_transform, double resolution,
+                 std::vector<std::pair<std::uint64_t, int>>* keyed) {
+  const auto transformed = [log_transform](const Eigen::Vector3f& p) {
+    return log_transform ? Eigen::Vector3f(p.x() / p.z(), p.y() / p.z(), std::log(p.z())) : p;
+  };
+  Eigen::Vector3d lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d upper = -lower;
+  std::vector<char> usable(points.size(), 0);
+  std::vector<Eigen::Vector3f> transformed_points(points.size());  // each transformed once
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite() || (log_transform && !(points[i].z() > 0.0f))) continue;
+    transformed_points[i] = transformed(points[i]);
+    const Eigen::Vector3d q = transformed_points[i].cast<double>();
+    if (!q.allFinite()) continue;
+    usable[i] = 1;
+    lower = lower.cwiseMin(q);
+    upper = upper.cwiseMax(q);
+  }
+  if (!lower.allFinite()) return Status::Error("no finite points to cluster");
+  if (((upper - lower) / resolution).maxCoeff() >= static_cast<double>(kKeyMax)) {
+    return Status::Error("cloud extent too large for voxel_resolution_m " +
+                         std::to_string(resolution));
+  }
+  lower = centredOctreeOrigin(lower, upper, resolution);
+  keyed->reserve(points.size());  // (Morton code, point)
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!usable[i]) continue;
+    const Eigen::Vector3d cell =
+        ((transformed_points[i].cast<double>() - lower) / resolution).array().floor();
+    keyed->emplace_back(
+        morton(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
+               static_cast<std::int64_t>(cell.z())),
+        static_cast<int>(i));
+  }
+  radixSortByKey(keyed);
+  return Status::Ok();
+}
+
+Status buildVoxelGrid(const PointCloud& points, bool log_transform, double resolution,
+                      VoxelGrid* grid) {
+  std::vector<std::pair<std::uint64_t, int>> keyed;
+  const Status keyed_ok = voxelKeys(points, log_transform, resolution, &keyed);
+  if (!keyed_ok) return keyed_ok;
+  grid->voxel_of_point.assign(points.size(), -1);
+  for (std::size_t begin = 0; begin < keyed.size();) {
+    std::size_t end = begin;
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();  // float, in input order, as PCL's leaves
+    while (end < keyed.size() && keyed[end].first == keyed[begin].first) {
+      sum += points[keyed[end].second];
+      grid->voxel_of_point[keyed[end].second] = static_cast<int>(grid->key.size());
+      ++end;
+    }
+    grid->key.push_back(unMorton(keyed[begin].first));
+    grid->centroid.push_back(sum / static_cast<float>(end - begin));
+    begin = end;
+  }
+  const int num_voxels = grid->size();
+  KeyIndex voxel_index(grid->key.size());
+  for (int v = 0; v < num_voxels; ++v) voxel_index.insert(grid->key[v], v);
+  grid->neighbour_begin.assign(num_voxels + 1, 0);
+  grid->neighbours.reserve(static_cast<std::size_t>(num_voxels) * 12);
+  for (int v = 0; v < num_voxels; ++v) {
+    forEachNeighbourKey(grid->key[v], voxel_index,
+                        [grid](int n) { grid->neighbours.push_back(n); });
+    grid->neighbour_begin[v + 1] = static_cast<int>(grid->neighbours.size());
+  }
+  return Status::Ok();
+}
+
+// 2. Voxel normals. PCL fits each to its voxel, its neighbours and their neighbours, counted with
+// multiplicity: moments(v) + sum over neighbours n of (moments(n) + neighbourhood moments(n)).
+// Each voxel's moments depend on its own neighbourhood only: split over the threads (the same
+// result). Turned towards the frame's origin.
+std::vector<Eigen::Vector3f> voxelNormals(const VoxelGrid& grid, int threads) {
+  constexpr std::size_t kMinVoxelsPerThread = 2048;
+  const int num_voxels = grid.size();
+  const std::size_t voxel_count = static_cast<std::size_t>(num_voxels);
+  const std::vector<int>& begin = grid.neighbour_begin;
+  const std::vector<int>& neighbours = grid.neighbours;
+  const Eigen::Vector3d origin = grid.centroid.front().cast<double>();  // for the precision
+  std::vector<PointMoments> own(num_voxels), around(num_voxels);
+  for (int v = 0; v < num_voxels; ++v) own[v].add(grid.centroid[v].cast<double>() - origin);
+  parallelRanges(voxel_count, threads, kMinVoxelsPerThread,
+                 [&](std::size_t first, std::size_t last) {
+                   for (std::size_t v = first; v < last; ++v) {
+                     for (int k = begin[v]; k < begin[v + 1]; ++k)
+                       around[v].add(own[neighbours[k]]);
+                   }
+                 });
+  std::vector<Eigen::Vector3f> normal(num_voxels);
+  parallelRanges(voxel_count, threads, kMinVoxelsPerThread,
+                 [&](std::size_t first, std::size_t last) {
+                   for (std::size_t v = first; v < last; ++v) {
+                     PointMoments total = own[v];
+                     for (int k = begin[v]; k < begin[v + 1]; ++k) {
+                       total.add(own[neighbours[k]]);
+                       total.add(around[neighbours[k]]);
+                     }
+                     normal[v] = planeNormal(total);
+                     if (grid.centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];
+                   }
+                 });
+  return normal;
+}
+
+// 3. Seeds: per occupied cell of a seed_m grid over the voxel centroids (real space), the voxel
+// nearest to the cell's centre; kept where enough voxels lie within half a seed. The cells and
+// their order are those of PCL's seed octree, which grows around the first centroid.
+class SeedCells {
+ public:
+  SeedCells(const std::vector<Eigen::Vector3f>& centroid, double seed_m)
+      : centroid_(centroid), seed_m_(seed_m), origin_(growingOctreeOrigin(centroid, seed_m)) {
+    keyed_.reserve(centroid.size());
+    for (int v = 0; v < static_cast<int>(centroid.size()); ++v) {
+      keyed_.emplace_back(cellOf(centroid[v]), v);
+    }
+    radixSortByKey(&keyed_);
+    for (std::size_t k = 0; k < keyed_.size(); ++k) {
+      if (k == 0 || keyed_[k].first != keyed_[k - 1].first) {
+        key_.push_back(keyed_[k].first);
+        begin_.push_back(static_cast<int>(k));
+      }
+    }
+    begin_.push_back(static_cast<int>(keyed_.size()));
+    index_ = KeyIndex(key_.size());
+    for (std::size_t c = 0; c < key_.size(); ++c) index_.insert(key_[c], static_cast<int>(c));
+  }
+
+  std::uint64_t cellOf(const Eigen::Vector3f& p) const {
+    const Eigen::Vector3d cell = ((p.cast<double>() - origin_) / seed_m_).array().floor();
+    return packKey(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
+                   static_cast<std::int64_t>(cell.z()));
+  }
+  // The occupied cells in octree (Morton) order.
+  std::vector<int> octreeOrder() const {
+    std::vector<std::pair<std::uint64_t, int>> order;
+    order.reserve(key_.size());
+    for (std::size_t c = 0; c < key_.size(); ++c) {
+      order.emplace_back(morton(keyX(key_[c]), keyY(key_[c]), keyZ(key_[c])), static_cast<int>(c));
+    }
+    radixSortByKey(&order);
+    std::vector<int> cells;
+    cells.reserve(order.size());
+    for (const auto& entry : order) cells.push_back(entry.second);
+    return cells;
+  }
+  // The voxel nearest to cell c's centre among the 27 cells around it (-1: none). The centre and
+  // the distances in float, as PCL's octree and k-d tree compute them.
+  int nearestToCentre(int c) const {
+    const std::uint64_t key = key_[c];
+    const Eigen::Vector3f centre(
+        static_cast<float>((static_cast<double>(keyX(key)) + 0.5) * seed_m_ + origin_.x()),
+        static_cast<float>((static_cast<double>(keyY(key)) + 0.5) * seed_m_ + origin_.y()),
+        static_cast<float>((static_cast<double>(keyZ(key)) + 0.5) * seed_m_ + origin_.z()));
+    int nearest = -1;
+    float nearest_sq = std::numeric_limits<float>::infinity();
+    forEachNeighbourKey(key, index_, [&](int cell) {
+      for (int k = begin_[cell]; k < begin_[cell + 1]; ++k) {
+        const int v = keyed_[k].second;
+        const float d_sq = (centroid_[v] - centre).squaredNorm();
+        if (d_sq < nearest_sq || (d_sq == nearest_sq && v < nearest)) {
+          nearest = v;
+          nearest_sq = d_sq;
+        }
+      }
+    });
+    return nearest;
+  }
+  // How many voxels lie within radius_m of voxel v (in the 27 cells around its cell).
+  int voxelsNear(int v, double radius_m) const {
+    int near = 0;
+    const Eigen::Vector3d seed_point = centroid_[v].cast<double>();
+    forEachNeighbourKey(cellOf(centroid_[v]), index_, [&](int cell) {
+      for (int k = begin_[cell]; k < begin_[cell + 1]; ++k) {
+        const double d = (centroid_[keyed_[k].second].cast<double>() - seed_point).norm();
+        if (d <= radius_m) ++near;
+      }
+    });
+    return near;
+  }
+
+ private:
+  const std::vector<Eigen::Vector3f>& centroid_;
+  double seed_m_;
+  Eigen::Vector3d origin_;
+  std::vector<std::pair<std::uint64_t, int>> keyed_;  // (cell key, voxel), by cell
+  std::vector<std::uint64_t> key_;                    // the occupied cells
+  std::vector<int> begin_;  // cell c's voxels: keyed_[begin_[c] .. begin_[c + 1])
+  KeyIndex index_{0};
+};
+
+Status placeSeeds(const std::vector<Eigen::Vector3f>& centroid, double seed_m, double resolution,
+                  std::vector<int>* seeds) {
+  Eigen::Vector3d centroid_lower = centroid.front().cast<double>();
+  Eigen::Vector3d centroid_upper = centroid_lower;
+  for (const Eigen::Vector3f& c : centroid) {
+    centroid_lower = centroid_lower.cwiseMin(c.cast<double>());
+    centroid_upper = centroid_upper.cwiseMax(c.cast<double>());
+  }
+  if (((centroid_upper - centroid_lower) / seed_m).maxCoeff() >= static_cast<double>(kKeyMax / 4)) {
+    return Status::Error("cloud extent too large for seed_resolution_m " + std::to_string(seed_m));
+  }
+  const SeedCells cells(centroid, seed_m);
+  const double search_radius_m = 0.5 * seed_m;
+  // PCL's bar: a twentieth of the voxels that fit in a disc of the search radius.
+  const double min_voxels_near =
+      0.05 * search_radius_m * search_radius_m * 3.14159265358979323846 / (resolution * resolution);
+  for (const int c : cells.octreeOrder()) {
+    const int nearest = cells.nearestToCentre(c);
+    if (nearest < 0) continue;
+    // Below 1 the seed itself suffices.
+    if (min_voxels_near >= 1.0 && !(cells.voxelsNear(nearest, search_radius_m) > min_voxels_near)) {
+      continue;
+    }
+    seeds->push_back(nearest);  // two cells may give the same voxel: PCL keeps both seeds
+  }
+  if (seeds->empty()) return Status::Error("no supervoxel seeds");
+  return Status::Ok();
+}
+
+// 4. Expansion, PCL's rule: each supervoxel in turn claims the neighbours of the voxels it held
+// when its turn began, wherever its distance (spatial over seed_resolution_m, plus normal) beats
+// the distance the voxel was last claimed at; then the centroids move. Seeds start with a zero
+// centroid and normal, as PCL's helpers do before their first update.
+//
+// A supervoxel's voxels are those it owns plus, as in PCL, a seed voxel that a later seed of the
+// same voxel took over ("phantom"): PCL removes a voxel only from its owner's set, so the earlier
+// seed keeps it, grows from it and counts it in its centroid until it owns it again.
+class SupervoxelExpansion {
+ public:
+  SupervoxelExpansion(const VoxelGrid& grid, const std::vector<Eigen::Vector3f>& normal,
+                      const std::vector<int>& seeds, const LccpSegmenter::Config& config)
+      : grid_(grid),
+        normal_(normal),
+        num_seeds_(static_cast<int>(seeds.size())),
+        seed_f_(static_cast<float>(config.seed_resolution_m)),
+        spatial_importance_(static_cast<float>(config.spatial_importance)),
+        normal_importance_(static_cast<float>(config.normal_importance)),
+        owner_(grid.size(), -1),
+        claimed_at_(grid.size(), std::numeric_limits<float>::max()),
+        centroid_(num_seeds_, Eigen::Vector3f::Zero()),
+        normal_sv_(num_seeds_, Eigen::Vector3f::Zero()),
+        alive_(num_seeds_, 1) {
+    for (int s = 0; s < num_seeds_; ++s) {
+      if (owner_[seeds[s]] >= 0) phantoms_.emplace_back(owner_[seeds[s]], seeds[s]);
+      owner_[seeds[s]] = s;
+    }
+    members_.build(owner_, num_seeds_);
+    groupPhantoms();
+  }
+
+  void run(int iterations) {
+    for (int iteration = 1; iteration < iterations; ++iteration) {
+      for (int s = 0; s < num_seeds_; ++s) {
+        if (alive_[s]) claimNeighbours(s);
+      }
+      members_.build(owner_, num_seeds_);
+      groupPhantoms();
+      for (int s = 0; s < num_seeds_; ++s) {
+        if (alive_[s]) updateCentroid(s);
+      }
+    }
+  }
+
+  // The voxels of supervoxel s, ascending (PCL's leaf set is ordered by voxel index).
+  const std::vector<int>& held(int s) {
+    held_.clear();
+    for (int k = members_.begin[s]; k < members_.begin[s + 1]; ++k) {
+      if (owner_[members_.entries[k]] == s) held_.push_back(members_.entries[k]);
+    }
+    if (phantom_begin_[s] < phantom_begin_[s + 1]) {
+      held_.insert(held_.end(), phantom_voxel_.begin() + phantom_begin_[s],
+                   phantom_voxel_.begin() + phantom_begin_[s + 1]);
+      std::sort(held_.begin(), held_.end());
+      held_.erase(std::unique(held_.begin(), held_.end()), held_.end());
+    }
+    return held_;
+  }
+  int numSeeds() const { return num_seeds_; }
+  bool alive(int s) const { return alive_[s] != 0; }
+  int owner(int voxel) const { return owner_[voxel]; }
+  const Eigen::Vector3f& centroid(int s) const { return centroid_[s]; }
+  const Eigen::Vector3f& normal(int s) const { return normal_sv_[s]; }
+
+ private:
+  void claimNeighbours(int s) {
+    const Eigen::Vector3f c = centroid_[s];
+    const Eigen::Vector3f n = normal_sv_[s];
+    for (const int leaf : held(s)) {
+      for (int k = grid_.neighbour_begin[leaf]; k < grid_.neighbour_begin[leaf + 1]; ++k) {
+        const int v = grid_.neighbours[k];
+        if (owner_[v] == s) continue;
+        const float distance = (1.0f - std::fabs(n.dot(normal_[v]))) * normal_importance_ +
+                               ((c - grid_.centroid[v]).norm() / seed_f_) * spatial_importance_;
+        if (distance < claimed_at_[v]) {
+          claimed_at_[v] = distance;
+          owner_[v] = s;
+        }
+      }
+    }
+  }
+  void updateCentroid(int s) {
+    const std::vector<int>& voxels = held(s);
+    if (voxels.empty()) {
+      alive_[s] = 0;
+      return;
+    }
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();  // float, ascending voxels, as PCL
+    Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
+    for (const int v : voxels) {
+      sum += grid_.centroid[v];
+      normal_sum += normal_[v];
+    }
+    centroid_[s] = sum / static_cast<float>(voxels.size());
+    normal_sv_[s] = normal_sum.norm() > 0.0f ? normal_sum.normalized() : Eigen::Vector3f::Zero();
+  }
+  // The phantoms still apart from their voxel's owner, grouped by supervoxel.
+  void groupPhantoms() {
+    phantoms_.erase(std::remove_if(phantoms_.begin(), phantoms_.end(),
+                                   [this](const std::pair<int, int>& p) {
+                                     return owner_[p.second] == p.first;  // owned again: a member
+                                   }),
+                    phantoms_.end());
+    std::sort(phantoms_.begin(), phantoms_.end());
+    phantoms_.erase(std::unique(phantoms_.begin(), phantoms_.end()), phantoms_.end());
+    phantom_begin_.assign(num_seeds_ + 1, 0);
+    for (const auto& p : phantoms_) ++phantom_begin_[p.first + 1];
+    for (int s = 0; s < num_seeds_; ++s) phantom_begin_[s + 1] += phantom_begin_[s];
+    phantom_voxel_.clear();
+    for (const auto& p : phantoms_) phantom_voxel_.push_back(p.second);
+  }
+
+  const VoxelGrid& grid_;
+  const std::vector<Eigen::Vector3f>& normal_;  // per voxel
+  const int num_seeds_;
+  const float seed_f_;
+  const float spatial_importance_;
+  const float normal_importance_;
+  std::vector<int> owner_;                  // per voxel; -1: none
+  std::vector<float> claimed_at_;           // per voxel
+  std::vector<Eigen::Vector3f> centroid_;   // per supervoxel
+  std::vector<Eigen::Vector3f> normal_sv_;  // per supervoxel
+  std::vector<char> alive_;
+  std::vector<std::pair<int, int>> phantoms_;  // (supervoxel, voxel), few
+  Buckets members_;                            // owned voxels per supervoxel, ascending
+  std::vector<int> phantom_begin_;             // phantoms grouped by supervoxel
+  std::vector<int> phantom_voxel_;
+  std::vector<int> held_;
+};
+
+// 5. The supervoxels (live ones, in seed order), their points and their adjacency: s and t are
+// adjacent where a voxel of s (phantoms included, as in PCL) neighbours one that t owns. Each
+// adjacency classified by LCCP's edge test.
+void buildGraph(std::size_t num_points, const VoxelGrid& grid, SupervoxelExpansion* expansion,
+                const LccpSegmenter::Config& config, LccpSegmenter::SupervoxelGraph* graph) {
+  const int num_seeds = expansion->numSeeds();
+  std::vector<int> index_of(num_seeds, -1);
+  for (int s = 0; s < num_seeds; ++s) {
+    if (!expansion->alive(s)) continue;
+    index_of[s] = static_cast<int>(graph->centroids.size());
+    graph->centroids.push_back(expansion->centroid(s));
+    graph->normals.push_back(expansion->normal(s));
+  }
+  for (std::size_t i = 0; i < num_points; ++i) {
+    const int voxel = grid.voxel_of_point[i];
+    if (voxel >= 0 && expansion->owner(voxel) >= 0) {
+      graph->point_supervoxel[i] = index_of[expansion->owner(voxel)];
+    }
+  }
+  std::vector<int> seen_from(num_seeds, -1);
+  std::vector<std::uint64_t> pairs;
+  for (int s = 0; s < num_seeds; ++s) {
+    if (!expansion->alive(s)) continue;
+    for (const int leaf : expansion->held(s)) {
+      for (int j = grid.neighbour_begin[leaf]; j < grid.neighbour_begin[leaf + 1]; ++j) {
+        const int t = expansion->owner(grid.neighbours[j]);
+        if (t < 0 || t == s || seen_from[t] == s) continue;
+        seen_from[t] = s;
+        const std::uint64_t a = static_cast<std::uint64_t>(std::min(index_of[s], index_of[t]));
+        const std::uint64_t b = static_cast<std::uint64_t>(std::max(index_of[s], index_of[t]));
+        pairs.push_back((a << 32) | b);
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  graph->edges.reserve(pairs.size());
+  for (const std::uint64_t pair : pairs) {
+    LccpSegmenter::SupervoxelEdge edge;
+    edge.a = static_cast<int>(pair >> 32);
+    edge.b = static_cast<int>(pair & 0xffffffffu);
+    edge.convex =
+        LccpSegmenter::convexConnection(graph->centroids[edge.a], graph->normals[edge.a],
+                                        graph->centroids[edge.b], graph->normals[edge.b], config);
+    graph->edges.push_back(edge);
+  }
+}
+
 }  // namespace
 
 bool LccpSegmenter::convexConnection(const Eigen::Vector3f& c_s, const Eigen::Vector3f& n_s_in,
@@ -238,325 +650,19 @@ Status LccpSegmenter::gridSupervoxels(const PointCloud& points, bool log_transfo
   const Status valid = config_.isValid();
   if (!valid) return valid;
   graph->point_supervoxel.assign(points.size(), -1);
-
-  // 1. Voxels: keys on the (log-depth) grid, placed as PCL's adjacency octree places them (the
-  // cloud's bounds centred in a power-of-two box of voxels), in its leaf order (Morton order).
-  const auto transformed = [log_transform](const Eigen::Vector3f& p) {
-    return log_transform ? Eigen::Vector3f(p.x() / p.z(), p.y() / p.z(), std::log(p.z())) : p;
-  };
-  Eigen::Vector3d lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d upper = -lower;
-  std::vector<char> usable(points.size(), 0);
-  std::vector<Eigen::Vector3f> transformed_points(points.size());  // each transformed once
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite() || (log_transform && !(points[i].z() > 0.0f))) continue;
-    transformed_points[i] = transformed(points[i]);
-    const Eigen::Vector3d q = transformed_points[i].cast<double>();
-    if (!q.allFinite()) continue;
-    usable[i] = 1;
-    lower = lower.cwiseMin(q);
-    upper = upper.cwiseMax(q);
-  }
-  if (!lower.allFinite()) return Status::Error("no finite points to cluster");
   const double resolution = static_cast<float>(config_.voxel_resolution_m);
-  if (((upper - lower) / resolution).maxCoeff() >= static_cast<double>(kKeyMax)) {
-    return Status::Error("cloud extent too large for voxel_resolution_m " +
-                         std::to_string(resolution));
-  }
-  lower = centredOctreeOrigin(lower, upper, resolution);
-  std::vector<std::pair<std::uint64_t, int>> keyed;  // (Morton code, point)
-  keyed.reserve(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!usable[i]) continue;
-    const Eigen::Vector3d cell =
-        ((transformed_points[i].cast<double>() - lower) / resolution).array().floor();
-    keyed.emplace_back(
-        morton(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
-               static_cast<std::int64_t>(cell.z())),
-        static_cast<int>(i));
-  }
-  radixSortByKey(&keyed);
-  std::vector<std::uint64_t> voxel_key;
-  std::vector<Eigen::Vector3f> centroid;
-  std::vector<int> voxel_of_point(points.size(), -1);
-  for (std::size_t begin = 0; begin < keyed.size();) {
-    std::size_t end = begin;
-    Eigen::Vector3f sum = Eigen::Vector3f::Zero();  // float, in input order, as PCL's leaves
-    while (end < keyed.size() && keyed[end].first == keyed[begin].first) {
-      sum += points[keyed[end].second];
-      voxel_of_point[keyed[end].second] = static_cast<int>(voxel_key.size());
-      ++end;
-    }
-    voxel_key.push_back(unMorton(keyed[begin].first));
-    centroid.push_back(sum / static_cast<float>(end - begin));
-    begin = end;
-  }
-  const int num_voxels = static_cast<int>(voxel_key.size());
-  KeyIndex voxel_index(voxel_key.size());
-  for (int v = 0; v < num_voxels; ++v) voxel_index.insert(voxel_key[v], v);
-  // Each voxel's occupied 27-neighbourhood, itself included (as PCL's adjacency octree).
-  std::vector<int> neighbour_begin(num_voxels + 1, 0);
-  std::vector<int> neighbours;
-  neighbours.reserve(static_cast<std::size_t>(num_voxels) * 12);
-  for (int v = 0; v < num_voxels; ++v) {
-    forEachNeighbourKey(voxel_key[v], voxel_index,
-                        [&neighbours](int n) { neighbours.push_back(n); });
-    neighbour_begin[v + 1] = static_cast<int>(neighbours.size());
-  }
-
-  // 2. Voxel normals. PCL fits each to its voxel, its neighbours and their neighbours, counted with
-  // multiplicity: moments(v) + sum over neighbours n of (moments(n) + neighbourhood moments(n)).
-  const Eigen::Vector3d origin = centroid.front().cast<double>();  // for the moments' precision
-  // Each voxel's moments depend on its own neighbourhood only: split over the threads.
-  constexpr std::size_t kMinVoxelsPerThread = 2048;
-  const std::size_t voxel_count = static_cast<std::size_t>(num_voxels);
-  std::vector<PointMoments> own(num_voxels), around(num_voxels);
-  for (int v = 0; v < num_voxels; ++v) own[v].add(centroid[v].cast<double>() - origin);
-  parallelRanges(voxel_count, config_.num_threads, kMinVoxelsPerThread,
-                 [&](std::size_t first, std::size_t last) {
-                   for (std::size_t v = first; v < last; ++v) {
-                     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k)
-                       around[v].add(own[neighbours[k]]);
-                   }
-                 });
-  std::vector<Eigen::Vector3f> normal(num_voxels);
-  parallelRanges(voxel_count, config_.num_threads, kMinVoxelsPerThread,
-                 [&](std::size_t first, std::size_t last) {
-                   for (std::size_t v = first; v < last; ++v) {
-                     PointMoments total = own[v];
-                     for (int k = neighbour_begin[v]; k < neighbour_begin[v + 1]; ++k) {
-                       total.add(own[neighbours[k]]);
-                       total.add(around[neighbours[k]]);
-                     }
-                     normal[v] = planeNormal(total);
-                     // Towards the frame's origin.
-                     if (centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];
-                   }
-                 });
-
-  // 3. Seeds: per occupied cell of a seed_resolution_m grid over the voxel centroids (real space),
-  // the voxel nearest to the cell's centre; kept where enough voxels lie within half a seed. The
-  // cells and their order are those of PCL's seed octree, which grows around the first centroid.
-  const double seed_m = static_cast<float>(config_.seed_resolution_m);
-  Eigen::Vector3d centroid_lower = centroid.front().cast<double>();
-  Eigen::Vector3d centroid_upper = centroid_lower;
-  for (const Eigen::Vector3f& c : centroid) {
-    centroid_lower = centroid_lower.cwiseMin(c.cast<double>());
-    centroid_upper = centroid_upper.cwiseMax(c.cast<double>());
-  }
-  if (((centroid_upper - centroid_lower) / seed_m).maxCoeff() >= static_cast<double>(kKeyMax / 4)) {
-    return Status::Error("cloud extent too large for seed_resolution_m " + std::to_string(seed_m));
-  }
-  const Eigen::Vector3d seed_origin = growingOctreeOrigin(centroid, seed_m);
-  const auto cellOf = [&](const Eigen::Vector3f& p) {
-    const Eigen::Vector3d cell = ((p.cast<double>() - seed_origin) / seed_m).array().floor();
-    return packKey(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
-                   static_cast<std::int64_t>(cell.z()));
-  };
-  std::vector<std::pair<std::uint64_t, int>> seed_keyed;
-  seed_keyed.reserve(num_voxels);
-  for (int v = 0; v < num_voxels; ++v) seed_keyed.emplace_back(cellOf(centroid[v]), v);
-  radixSortByKey(&seed_keyed);
-  std::vector<std::uint64_t> cell_key;
-  std::vector<int> cell_begin;
-  for (std::size_t k = 0; k < seed_keyed.size(); ++k) {
-    if (k == 0 || seed_keyed[k].first != seed_keyed[k - 1].first) {
-      cell_key.push_back(seed_keyed[k].first);
-      cell_begin.push_back(static_cast<int>(k));
-    }
-  }
-  cell_begin.push_back(static_cast<int>(seed_keyed.size()));
-  KeyIndex cell_index(cell_key.size());
-  for (std::size_t c = 0; c < cell_key.size(); ++c)
-    cell_index.insert(cell_key[c], static_cast<int>(c));
-  const double search_radius_m = 0.5 * seed_m;
-  // PCL's bar: a twentieth of the voxels that fit in a disc of the search radius.
-  const double min_voxels_near =
-      0.05 * search_radius_m * search_radius_m * 3.14159265358979323846 / (resolution * resolution);
+  VoxelGrid grid;
+  const Status voxelized = buildVoxelGrid(points, log_transform, resolution, &grid);
+  if (!voxelized) return voxelized;
+  const std::vector<Eigen::Vector3f> normal = voxelNormals(grid, config_.num_threads);
   std::vector<int> seeds;
-  std::vector<std::pair<std::uint64_t, int>> cell_order;  // octree (Morton) order
-  cell_order.reserve(cell_key.size());
-  for (std::size_t c = 0; c < cell_key.size(); ++c) {
-    cell_order.emplace_back(morton(keyX(cell_key[c]), keyY(cell_key[c]), keyZ(cell_key[c])),
-                            static_cast<int>(c));
-  }
-  radixSortByKey(&cell_order);
-  for (const auto& ordered : cell_order) {
-    const std::size_t c = static_cast<std::size_t>(ordered.second);
-    // The cell's centre and the distances in float, as PCL's octree and k-d tree compute them.
-    const Eigen::Vector3f centre(
-        static_cast<float>((static_cast<double>(keyX(cell_key[c])) + 0.5) * seed_m +
-                           seed_origin.x()),
-        static_cast<float>((static_cast<double>(keyY(cell_key[c])) + 0.5) * seed_m +
-                           seed_origin.y()),
-        static_cast<float>((static_cast<double>(keyZ(cell_key[c])) + 0.5) * seed_m +
-                           seed_origin.z()));
-    int nearest = -1;
-    float nearest_sq = std::numeric_limits<float>::infinity();
-    forEachNeighbourKey(cell_key[c], cell_index, [&](int cell) {
-      for (int k = cell_begin[cell]; k < cell_begin[cell + 1]; ++k) {
-        const int v = seed_keyed[k].second;
-        const float d_sq = (centroid[v] - centre).squaredNorm();
-        if (d_sq < nearest_sq || (d_sq == nearest_sq && v < nearest)) {
-          nearest = v;
-          nearest_sq = d_sq;
-        }
-      }
-    });
-    if (nearest < 0) continue;
-    if (min_voxels_near >= 1.0) {  // below 1 the seed itself suffices
-      int near = 0;
-      const Eigen::Vector3d seed_point = centroid[nearest].cast<double>();
-      const std::uint64_t seed_key = cellOf(centroid[nearest]);
-      forEachNeighbourKey(seed_key, cell_index, [&](int cell) {
-        for (int k = cell_begin[cell]; k < cell_begin[cell + 1]; ++k) {
-          const double d = (centroid[seed_keyed[k].second].cast<double>() - seed_point).norm();
-          if (d <= search_radius_m) ++near;
-        }
-      });
-      if (!(near > min_voxels_near)) continue;
-    }
-    seeds.push_back(nearest);  // two cells may give the same voxel: PCL keeps both seeds
-  }
-  const int num_seeds = static_cast<int>(seeds.size());
-  if (num_seeds == 0) return Status::Error("no supervoxel seeds");
-
-  // 4. Expansion, PCL's rule: each supervoxel in turn claims the neighbours of the voxels it held
-  // when its turn began, wherever its distance (spatial over seed_resolution_m, plus normal) beats
-  // the distance the voxel was last claimed at; then the centroids move. Seeds start with a zero
-  // centroid and normal, as PCL's helpers do before their first update.
-  //
-  // A supervoxel's voxels are those it owns plus, as in PCL, a seed voxel that a later seed of the
-  // same voxel took over ("phantom"): PCL removes a voxel only from its owner's set, so the earlier
-  // seed keeps it, grows from it and counts it in its centroid until it owns it again.
-  std::vector<int> owner(num_voxels, -1);
-  std::vector<float> claimed_at(num_voxels, std::numeric_limits<float>::max());
-  std::vector<std::pair<int, int>> phantoms;  // (supervoxel, voxel), few
-  for (int s = 0; s < num_seeds; ++s) {
-    if (owner[seeds[s]] >= 0) phantoms.emplace_back(owner[seeds[s]], seeds[s]);
-    owner[seeds[s]] = s;
-  }
-  std::vector<Eigen::Vector3f> sv_centroid(num_seeds, Eigen::Vector3f::Zero());
-  std::vector<Eigen::Vector3f> sv_normal(num_seeds, Eigen::Vector3f::Zero());
-  std::vector<char> alive(num_seeds, 1);
-  const float seed_f = static_cast<float>(config_.seed_resolution_m);
-  const float spatial_importance = static_cast<float>(config_.spatial_importance);
-  const float normal_importance = static_cast<float>(config_.normal_importance);
-  Buckets members;  // owned voxels per supervoxel, ascending
-  members.build(owner, num_seeds);
-  std::vector<int> phantom_begin;  // phantoms grouped by supervoxel
-  std::vector<int> phantom_voxel;
-  const auto groupPhantoms = [&]() {
-    phantoms.erase(std::remove_if(phantoms.begin(), phantoms.end(),
-                                  [&owner](const std::pair<int, int>& p) {
-                                    return owner[p.second] == p.first;  // owned again: a member
-                                  }),
-                   phantoms.end());
-    std::sort(phantoms.begin(), phantoms.end());
-    phantoms.erase(std::unique(phantoms.begin(), phantoms.end()), phantoms.end());
-    phantom_begin.assign(num_seeds + 1, 0);
-    for (const auto& p : phantoms) ++phantom_begin[p.first + 1];
-    for (int s = 0; s < num_seeds; ++s) phantom_begin[s + 1] += phantom_begin[s];
-    phantom_voxel.clear();
-    for (const auto& p : phantoms) phantom_voxel.push_back(p.second);
-  };
-  groupPhantoms();
-  // The voxels of supervoxel s, ascending (PCL's leaf set is ordered by voxel index).
-  std::vector<int> held;
-  const auto collectHeld = [&](int s) {
-    held.clear();
-    for (int k = members.begin[s]; k < members.begin[s + 1]; ++k) {
-      if (owner[members.entries[k]] == s) held.push_back(members.entries[k]);
-    }
-    if (phantom_begin[s] < phantom_begin[s + 1]) {
-      held.insert(held.end(), phantom_voxel.begin() + phantom_begin[s],
-                  phantom_voxel.begin() + phantom_begin[s + 1]);
-      std::sort(held.begin(), held.end());
-      held.erase(std::unique(held.begin(), held.end()), held.end());
-    }
-  };
-  const int depth =
-      static_cast<int>(1.8f * seed_f / static_cast<float>(config_.voxel_resolution_m));
-  for (int iteration = 1; iteration < depth; ++iteration) {
-    for (int s = 0; s < num_seeds; ++s) {
-      if (!alive[s]) continue;
-      collectHeld(s);
-      const Eigen::Vector3f c = sv_centroid[s];
-      const Eigen::Vector3f n = sv_normal[s];
-      for (const int leaf : held) {
-        for (int k = neighbour_begin[leaf]; k < neighbour_begin[leaf + 1]; ++k) {
-          const int v = neighbours[k];
-          if (owner[v] == s) continue;
-          const float distance = (1.0f - std::fabs(n.dot(normal[v]))) * normal_importance +
-                                 ((c - centroid[v]).norm() / seed_f) * spatial_importance;
-          if (distance < claimed_at[v]) {
-            claimed_at[v] = distance;
-            owner[v] = s;
-          }
-        }
-      }
-    }
-    members.build(owner, num_seeds);
-    groupPhantoms();
-    for (int s = 0; s < num_seeds; ++s) {
-      if (!alive[s]) continue;
-      collectHeld(s);
-      if (held.empty()) {
-        alive[s] = 0;
-        continue;
-      }
-      Eigen::Vector3f sum = Eigen::Vector3f::Zero();  // float, ascending voxels, as PCL
-      Eigen::Vector3f normal_sum = Eigen::Vector3f::Zero();
-      for (const int v : held) {
-        sum += centroid[v];
-        normal_sum += normal[v];
-      }
-      sv_centroid[s] = sum / static_cast<float>(held.size());
-      sv_normal[s] = normal_sum.norm() > 0.0f ? normal_sum.normalized() : Eigen::Vector3f::Zero();
-    }
-  }
-
-  // 5. The supervoxels (live ones, in seed order), their points and their adjacency: s and t are
-  // adjacent where a voxel of s (phantoms included, as in PCL) neighbours one that t owns.
-  std::vector<int> index_of(num_seeds, -1);
-  for (int s = 0; s < num_seeds; ++s) {
-    if (!alive[s]) continue;
-    index_of[s] = static_cast<int>(graph->centroids.size());
-    graph->centroids.push_back(sv_centroid[s]);
-    graph->normals.push_back(sv_normal[s]);
-  }
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (voxel_of_point[i] >= 0 && owner[voxel_of_point[i]] >= 0) {
-      graph->point_supervoxel[i] = index_of[owner[voxel_of_point[i]]];
-    }
-  }
-  std::vector<int> seen_from(num_seeds, -1);
-  std::vector<std::uint64_t> pairs;
-  for (int s = 0; s < num_seeds; ++s) {
-    if (!alive[s]) continue;
-    collectHeld(s);
-    for (const int leaf : held) {
-      for (int j = neighbour_begin[leaf]; j < neighbour_begin[leaf + 1]; ++j) {
-        const int t = owner[neighbours[j]];
-        if (t < 0 || t == s || seen_from[t] == s) continue;
-        seen_from[t] = s;
-        const std::uint64_t a = static_cast<std::uint64_t>(std::min(index_of[s], index_of[t]));
-        const std::uint64_t b = static_cast<std::uint64_t>(std::max(index_of[s], index_of[t]));
-        pairs.push_back((a << 32) | b);
-      }
-    }
-  }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  graph->edges.reserve(pairs.size());
-  for (const std::uint64_t pair : pairs) {
-    SupervoxelEdge edge;
-    edge.a = static_cast<int>(pair >> 32);
-    edge.b = static_cast<int>(pair & 0xffffffffu);
-    edge.convex = convexConnection(graph->centroids[edge.a], graph->normals[edge.a],
-                                   graph->centroids[edge.b], graph->normals[edge.b], config_);
-    graph->edges.push_back(edge);
-  }
+  const double seed_m = static_cast<float>(config_.seed_resolution_m);
+  const Status seeded = placeSeeds(grid.centroid, seed_m, resolution, &seeds);
+  if (!seeded) return seeded;
+  SupervoxelExpansion expansion(grid, normal, seeds, config_);
+  expansion.run(static_cast<int>(1.8f * static_cast<float>(config_.seed_resolution_m) /
+                                 static_cast<float>(config_.voxel_resolution_m)));
+  buildGraph(points.size(), grid, &expansion, config_, graph);
   return Status::Ok();
 }
 

@@ -248,22 +248,88 @@ std::vector<int> LccpSegmenter::groupSupervoxels(int num_supervoxels,
   return out;
 }
 
+namespace {
+
+// Table 3's "-LCCP" ablation and clouds too small to split: one segment of all finite points.
+std::vector<int> finiteIndices(const PointCloud& points) {
+  std::vector<int> all;
+  all.reserve(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (points[i].allFinite()) all.push_back(static_cast<int>(i));
+  }
+  return all;
+}
+
+// PCL's octree keys are 32-bit (and it asserts on overflow), the voxel grid's 21-bit: refuses
+// absurd extents, of the voxels (in the log-depth space for a single view) and of the seeds (in
+// metres: a view spanning 1 m to 1e20 m is small in log depth).
+Status checkExtent(const PointCloud& points, const std::vector<std::size_t>& source_index,
+                   bool log_transform, const LccpSegmenter::Config& config) {
+  Eigen::Array3d lower = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Array3d upper = -lower;
+  Eigen::Array3d lower_m = lower;
+  Eigen::Array3d upper_m = upper;
+  for (const std::size_t i : source_index) {
+    const Eigen::Vector3f& p = points[i];
+    const Eigen::Array3d q = log_transform
+                                 ? Eigen::Array3d(p.x() / p.z(), p.y() / p.z(), std::log(p.z()))
+                                 : p.cast<double>().array();
+    lower = lower.min(q);
+    upper = upper.max(q);
+    lower_m = lower_m.min(p.cast<double>().array());
+    upper_m = upper_m.max(p.cast<double>().array());
+  }
+  if ((upper - lower).maxCoeff() / config.voxel_resolution_m > kMaxVoxelsPerAxis) {
+    return Status::Error("cloud extent " + std::to_string((upper - lower).maxCoeff()) +
+                         " is too large for voxel_resolution_m " +
+                         std::to_string(config.voxel_resolution_m));
+  }
+  if ((upper_m - lower_m).maxCoeff() / config.seed_resolution_m > kMaxVoxelsPerAxis) {
+    return Status::Error("cloud extent " + std::to_string((upper_m - lower_m).maxCoeff()) +
+                         " m is too large for seed_resolution_m " +
+                         std::to_string(config.seed_resolution_m));
+  }
+  return Status::Ok();
+}
+
+// Each point takes its supervoxel's segment (points in no supervoxel are in none); the segments
+// largest first, the largest by point count (ties: the lower segment id) the object (Eq. 2).
+Status collectSegments(const PointCloud& points, const std::vector<int>& point_supervoxel,
+                       const std::vector<int>& supervoxel_segment, int num_segments,
+                       LccpSegmenter::Result* result) {
+  std::vector<std::vector<int>> by_segment(num_segments + 1);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int supervoxel = point_supervoxel[i];
+    if (supervoxel >= 0) by_segment[supervoxel_segment[supervoxel]].push_back(static_cast<int>(i));
+  }
+  int largest = 0;
+  for (int id = 1; id <= num_segments; ++id) {
+    if (by_segment[id].size() > by_segment[largest].size()) largest = id;
+  }
+  if (largest == 0) return Status::Error("LCCP assigned no point to a segment");
+  result->largest_segment.reserve(by_segment[largest].size());
+  for (const int i : by_segment[largest]) result->largest_segment.push_back(points[i]);
+  result->segments.push_back(std::move(by_segment[largest]));
+  for (int id = 1; id <= num_segments; ++id) {
+    if (id != largest && !by_segment[id].empty())
+      result->segments.push_back(std::move(by_segment[id]));
+  }
+  std::stable_sort(
+      result->segments.begin() + 1, result->segments.end(),
+      [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_frame,
                               Result* result) const {
   if (result == nullptr) return Status::Error("result must not be null");
   *result = Result();
   // Table 3's "-LCCP" ablation: the whole cloud is the object.
-  auto wholeCloud = [&points, result]() {
-    std::vector<int> all;
-    all.reserve(points.size());
-    for (size_t i = 0; i < points.size(); ++i) {
-      if (points[i].allFinite()) all.push_back(static_cast<int>(i));
-    }
-    result->segments.push_back(std::move(all));
-  };
   if (!config_.enable) {
     result->largest_segment = points;
-    wholeCloud();
+    result->segments.push_back(finiteIndices(points));
     return Status::Ok();
   }
   const Status valid = config_.isValid();
@@ -285,50 +351,22 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   if (static_cast<int>(source_index.size()) < config_.min_points) {
     // Too small to split into supervoxels: keep it whole.
     for (const std::size_t i : source_index) result->largest_segment.push_back(points[i]);
-    wholeCloud();
+    result->segments.push_back(finiteIndices(points));
     return Status::Ok();
   }
 
   // Sec. 3.2: the paper's logarithmic depth transform (x/z, y/z, log z) keeps supervoxels fair
   // to the depth-dependent density of a single view; only defined in front of the camera.
   const bool log_transform = config_.log_depth_transform && points_in_camera_frame && min_z > 1e-3f;
-
-  // PCL's octree keys are 32-bit (and it asserts on overflow), the voxel grid's 21-bit: refuse
-  // absurd extents, of the voxels (in the log-depth space for a single view) and of the seeds (in
-  // metres: a view spanning 1 m to 1e20 m is small in log depth).
-  Eigen::Array3d lower = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Array3d upper = -lower;
-  Eigen::Array3d lower_m = lower;
-  Eigen::Array3d upper_m = upper;
-  for (const std::size_t i : source_index) {
-    const Eigen::Vector3f& p = points[i];
-    const Eigen::Array3d q = log_transform
-                                 ? Eigen::Array3d(p.x() / p.z(), p.y() / p.z(), std::log(p.z()))
-                                 : p.cast<double>().array();
-    lower = lower.min(q);
-    upper = upper.max(q);
-    lower_m = lower_m.min(p.cast<double>().array());
-    upper_m = upper_m.max(p.cast<double>().array());
-  }
-  if ((upper - lower).maxCoeff() / config_.voxel_resolution_m > kMaxVoxelsPerAxis) {
-    return Status::Error("cloud extent " + std::to_string((upper - lower).maxCoeff()) +
-                         " is too large for voxel_resolution_m " +
-                         std::to_string(config_.voxel_resolution_m));
-  }
-  if ((upper_m - lower_m).maxCoeff() / config_.seed_resolution_m > kMaxVoxelsPerAxis) {
-    return Status::Error("cloud extent " + std::to_string((upper_m - lower_m).maxCoeff()) +
-                         " m is too large for seed_resolution_m " +
-                         std::to_string(config_.seed_resolution_m));
-  }
+  const Status extent = checkExtent(points, source_index, log_transform, config_);
+  if (!extent) return extent;
 
   SupervoxelGraph graph;
-  if (config_.implementation == "pcl") {
-    const Status clustered = pclSupervoxels(points, source_index, log_transform, config_, &graph);
-    if (!clustered) return clustered;
-  } else {
-    const Status clustered = gridSupervoxels(points, log_transform, &graph);
-    if (!clustered) return clustered;
-  }
+  const Status clustered =
+      config_.implementation == "pcl"
+          ? pclSupervoxels(points, source_index, log_transform, config_, &graph)
+          : gridSupervoxels(points, log_transform, &graph);
+  if (!clustered) return clustered;
   const int num_supervoxels = static_cast<int>(graph.centroids.size());
   result->num_supervoxels = num_supervoxels;
   if (num_supervoxels == 0) {
@@ -342,30 +380,7 @@ Status LccpSegmenter::segment(const PointCloud& points, bool points_in_camera_fr
   const int num_segments =
       *std::max_element(supervoxel_segment.begin(), supervoxel_segment.end());  // ids 1..n
   result->num_segments = num_segments;
-
-  // Each point takes its supervoxel's segment; points in no supervoxel are in none.
-  std::vector<std::vector<int>> by_segment(num_segments + 1);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const int supervoxel = graph.point_supervoxel[i];
-    if (supervoxel >= 0) by_segment[supervoxel_segment[supervoxel]].push_back(static_cast<int>(i));
-  }
-  // The largest segment by point count is the object; ties go to the lower segment id.
-  int largest = 0;
-  for (int id = 1; id <= num_segments; ++id) {
-    if (by_segment[id].size() > by_segment[largest].size()) largest = id;
-  }
-  if (largest == 0) return Status::Error("LCCP assigned no point to a segment");
-  result->largest_segment.reserve(by_segment[largest].size());
-  for (const int i : by_segment[largest]) result->largest_segment.push_back(points[i]);
-  result->segments.push_back(std::move(by_segment[largest]));
-  for (int id = 1; id <= num_segments; ++id) {
-    if (id != largest && !by_segment[id].empty())
-      result->segments.push_back(std::move(by_segment[id]));
-  }
-  std::stable_sort(
-      result->segments.begin() + 1, result->segments.end(),
-      [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
-  return Status::Ok();
+  return collectSegments(points, graph.point_supervoxel, supervoxel_segment, num_segments, result);
 }
 
 }  // namespace mvod

@@ -141,25 +141,19 @@ PointCloud ObjectCloudExtractor::backProjectDepth(const cv::Mat& depth, const Ca
   return points_D;
 }
 
-Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
-                                     const std::vector<Detection2D>& detections,
-                                     std::vector<PointCloud>* clouds_D) const {
-  if (clouds_D == nullptr) return Status::Error("extract: clouds_D is null");
-  clouds_D->clear();
-  const Status config_valid = config_.isValid();
-  if (!config_valid) return Status::Error("extractor config: " + config_valid.message());
-  const Status frame_valid = frame.validate();
-  if (!frame_valid) return frame_valid;
-  const std::string label =
-      frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
+namespace {
 
-  // Masks are in colour pixels. Check them all before any work, so a bad one leaves no partial
-  // output.
+// The detections' masks prepared for look-ups (eroded by mask_erosion_px first), all checked
+// before any work, so a bad one leaves no partial output. An empty mask gives no pixels.
+Status prepareMasks(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
+                    const ObjectCloudExtractor::Config& config, const std::string& label,
+                    std::vector<MaskLookup>* masks) {
+  // Masks are in colour pixels.
   const cv::Size color_size = frame.color_bgr.size();
-  std::vector<MaskLookup> masks(detections.size());
+  masks->assign(detections.size(), MaskLookup());
   cv::Mat kernel;
-  if (config_.mask_erosion_px > 0) {
-    const int k = 2 * config_.mask_erosion_px + 1;
+  if (config.mask_erosion_px > 0) {
+    const int k = 2 * config.mask_erosion_px + 1;
     kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(k, k));
   }
   const cv::Rect image_rect(cv::Point(0, 0), color_size);
@@ -176,60 +170,28 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
           "x" + std::to_string(box.height) + " or of the colour image's " +
           std::to_string(color_size.width) + "x" + std::to_string(color_size.height));
     }
-    if (config_.mask_erosion_px > 0) {
+    MaskLookup& lookup = (*masks)[i];
+    if (config.mask_erosion_px > 0) {
       // Mask borders bleed into the background; the image border does not erode (OpenCV
       // default). The mask is eroded on its rectangle grown by the radius, so the pixels just
       // outside it count as background, as they would on the whole image.
-      const int r = config_.mask_erosion_px;
+      const int r = config.mask_erosion_px;
       const cv::Rect region =
           cv::Rect(origin.x - r, origin.y - r, mask.cols + 2 * r, mask.rows + 2 * r) & image_rect;
-      cv::erode(maskInRegion(detections[i], color_size, region), masks[i].mask, kernel);
-      masks[i].origin = region.tl();
+      cv::erode(maskInRegion(detections[i], color_size, region), lookup.mask, kernel);
+      lookup.origin = region.tl();
     } else {
-      masks[i].mask = mask;
-      masks[i].origin = origin;
+      lookup.mask = mask;
+      lookup.origin = origin;
     }
-    masks[i].box = nonZeroBounds(masks[i].mask) + masks[i].origin;
+    lookup.box = nonZeroBounds(lookup.mask) + lookup.origin;
   }
-  clouds_D->assign(detections.size(), PointCloud());
+  return Status::Ok();
+}
 
-  cv::Rect any_box;  // union of all mask boxes
-  for (const MaskLookup& m : masks) any_box |= m.box;
-  if (any_box.empty()) return Status::Ok();
-
-  const cv::Mat& depth = frame.depth;
-  const CameraIntrinsics& K_d = frame.K_depth;
-  const int stride = config_.pixel_stride;
-  const double min_m = config_.min_valid_depth_m;
-  const double max_m = config_.max_valid_depth_m;
-
-  // Depth-edge outliers: a pixel is kept when enough of its four neighbours (at the stride) have a
-  // depth within a few of the sensor's depth steps of its own. A line of flying pixels between an
-  // object and the background, or an isolated speckle, has at most two such neighbours; a
-  // surface's pixels have four, or three on a straight silhouette edge. Corners and diagonal edges
-  // of a silhouette (and the image's corners) have two: there it acts as a one-pixel erosion at
-  // depth edges, which also trims a mask's bleed there. (Measured on the benchmark rooms: with the
-  // eight neighbours and three of them, box mAP@0.5 was 7 points lower.)
-  const int min_neighbours = config_.min_consistent_neighbours;
-  const auto consistent = [&](int u, int v, double z) {
-    if (min_neighbours <= 0) return true;
-    const double tolerance_m =
-        config_.consistency_tolerance_m + 3.0 * config_.depth_step_per_m2 * z * z;
-    static constexpr int kDu[4] = {1, -1, 0, 0};
-    static constexpr int kDv[4] = {0, 0, 1, -1};
-    int agreeing = 0;
-    for (int n = 0; n < 4; ++n) {
-      const int un = u + kDu[n] * stride;
-      const int vn = v + kDv[n] * stride;
-      if (un < 0 || vn < 0 || un >= depth.cols || vn >= depth.rows) continue;
-      const double zn = depthMetres(depth, un, vn, min_m, max_m);
-      if (std::abs(zn - z) <= tolerance_m) ++agreeing;  // false for NaN
-    }
-    return agreeing >= min_neighbours;
-  };
-
-  // The union of the masks over the boxes' union, once: the consistency test (four more depth
-  // reads) and the per-detection look-ups then run only on pixels some mask covers.
+// The union of the masks over the boxes' union (any_box), once: the consistency test (four more
+// depth reads) and the per-detection look-ups then run only on pixels some mask covers.
+cv::Mat coveredByMasks(const std::vector<MaskLookup>& masks, const cv::Rect& any_box) {
   cv::Mat covered(any_box.size(), CV_8UC1, cv::Scalar(0));
   for (const MaskLookup& m : masks) {
     if (m.box.empty()) continue;
@@ -237,6 +199,126 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
     cv::Mat target = covered(m.box - any_box.tl());
     cv::bitwise_or(target, source, target);
   }
+  return covered;
+}
+
+// Depth-edge outliers: a pixel is kept when enough of its four neighbours (at the stride) have a
+// depth within a few of the sensor's depth steps of its own. A line of flying pixels between an
+// object and the background, or an isolated speckle, has at most two such neighbours; a
+// surface's pixels have four, or three on a straight silhouette edge. Corners and diagonal edges
+// of a silhouette (and the image's corners) have two: there it acts as a one-pixel erosion at
+// depth edges, which also trims a mask's bleed there. (Measured on the benchmark rooms: with the
+// eight neighbours and three of them, box mAP@0.5 was 7 points lower.)
+bool consistentDepth(const cv::Mat& depth, int u, int v, double z,
+                     const ObjectCloudExtractor::Config& config) {
+  const int min_neighbours = config.min_consistent_neighbours;
+  if (min_neighbours <= 0) return true;
+  const int stride = config.pixel_stride;
+  const double tolerance_m =
+      config.consistency_tolerance_m + 3.0 * config.depth_step_per_m2 * z * z;
+  static constexpr int kDu[4] = {1, -1, 0, 0};
+  static constexpr int kDv[4] = {0, 0, 1, -1};
+  int agreeing = 0;
+  for (int n = 0; n < 4; ++n) {
+    const int un = u + kDu[n] * stride;
+    const int vn = v + kDv[n] * stride;
+    if (un < 0 || vn < 0 || un >= depth.cols || vn >= depth.rows) continue;
+    const double zn =
+        depthMetres(depth, un, vn, config.min_valid_depth_m, config.max_valid_depth_m);
+    if (std::abs(zn - z) <= tolerance_m) ++agreeing;  // false for NaN
+  }
+  return agreeing >= min_neighbours;
+}
+
+// The depths in metres of depth row v over `width` columns from first_column, NaN where invalid
+// or outside the image.
+void fillDepthRow(const cv::Mat& depth, int v, int first_column, int width, double min_m,
+                  double max_m, double* row) {
+  for (int k = 0; k < width; ++k) {
+    const int u = first_column + k;
+    row[k] = (v < 0 || v >= depth.rows || u < 0 || u >= depth.cols)
+                 ? std::nan("")
+                 : depthMetres(depth, u, v, min_m, max_m);
+  }
+}
+
+// Same pixel grid (a registered frame): only depth pixels inside some mask matter. The stride grid
+// stays anchored at (0, 0), as in backProjectDepth. The depths in metres of the rows at v - stride,
+// v and v + stride over the masks' columns (and one stride either side) are read once per row into
+// buffers, NaN where invalid or outside the image, so the test of the four neighbours reads them
+// without bounds checks: the same values and tests as consistentDepth's per pixel.
+void extractRegistered(const RgbdFrame& frame, const std::vector<MaskLookup>& masks,
+                       const cv::Rect& any_box, const cv::Mat& covered,
+                       const ObjectCloudExtractor::Config& config,
+                       std::vector<PointCloud>* clouds_D) {
+  const cv::Mat& depth = frame.depth;
+  const CameraIntrinsics& K_d = frame.K_depth;
+  const int stride = config.pixel_stride;
+  const double min_m = config.min_valid_depth_m;
+  const double max_m = config.max_valid_depth_m;
+  const int min_neighbours = config.min_consistent_neighbours;
+  const int u0 = (any_box.x + stride - 1) / stride * stride;
+  const int v0 = (any_box.y + stride - 1) / stride * stride;
+  const int u_end = any_box.br().x;
+  const int first_column = u0 - stride;  // buffer index 0
+  const int width = u_end + stride - first_column + 1;
+  std::vector<double> rows(3 * static_cast<size_t>(width));
+  double* above = rows.data();
+  double* here = above + width;
+  double* below = here + width;
+  fillDepthRow(depth, v0 - stride, first_column, width, min_m, max_m, above);
+  fillDepthRow(depth, v0, first_column, width, min_m, max_m, here);
+  const double tolerance_base_m = config.consistency_tolerance_m;
+  const double tolerance_per_m2 = 3.0 * config.depth_step_per_m2;
+  std::vector<size_t> row_masks;  // the masks whose boxes hold row v
+  for (int v = v0; v < any_box.br().y; v += stride) {
+    fillDepthRow(depth, v + stride, first_column, width, min_m, max_m, below);
+    row_masks.clear();
+    for (size_t i = 0; i < masks.size(); ++i) {
+      if (v >= masks[i].box.y && v < masks[i].box.br().y) row_masks.push_back(i);
+    }
+    const uint8_t* covered_row = covered.ptr<uint8_t>(v - any_box.y);
+    for (int u = u0; u < u_end; u += stride) {
+      if (covered_row[u - any_box.x] == 0) continue;
+      const int k = u - first_column;
+      const double z = here[k];
+      if (!std::isfinite(z)) continue;
+      if (min_neighbours > 0) {
+        const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
+        // false for NaN
+        const int agreeing = (std::abs(here[k + stride] - z) <= tolerance_m) +
+                             (std::abs(here[k - stride] - z) <= tolerance_m) +
+                             (std::abs(below[k] - z) <= tolerance_m) +
+                             (std::abs(above[k] - z) <= tolerance_m);
+        if (agreeing < min_neighbours) continue;
+      }
+      const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
+                                static_cast<float>((v - K_d.cy) * z / K_d.fy),
+                                static_cast<float>(z));
+      // To every mask of this row that covers (u, v).
+      for (const size_t i : row_masks) {
+        const MaskLookup& m = masks[i];
+        if (u < m.box.x || u >= m.box.br().x) continue;
+        if (m.mask.ptr<uint8_t>(v - m.origin.y)[u - m.origin.x] != 0) {
+          (*clouds_D)[i].push_back(p_D);
+        }
+      }
+    }
+    std::swap(above, here);
+    std::swap(here, below);
+  }
+}
+
+// Not registered (two cameras): each depth point is moved into the colour camera (T_C_D) and
+// projected with K_color; the mask is read at the nearest colour pixel. Every depth pixel may
+// land in a mask.
+void extractUnregistered(const RgbdFrame& frame, const std::vector<MaskLookup>& masks,
+                         const cv::Rect& any_box, const cv::Mat& covered,
+                         const ObjectCloudExtractor::Config& config,
+                         std::vector<PointCloud>* clouds_D) {
+  const cv::Mat& depth = frame.depth;
+  const CameraIntrinsics& K_d = frame.K_depth;
+  const int stride = config.pixel_stride;
   auto inSomeMask = [&](int uc, int vc) {
     return any_box.contains(cv::Point(uc, vc)) &&
            covered.ptr<uint8_t>(vc - any_box.y)[uc - any_box.x] != 0;
@@ -252,88 +334,46 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
       }
     }
   };
-
-  if (frame.registered) {
-    // Same pixel grid: only depth pixels inside some mask matter. The stride grid stays anchored
-    // at (0, 0), as in backProjectDepth. The depths in metres of the rows at v - stride, v and
-    // v + stride over the masks' columns (and one stride either side) are read once per row into
-    // buffers, NaN where invalid or outside the image, so the test of the four neighbours reads
-    // them without bounds checks: the same values and tests as depthMetres' per pixel.
-    const int u0 = (any_box.x + stride - 1) / stride * stride;
-    const int v0 = (any_box.y + stride - 1) / stride * stride;
-    const int u_end = any_box.br().x;
-    const int first_column = u0 - stride;  // buffer index 0
-    const int width = u_end + stride - first_column + 1;
-    std::vector<double> rows(3 * static_cast<size_t>(width));
-    const auto fillRow = [&](int v, double* row) {
-      for (int k = 0; k < width; ++k) {
-        const int u = first_column + k;
-        row[k] = (v < 0 || v >= depth.rows || u < 0 || u >= depth.cols)
-                     ? std::nan("")
-                     : depthMetres(depth, u, v, min_m, max_m);
-      }
-    };
-    double* above = rows.data();
-    double* here = above + width;
-    double* below = here + width;
-    fillRow(v0 - stride, above);
-    fillRow(v0, here);
-    const double tolerance_base_m = config_.consistency_tolerance_m;
-    const double tolerance_per_m2 = 3.0 * config_.depth_step_per_m2;
-    std::vector<size_t> row_masks;  // the masks whose boxes hold row v
-    for (int v = v0; v < any_box.br().y; v += stride) {
-      fillRow(v + stride, below);
-      row_masks.clear();
-      for (size_t i = 0; i < masks.size(); ++i) {
-        if (v >= masks[i].box.y && v < masks[i].box.br().y) row_masks.push_back(i);
-      }
-      const uint8_t* covered_row = covered.ptr<uint8_t>(v - any_box.y);
-      for (int u = u0; u < u_end; u += stride) {
-        if (covered_row[u - any_box.x] == 0) continue;
-        const int k = u - first_column;
-        const double z = here[k];
-        if (!std::isfinite(z)) continue;
-        if (min_neighbours > 0) {
-          const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
-          // false for NaN
-          const int agreeing = (std::abs(here[k + stride] - z) <= tolerance_m) +
-                               (std::abs(here[k - stride] - z) <= tolerance_m) +
-                               (std::abs(below[k] - z) <= tolerance_m) +
-                               (std::abs(above[k] - z) <= tolerance_m);
-          if (agreeing < min_neighbours) continue;
-        }
-        const Eigen::Vector3f p_D(static_cast<float>((u - K_d.cx) * z / K_d.fx),
-                                  static_cast<float>((v - K_d.cy) * z / K_d.fy),
-                                  static_cast<float>(z));
-        // assign(), with the masks of this row only.
-        for (const size_t i : row_masks) {
-          const MaskLookup& m = masks[i];
-          if (u < m.box.x || u >= m.box.br().x) continue;
-          if (m.mask.ptr<uint8_t>(v - m.origin.y)[u - m.origin.x] != 0) {
-            (*clouds_D)[i].push_back(p_D);
-          }
-        }
-      }
-      std::swap(above, here);
-      std::swap(here, below);
-    }
-    return Status::Ok();
-  }
-
-  // Not registered (two cameras): each depth point is moved into the colour camera (T_C_D) and
-  // projected with K_color; the mask is read at the nearest colour pixel. Every depth pixel may
-  // land in a mask.
   for (int v = 0; v < depth.rows; v += stride) {
     for (int u = 0; u < depth.cols; u += stride) {
-      const double z = depthMetres(depth, u, v, min_m, max_m);
+      const double z = depthMetres(depth, u, v, config.min_valid_depth_m, config.max_valid_depth_m);
       if (!std::isfinite(z)) continue;
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel;
       // Behind the colour camera or outside its image: in no mask.
-      if (colorPixelOf(frame, p_D, &pixel) && inSomeMask(pixel.x, pixel.y) && consistent(u, v, z)) {
+      if (colorPixelOf(frame, p_D, &pixel) && inSomeMask(pixel.x, pixel.y) &&
+          consistentDepth(depth, u, v, z, config)) {
         assign(pixel.x, pixel.y, p_D.cast<float>());
       }
     }
+  }
+}
+
+}  // namespace
+
+Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
+                                     const std::vector<Detection2D>& detections,
+                                     std::vector<PointCloud>* clouds_D) const {
+  if (clouds_D == nullptr) return Status::Error("extract: clouds_D is null");
+  clouds_D->clear();
+  const Status config_valid = config_.isValid();
+  if (!config_valid) return Status::Error("extractor config: " + config_valid.message());
+  const Status frame_valid = frame.validate();
+  if (!frame_valid) return frame_valid;
+  const std::string label =
+      frame.name.empty() ? "frame " + std::to_string(frame.index) : frame.name;
+  std::vector<MaskLookup> masks;
+  const Status prepared = prepareMasks(frame, detections, config_, label, &masks);
+  if (!prepared) return prepared;
+  clouds_D->assign(detections.size(), PointCloud());
+  cv::Rect any_box;  // union of all mask boxes
+  for (const MaskLookup& m : masks) any_box |= m.box;
+  if (any_box.empty()) return Status::Ok();
+  const cv::Mat covered = coveredByMasks(masks, any_box);
+  if (frame.registered) {
+    extractRegistered(frame, masks, any_box, covered, config_, clouds_D);
+  } else {
+    extractUnregistered(frame, masks, any_box, covered, config_, clouds_D);
   }
   return Status::Ok();
 }

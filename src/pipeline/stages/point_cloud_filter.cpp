@@ -16,6 +16,8 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "multiview_object_detection/pipeline/utils/parallel.h"
+
 namespace mvod {
 namespace {
 
@@ -27,6 +29,40 @@ PointCloud finitePoints(const PointCloud& points) {
   out.reserve(points.size());
   for (const Eigen::Vector3f& p : points) {
     if (p.allFinite()) out.push_back(p);
+  }
+  return out;
+}
+
+// How the statistical outlier removal's variance is summed. Its two callers must keep their bits
+// (the maps stay as they were), and these differ in two ways: kPcl is PCL's
+// StatisticalOutlierRemoval exactly (each float distance squared in float; a variance that rounds
+// below zero is let through, its root NaN, and nothing is removed), which the exact grid search
+// reproduces; kDoubleClamped (the voxel-centre statistic) squares in double and clamps the
+// variance at zero.
+enum class VarianceSum { kPcl, kDoubleClamped };
+
+// PCL's rule: a point goes when its mean distance to its k nearest lies beyond mean +
+// stddev_mul x standard deviation of those mean distances over the cloud. Returns the points of
+// `finite` (one distance each) that stay, in order.
+PointCloud keepBelowStatisticalThreshold(const PointCloud& finite,
+                                         const std::vector<float>& mean_distance_m,
+                                         double stddev_mul, VarianceSum rule) {
+  double sum = 0.0;
+  double sq_sum = 0.0;
+  for (const float distance : mean_distance_m) {
+    sum += distance;
+    sq_sum +=
+        rule == VarianceSum::kPcl ? distance * distance : static_cast<double>(distance) * distance;
+  }
+  const double count_d = static_cast<double>(mean_distance_m.size());
+  const double mean = sum / count_d;
+  double variance = (sq_sum - sum * sum / count_d) / (count_d - 1.0);
+  if (rule == VarianceSum::kDoubleClamped) variance = std::max(0.0, variance);
+  const double threshold = mean + stddev_mul * std::sqrt(variance);
+  PointCloud out;
+  out.reserve(finite.size());
+  for (std::size_t i = 0; i < finite.size(); ++i) {
+    if (!(mean_distance_m[i] > threshold)) out.push_back(finite[i]);
   }
   return out;
 }
@@ -124,18 +160,15 @@ namespace {
 // grid positions too).
 PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m);
 
-}  // namespace
-
-PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
-  if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
-  // The common case, a cloud of fewer than 2^32 points whose voxels' positions in their bounding
-  // grid fit in 32 bits: each point's position and its index packed into one 64-bit word, radix
-  // sorted on the position's digits only (stable, so a voxel's points stay in input order). Half
-  // the memory traffic of sorting positions and indices apart, and no hash table.
+// The common case of the voxel grid: each finite point's voxel position in the cloud's bounding
+// grid (x major) and its index packed into one 64-bit word, position << 32 | index; *max_position
+// the largest position. False (nothing useful in *keyed) where a voxel index exceeds 32 bits or
+// the grid 4e9 cells.
+bool packedPositionKeys(const PointCloud& points, double leaf_size_m,
+                        std::vector<std::uint64_t>* keyed, std::uint64_t* max_position) {
   constexpr double kMaxIndex = 2.0e9;  // |index| below this fits a 32-bit int
   const double inv_leaf = 1.0 / leaf_size_m;
   const std::size_t n = points.size();
-  if (n >= std::numeric_limits<std::uint32_t>::max()) return voxelizeBySorting(points, leaf_size_m);
   std::vector<std::array<std::int32_t, 3>> cells;
   std::vector<std::uint32_t> source;  // the finite points' indices
   cells.reserve(n);
@@ -152,7 +185,7 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
     std::array<std::int32_t, 3> cell;
     for (int d = 0; d < 3; ++d) {
       const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
-      if (!(std::abs(index) < kMaxIndex)) return voxelizeBySorting(points, leaf_size_m);
+      if (!(std::abs(index) < kMaxIndex)) return false;
       cell[d] = static_cast<std::int32_t>(index);
       lo[d] = std::min(lo[d], cell[d]);
       hi[d] = std::max(hi[d], cell[d]);
@@ -160,30 +193,36 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
     cells.push_back(cell);
     source.push_back(static_cast<std::uint32_t>(i));
   }
-  PointCloud out;
-  if (cells.empty()) return out;
+  keyed->clear();
+  *max_position = 0;
+  if (cells.empty()) return true;
   std::array<std::uint64_t, 3> dims;
   double grid_cells = 1.0;
   for (int d = 0; d < 3; ++d) {
     dims[d] = static_cast<std::uint64_t>(static_cast<std::int64_t>(hi[d]) - lo[d]) + 1;
     grid_cells *= static_cast<double>(dims[d]);
   }
-  if (!(grid_cells < 4.0e9)) return voxelizeBySorting(points, leaf_size_m);
-  // (position in the grid, x major) << 32 | the point's index.
+  if (!(grid_cells < 4.0e9)) return false;
   const std::size_t m = cells.size();
-  std::vector<std::uint64_t> keyed(m);
-  std::uint64_t max_position = 0;
+  keyed->resize(m);
   for (std::size_t k = 0; k < m; ++k) {
     const std::uint64_t x = static_cast<std::uint64_t>(cells[k][0] - lo[0]);
     const std::uint64_t y = static_cast<std::uint64_t>(cells[k][1] - lo[1]);
     const std::uint64_t z = static_cast<std::uint64_t>(cells[k][2] - lo[2]);
     const std::uint64_t position = (x * dims[1] + y) * dims[2] + z;
-    max_position = std::max(max_position, position);
-    keyed[k] = (position << 32) | source[k];
+    *max_position = std::max(*max_position, position);
+    (*keyed)[k] = (position << 32) | source[k];
   }
+  return true;
+}
+
+// A stable LSD radix sort of the packed words on the position's digits only, so a voxel's points
+// stay in input order. Half the memory traffic of sorting positions and indices apart.
+void sortByPosition(std::uint64_t max_position, std::vector<std::uint64_t>* keyed_in) {
+  std::vector<std::uint64_t>& keyed = *keyed_in;
   constexpr int kDigitBits = 11;
   constexpr std::uint64_t kDigitMask = (std::uint64_t{1} << kDigitBits) - 1;
-  std::vector<std::uint64_t> buffer(m);
+  std::vector<std::uint64_t> buffer(keyed.size());
   std::vector<std::uint32_t> count(std::size_t{1} << kDigitBits);
   for (int shift = 32; shift < 64 && (max_position >> (shift - 32)) != 0; shift += kDigitBits) {
     std::fill(count.begin(), count.end(), 0u);
@@ -197,6 +236,27 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
     for (const std::uint64_t key : keyed) buffer[count[(key >> shift) & kDigitMask]++] = key;
     keyed.swap(buffer);
   }
+}
+
+}  // namespace
+
+PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size_m) {
+  if (!(std::isfinite(leaf_size_m) && leaf_size_m > 0.0)) return finitePoints(points);
+  // The common case, a cloud of fewer than 2^32 points whose voxels' positions in their bounding
+  // grid fit in 32 bits: each point's position and index in one word, radix sorted on the
+  // position. No hash table.
+  if (points.size() >= std::numeric_limits<std::uint32_t>::max()) {
+    return voxelizeBySorting(points, leaf_size_m);
+  }
+  std::vector<std::uint64_t> keyed;
+  std::uint64_t max_position = 0;
+  if (!packedPositionKeys(points, leaf_size_m, &keyed, &max_position)) {
+    return voxelizeBySorting(points, leaf_size_m);
+  }
+  sortByPosition(max_position, &keyed);
+  // One centroid per run of equal positions, summed in double in input order.
+  const std::size_t m = keyed.size();
+  PointCloud out;
   out.reserve(m / 2);
   std::size_t begin = 0;
   while (begin < m) {
@@ -215,20 +275,70 @@ PointCloud PointCloudFilter::voxelize(const PointCloud& points, double leaf_size
 
 namespace {
 
+// The voxels' positions in the cloud's bounding grid (sortable integers), ordered by a stable LSD
+// radix sort: O(n) instead of a comparison sort's O(n log n). order[k]: the key index of the k-th.
+void radixSortPositions(std::vector<std::uint64_t>* order_key_in,
+                        std::vector<std::uint32_t>* order_in) {
+  std::vector<std::uint64_t>& order_key = *order_key_in;
+  std::vector<std::uint32_t>& order = *order_in;
+  const std::size_t n = order_key.size();
+  std::uint64_t max_key = 0;
+  for (const std::uint64_t key : order_key) max_key = std::max(max_key, key);
+  constexpr int kDigitBits = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+  std::vector<std::uint64_t> next_key(n);
+  std::vector<std::uint32_t> next(n);
+  std::vector<std::uint32_t> count(kBuckets);
+  for (int shift = 0; shift < 64 && (max_key >> shift) != 0; shift += kDigitBits) {
+    std::fill(count.begin(), count.end(), 0u);
+    for (std::size_t k = 0; k < n; ++k) ++count[(order_key[k] >> shift) & (kBuckets - 1)];
+    std::uint32_t total = 0;
+    for (std::uint32_t& c : count) {
+      const std::uint32_t here = c;
+      c = total;
+      total += here;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t slot = count[(order_key[k] >> shift) & (kBuckets - 1)]++;
+      next_key[slot] = order_key[k];
+      next[slot] = order[k];
+    }
+    order_key.swap(next_key);
+    order.swap(next);
+  }
+}
+
+using VoxelIndex = std::array<std::int64_t, 3>;
+
+// Extents beyond 64-bit grid positions: a comparison sort on the indices themselves; order_key
+// then holds each voxel's rank.
+void sortVoxelIndices(const std::vector<VoxelIndex>& keys, std::vector<std::uint64_t>* order_key,
+                      std::vector<std::uint32_t>* order) {
+  const std::size_t n = keys.size();
+  std::vector<std::pair<VoxelIndex, std::uint32_t>> keyed(n);
+  for (std::size_t k = 0; k < n; ++k) keyed[k] = {keys[k], static_cast<std::uint32_t>(k)};
+  std::sort(keyed.begin(), keyed.end());
+  std::uint64_t rank = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k > 0 && keyed[k].first != keyed[k - 1].first) ++rank;
+    (*order_key)[k] = rank;
+    (*order)[k] = keyed[k].second;
+  }
+}
+
 PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m) {
   // 64-bit integer voxel index per point, without PCL's 32-bit index limit for large extents.
-  using Key = std::array<std::int64_t, 3>;
-  std::vector<Key> keys;
+  std::vector<VoxelIndex> keys;
   std::vector<std::uint32_t> source;
   keys.reserve(points.size());
   source.reserve(points.size());
   const double inv_leaf = 1.0 / leaf_size_m;
-  Key lo = {0, 0, 0};
-  Key hi = {0, 0, 0};
+  VoxelIndex lo = {0, 0, 0};
+  VoxelIndex hi = {0, 0, 0};
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3f& p = points[i];
     if (!p.allFinite()) continue;
-    Key key;
+    VoxelIndex key;
     bool representable = true;
     for (int d = 0; d < 3; ++d) {
       const double index = std::floor(static_cast<double>(p[d]) * inv_leaf);
@@ -251,9 +361,7 @@ PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m) {
   if (n == 0) return out;
 
   // Output in ascending (x, y, z) voxel order, each voxel's points summed in input order: a
-  // deterministic order that does not depend on a hash. The voxels' positions in the cloud's
-  // bounding grid are sortable integers; a stable LSD radix sort on them costs O(n) instead of a
-  // comparison sort's O(n log n).
+  // deterministic order that does not depend on a hash.
   std::array<std::uint64_t, 3> dims;
   double cells = 1.0;
   for (int d = 0; d < 3; ++d) {
@@ -263,48 +371,16 @@ PointCloud voxelizeBySorting(const PointCloud& points, double leaf_size_m) {
   std::vector<std::uint64_t> order_key(n);
   std::vector<std::uint32_t> order(n);
   if (cells < 9.0e18 && points.size() < std::numeric_limits<std::uint32_t>::max()) {
-    std::uint64_t max_key = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const std::uint64_t x = static_cast<std::uint64_t>(keys[k][0] - lo[0]);
       const std::uint64_t y = static_cast<std::uint64_t>(keys[k][1] - lo[1]);
       const std::uint64_t z = static_cast<std::uint64_t>(keys[k][2] - lo[2]);
       order_key[k] = (x * dims[1] + y) * dims[2] + z;
       order[k] = static_cast<std::uint32_t>(k);
-      max_key = std::max(max_key, order_key[k]);
     }
-    constexpr int kDigitBits = 11;
-    constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
-    std::vector<std::uint64_t> next_key(n);
-    std::vector<std::uint32_t> next(n);
-    std::vector<std::uint32_t> count(kBuckets);
-    for (int shift = 0; shift < 64 && (max_key >> shift) != 0; shift += kDigitBits) {
-      std::fill(count.begin(), count.end(), 0u);
-      for (std::size_t k = 0; k < n; ++k) ++count[(order_key[k] >> shift) & (kBuckets - 1)];
-      std::uint32_t total = 0;
-      for (std::uint32_t& c : count) {
-        const std::uint32_t here = c;
-        c = total;
-        total += here;
-      }
-      for (std::size_t k = 0; k < n; ++k) {
-        const std::uint32_t slot = count[(order_key[k] >> shift) & (kBuckets - 1)]++;
-        next_key[slot] = order_key[k];
-        next[slot] = order[k];
-      }
-      order_key.swap(next_key);
-      order.swap(next);
-    }
+    radixSortPositions(&order_key, &order);
   } else {
-    // Extents beyond 64-bit grid positions: a comparison sort on the keys themselves.
-    std::vector<std::pair<Key, std::uint32_t>> keyed(n);
-    for (std::size_t k = 0; k < n; ++k) keyed[k] = {keys[k], static_cast<std::uint32_t>(k)};
-    std::sort(keyed.begin(), keyed.end());
-    std::uint64_t rank = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (k > 0 && keyed[k].first != keyed[k - 1].first) ++rank;
-      order_key[k] = rank;
-      order[k] = keyed[k].second;
-    }
+    sortVoxelIndices(keys, &order_key, &order);
   }
 
   std::size_t begin = 0;
@@ -528,23 +604,140 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnVoxelCentres(const Point
   if (!voxelCentreMeanDistances(finite, mean_k, leaf_size_m, threads, &mean_distance)) {
     return removeStatisticalOutliersOnGrid(finite, mean_k, stddev_mul, leaf_size_m, threads);
   }
-  double sum = 0.0;
-  double sq_sum = 0.0;
-  for (const float distance : mean_distance) {
-    sum += distance;
-    sq_sum += static_cast<double>(distance) * distance;
-  }
-  const double count_d = static_cast<double>(n);
-  const double mean = sum / count_d;
-  const double variance = std::max(0.0, (sq_sum - sum * sum / count_d) / (count_d - 1.0));
-  const double threshold = mean + stddev_mul * std::sqrt(variance);
-  PointCloud out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
-  }
-  return out;
+  return keepBelowStatisticalThreshold(finite, mean_distance, stddev_mul,
+                                       VarianceSum::kDoubleClamped);
 }
+
+namespace {
+
+// The voxels of a cloud as bits of a dense occupancy grid over its bounding box, with a margin of
+// `radius` cells, and what the centre-distance scan needs of it: the grid offsets by length and
+// their bit distances, and each row of the 5 x 5 x 5 cube's first bit.
+struct OccupancyBits {
+  int radius = 0;
+  Eigen::Array3i lo;
+  std::int64_t stride_y = 0;
+  std::int64_t stride_z = 0;
+  std::vector<Eigen::Array3i> cells;  // per point
+  std::vector<std::uint64_t> bits;    // one spare word at the end
+  const SortedOffsets* table = nullptr;
+  std::vector<std::int64_t> deltas;  // the bit distance of each of table's offsets
+  bool use_cube = false;             // the cube's shells, where the table holds them all
+  std::size_t beyond_cube = 0;       // the table's first offset outside the cube's shells
+  std::array<std::int64_t, CubeShells::kRows> row_start;  // bit of each row's first cell
+  std::int64_t bitOf(const Eigen::Array3i& c) const {
+    const Eigen::Array3i r = c - lo + radius;
+    return r[2] * stride_z + r[1] * stride_y + r[0];
+  }
+};
+
+// The offsets depend on the radius only: computed once per thread and radius.
+const SortedOffsets& sortedOffsetsCached(int radius) {
+  static thread_local std::map<int, SortedOffsets> tables;
+  auto cached = tables.find(radius);
+  if (cached == tables.end()) cached = tables.emplace(radius, sortedOffsets(radius)).first;
+  return cached->second;
+}
+
+// False (nothing built) where the grid would exceed 256 M cells (32 MB).
+bool buildOccupancyBits(const PointCloud& finite, double leaf_size_m, int radius,
+                        OccupancyBits* grid) {
+  const std::size_t n = finite.size();
+  grid->radius = radius;
+  const double inv_leaf = 1.0 / leaf_size_m;
+  std::vector<Eigen::Array3i>& cells = grid->cells;
+  cells.resize(n);
+  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const double index = std::floor(static_cast<double>(finite[i][d]) * inv_leaf);
+      cells[i][d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
+    }
+    lo = lo.min(cells[i]);
+    hi = hi.max(cells[i]);
+  }
+  double num_cells = 1.0;
+  for (int d = 0; d < 3; ++d) {
+    num_cells *= static_cast<double>(hi[d]) - static_cast<double>(lo[d]) + 1.0 + 2.0 * radius;
+  }
+  if (!(num_cells <= 256.0 * 1024 * 1024)) return false;
+  const Eigen::Array3i dims = hi - lo + 1 + 2 * radius;
+  grid->lo = lo;
+  grid->stride_y = dims[0];
+  grid->stride_z = static_cast<std::int64_t>(dims[0]) * dims[1];
+  grid->bits.assign(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
+  for (const Eigen::Array3i& c : cells) {
+    const std::int64_t b = grid->bitOf(c);
+    grid->bits[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
+  }
+  // One spare word: a row of the cube is read from the word it starts in and the next.
+  grid->bits.push_back(0);
+  return true;
+}
+
+// The scan's offsets on this grid: their bit distances, where the cube's shells end, each cube
+// row's first bit.
+void prepareScan(const SortedOffsets& table, OccupancyBits* grid) {
+  grid->table = &table;
+  grid->deltas.resize(table.offsets.size());
+  for (std::size_t k = 0; k < grid->deltas.size(); ++k) {
+    const Eigen::Array3i& o = table.offsets[k];
+    grid->deltas[k] = o[2] * grid->stride_z + o[1] * grid->stride_y + o[0];
+  }
+  const CubeShells& cube = cubeShells();
+  // The cube's shells only where the table holds them all (not for mean_k 1, radius 2).
+  grid->use_cube = grid->radius * grid->radius >= CubeShells::kMaxSquared;
+  grid->beyond_cube = 0;
+  while (grid->use_cube && grid->beyond_cube < table.offsets.size() &&
+         table.offsets[grid->beyond_cube].square().sum() <= CubeShells::kMaxSquared) {
+    ++grid->beyond_cube;
+  }
+  for (int r = 0; r < CubeShells::kRows; ++r) {
+    grid->row_start[r] = cube.row_dz[r] * grid->stride_z + cube.row_dy[r] * grid->stride_y - 2;
+  }
+}
+
+// The mean distance (m) from voxel i to its mean_k nearest occupied voxel centres; those missing
+// within the radius count at radius + 1 cells.
+float meanCentreDistance(const OccupancyBits& grid, std::size_t i, int mean_k, double leaf_size_m) {
+  const CubeShells& cube = cubeShells();
+  const std::vector<std::uint64_t>& bits = grid.bits;
+  const std::int64_t b = grid.bitOf(grid.cells[i]);
+  // The occupied cells of the 5 x 5 x 5 cube around the voxel, counted per shell: five bits
+  // per row of the cube, and a table turns them into counts at the row's squared lengths.
+  std::uint64_t counts = 0;
+  for (int r = 0; grid.use_cube && r < CubeShells::kRows; ++r) {
+    const std::uint64_t q = static_cast<std::uint64_t>(b + grid.row_start[r]);
+    counts += cube.row_counts[cube.row_class[r]][fiveBits(bits, q)];
+  }
+  // The nearest occupied cells shell by shell: all of a shell's offsets have its length, so
+  // adding it once per occupied cell is the scan's sum, bit for bit, in the scan's order.
+  int found = 0;
+  float sum = 0.f;
+  for (int s = 0; s < CubeShells::kShells && found < mean_k; ++s) {
+    const int in_shell =
+        static_cast<int>((counts >> (CubeShells::kCountBits * s)) & CubeShells::kCountMask);
+    const int take = std::min(in_shell, mean_k - found);
+    for (int t = 0; t < take; ++t) sum += cube.shell_length[s];
+    found += take;
+  }
+  // Beyond the cube (a surface's edge, a sparse view): the table's offsets in order.
+  // Branch-free: whether a neighbour cell is occupied is close to a coin flip on a surface's
+  // edge, which a branch mispredicts half the time. Adding 0 for an empty cell leaves the sum's
+  // bits as they were (it is never -0), so the sum is that of the occupied cells in order.
+  const std::vector<float>& lengths = grid.table->lengths;
+  for (std::size_t k = grid.beyond_cube; k < grid.deltas.size() && found < mean_k; ++k) {
+    const std::size_t q = static_cast<std::size_t>(b + grid.deltas[k]);
+    const std::uint64_t occupied = (bits[q / 64] >> (q % 64)) & 1u;
+    sum += lengths[k] * static_cast<float>(occupied);
+    found += static_cast<int>(occupied);
+  }
+  sum += static_cast<float>(mean_k - found) * static_cast<float>(grid.radius + 1);
+  return static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
+}
+
+}  // namespace
 
 bool PointCloudFilter::voxelCentreMeanDistances(const PointCloud& finite, int mean_k,
                                                 double leaf_size_m, int threads,
@@ -557,98 +750,16 @@ bool PointCloudFilter::voxelCentreMeanDistances(const PointCloud& finite, int me
   // occupied voxels within twice that counts the missing ones at that distance (an outlier
   // anyway).
   const int radius = std::max(2, static_cast<int>(std::ceil(2.0 * std::sqrt(mean_k))));
-  // The offsets depend on mean_k only: computed once per thread and mean_k.
-  static thread_local std::map<int, SortedOffsets> tables;
-  auto cached = tables.find(radius);
-  if (cached == tables.end()) cached = tables.emplace(radius, sortedOffsets(radius)).first;
-  const SortedOffsets& table = cached->second;
-
-  const double inv_leaf = 1.0 / leaf_size_m;
-  std::vector<Eigen::Array3i> cells(n);
-  Eigen::Array3i lo = Eigen::Array3i::Constant(std::numeric_limits<int>::max());
-  Eigen::Array3i hi = Eigen::Array3i::Constant(std::numeric_limits<int>::min());
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) {
-      const double index = std::floor(static_cast<double>(finite[i][d]) * inv_leaf);
-      cells[i][d] = static_cast<int>(std::max(-1e9, std::min(1e9, index)));
-    }
-    lo = lo.min(cells[i]);
-    hi = hi.max(cells[i]);
-  }
-  // An occupancy bitset over the bounding box with a margin of `radius` cells; beyond 32 MB the
-  // exact search handles the cloud.
-  double num_cells = 1.0;
-  for (int d = 0; d < 3; ++d) {
-    num_cells *= static_cast<double>(hi[d]) - static_cast<double>(lo[d]) + 1.0 + 2.0 * radius;
-  }
-  if (!(num_cells <= 256.0 * 1024 * 1024)) return false;
-  const Eigen::Array3i dims = hi - lo + 1 + 2 * radius;
-  std::vector<std::uint64_t> bits(static_cast<std::size_t>(num_cells) / 64 + 1, 0);
-  const std::int64_t stride_y = dims[0];
-  const std::int64_t stride_z = static_cast<std::int64_t>(dims[0]) * dims[1];
-  const auto bit_of = [&](const Eigen::Array3i& c) {
-    const Eigen::Array3i r = c - lo + radius;
-    return r[2] * stride_z + r[1] * stride_y + r[0];
-  };
-  for (const Eigen::Array3i& c : cells) {
-    const std::int64_t b = bit_of(c);
-    bits[static_cast<std::size_t>(b) / 64] |= std::uint64_t{1} << (b % 64);
-  }
-  // One spare word: a row of the cube is read from the word it starts in and the next.
-  bits.push_back(0);
-  std::vector<std::int64_t> deltas(table.offsets.size());
-  for (std::size_t k = 0; k < deltas.size(); ++k) {
-    const Eigen::Array3i& o = table.offsets[k];
-    deltas[k] = o[2] * stride_z + o[1] * stride_y + o[0];
-  }
-  const CubeShells& cube = cubeShells();
-  // The cube's shells only where the table holds them all (not for mean_k 1, radius 2).
-  const bool use_cube = radius * radius >= CubeShells::kMaxSquared;
-  std::size_t beyond_cube = 0;  // the table's first offset outside the cube's shells
-  while (use_cube && beyond_cube < table.offsets.size() &&
-         table.offsets[beyond_cube].square().sum() <= CubeShells::kMaxSquared) {
-    ++beyond_cube;
-  }
-  std::array<std::int64_t, CubeShells::kRows> row_start;  // bit of each row's first cell
-  for (int r = 0; r < CubeShells::kRows; ++r) {
-    row_start[r] = cube.row_dz[r] * stride_z + cube.row_dy[r] * stride_y - 2;
-  }
-  const float missing = static_cast<float>(radius + 1);
+  const SortedOffsets& table = sortedOffsetsCached(radius);
+  // An occupancy bitset over the bounding box; beyond 32 MB the exact search handles the cloud.
+  OccupancyBits grid;
+  if (!buildOccupancyBits(finite, leaf_size_m, radius, &grid)) return false;
+  prepareScan(table, &grid);
   std::vector<float>& mean_distance = *mean_distance_m;
   mean_distance.assign(n, 0.f);
   parallelRanges(n, threads, 4096, [&](std::size_t first, std::size_t last) {
     for (std::size_t i = first; i < last; ++i) {
-      const std::int64_t b = bit_of(cells[i]);
-      // The occupied cells of the 5 x 5 x 5 cube around the voxel, counted per shell: five bits
-      // per row of the cube, and a table turns them into counts at the row's squared lengths.
-      std::uint64_t counts = 0;
-      for (int r = 0; use_cube && r < CubeShells::kRows; ++r) {
-        const std::uint64_t q = static_cast<std::uint64_t>(b + row_start[r]);
-        counts += cube.row_counts[cube.row_class[r]][fiveBits(bits, q)];
-      }
-      // The nearest occupied cells shell by shell: all of a shell's offsets have its length, so
-      // adding it once per occupied cell is the scan's sum, bit for bit, in the scan's order.
-      int found = 0;
-      float sum = 0.f;
-      for (int s = 0; s < CubeShells::kShells && found < mean_k; ++s) {
-        const int in_shell =
-            static_cast<int>((counts >> (CubeShells::kCountBits * s)) & CubeShells::kCountMask);
-        const int take = std::min(in_shell, mean_k - found);
-        for (int t = 0; t < take; ++t) sum += cube.shell_length[s];
-        found += take;
-      }
-      // Beyond the cube (a surface's edge, a sparse view): the table's offsets in order.
-      // Branch-free: whether a neighbour cell is occupied is close to a coin flip on a surface's
-      // edge, which a branch mispredicts half the time. Adding 0 for an empty cell leaves the sum's
-      // bits as they were (it is never -0), so the sum is that of the occupied cells in order.
-      for (std::size_t k = beyond_cube; k < deltas.size() && found < mean_k; ++k) {
-        const std::size_t q = static_cast<std::size_t>(b + deltas[k]);
-        const std::uint64_t occupied = (bits[q / 64] >> (q % 64)) & 1u;
-        sum += table.lengths[k] * static_cast<float>(occupied);
-        found += static_cast<int>(occupied);
-      }
-      sum += static_cast<float>(mean_k - found) * missing;
-      mean_distance[i] = static_cast<float>(leaf_size_m) * sum / static_cast<float>(mean_k);
+      mean_distance[i] = meanCentreDistance(grid, i, mean_k, leaf_size_m);
     }
   });
   return true;
@@ -692,6 +803,179 @@ PointCloud PointCloudFilter::removeStatisticalOutliers(const PointCloud& points,
   return out;
 }
 
+namespace {
+
+// The exact search's grid: cells of cell_m over the cloud's bounding box, the points
+// counting-sorted by cell.
+struct CellTable {
+  double cell_m = 0.0;
+  Eigen::Array3i dims;
+  std::vector<Eigen::Array3i> cell_of;  // per point
+  std::vector<std::int32_t> start;      // cell c holds order[start[c] .. start[c + 1])
+  std::vector<std::int32_t> order;      // the points in cell order
+  std::vector<Eigen::Vector3f> sorted;  // the points in cell order, for locality
+  std::int64_t indexOf(const Eigen::Array3i& c) const {
+    return (static_cast<std::int64_t>(c[2]) * dims[1] + c[1]) * dims[0] + c[0];
+  }
+};
+
+// False (nothing built) for a grid of more than 1e6 cells a side or 16e6 cells: the k-d tree is
+// the better search there.
+bool buildCellTable(const PointCloud& finite, double cell_m, CellTable* table) {
+  Eigen::Vector3f lo = finite[0];
+  Eigen::Vector3f hi = finite[0];
+  for (const Eigen::Vector3f& p : finite) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double inv_cell = 1.0 / cell_m;
+  Eigen::Array3i& dims = table->dims;
+  for (int d = 0; d < 3; ++d) {
+    const double cells = std::floor((static_cast<double>(hi[d]) - lo[d]) * inv_cell) + 1.0;
+    if (!(cells < 1e6)) return false;
+    dims[d] = static_cast<int>(cells);
+  }
+  const std::int64_t num_cells =
+      static_cast<std::int64_t>(dims[0]) * dims[1] * static_cast<std::int64_t>(dims[2]);
+  // A dense table of cells when it is small (a view of an object).
+  if (num_cells > 16 * 1000 * 1000) return false;
+  table->cell_m = cell_m;
+  const std::size_t n = finite.size();
+  table->cell_of.resize(n);
+  std::vector<std::int32_t>& start = table->start;
+  start.assign(static_cast<std::size_t>(num_cells) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int d = 0; d < 3; ++d) {
+      const int c =
+          static_cast<int>(std::floor((static_cast<double>(finite[i][d]) - lo[d]) * inv_cell));
+      table->cell_of[i][d] = std::min(std::max(c, 0), dims[d] - 1);
+    }
+    ++start[static_cast<std::size_t>(table->indexOf(table->cell_of[i])) + 1];
+  }
+  // Counting sort: the counts' prefix sums are the cells' starts.
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  table->order.resize(n);
+  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t cell = static_cast<std::size_t>(table->indexOf(table->cell_of[i]));
+    table->order[static_cast<std::size_t>(fill[cell]++)] = static_cast<std::int32_t>(i);
+  }
+  table->sorted.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    table->sorted[k] = finite[static_cast<std::size_t>(table->order[k])];
+  }
+  return true;
+}
+
+// Appends the squared distances from q to the points of cell (x, y, z) (none outside the grid):
+// in float, summed dimension by dimension as FLANN's L2 does.
+void addCellDistances(const CellTable& table, const Eigen::Vector3f& q, int x, int y, int z,
+                      std::vector<float>* candidates) {
+  const Eigen::Array3i& dims = table.dims;
+  if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
+  const std::size_t c = static_cast<std::size_t>(table.indexOf(Eigen::Array3i(x, y, z)));
+  const std::int32_t end = table.start[c + 1];
+  for (std::int32_t k = table.start[c]; k < end; ++k) {
+    const Eigen::Vector3f& p = table.sorted[static_cast<std::size_t>(k)];
+    float d2 = 0.f;
+    const float dx = q.x() - p.x();
+    d2 += dx * dx;
+    const float dy = q.y() - p.y();
+    d2 += dy * dy;
+    const float dz = q.z() - p.z();
+    d2 += dz * dz;
+    candidates->push_back(d2);
+  }
+}
+
+// Keeps the `want` smallest candidates (those under guess_kth, when there are enough of them);
+// returns the largest kept.
+float keepSmallest(std::size_t want, float guess_kth, std::vector<float>* candidates_in) {
+  std::vector<float>& candidates = *candidates_in;
+  std::size_t under = 0;
+  if (guess_kth > 0.f) {
+    // A branch-free partition (each step swaps positions `under` and k).
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+      const float d2 = candidates[k];
+      candidates[k] = candidates[under];
+      candidates[under] = d2;
+      under += d2 <= guess_kth ? 1 : 0;
+    }
+  }
+  if (under < want) under = candidates.size();
+  std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
+                   candidates.begin() + static_cast<std::ptrdiff_t>(under));
+  candidates.resize(want);
+  return *std::max_element(candidates.begin(), candidates.end());
+}
+
+// The squared distances from point i of the table to its `want` nearest (itself included, as
+// PCL's search returns it), shell by shell of cells: a point in a cell s + 1 cells away
+// (Chebyshev) is at least s cells away in space, so once the want-th distance is within s cells
+// nothing further can be nearer. *visited counts the cells visited.
+void nearestSquaredDistances(const CellTable& table, const Eigen::Vector3f& q, std::size_t i,
+                             std::size_t want, float guess_kth, std::vector<float>* candidates,
+                             std::int64_t* visited) {
+  const Eigen::Array3i& qc = table.cell_of[i];
+  const int max_shell = std::max({table.dims[0], table.dims[1], table.dims[2]});
+  candidates->clear();
+  for (int s = 0; s <= max_shell; ++s) {
+    for (int dz = -s; dz <= s; ++dz) {
+      for (int dy = -s; dy <= s; ++dy) {
+        const bool inner = std::abs(dz) < s && std::abs(dy) < s;
+        for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
+          ++*visited;
+          addCellDistances(table, q, qc[0] + dx, qc[1] + dy, qc[2] + dz, candidates);
+          if (s == 0) break;
+        }
+      }
+    }
+    if (s > 0 && candidates->size() >= want) {
+      const float kth = keepSmallest(want, guess_kth, candidates);
+      const double reach = s * table.cell_m;
+      if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
+    }
+  }
+}
+
+// PCL's statistic for the queries of the table's order [first, last): each point's mean distance
+// to its mean_k nearest, their roots added in ascending order as PCL does, so the result is PCL's.
+// Sparse clouds (many isolated points far apart) would visit many empty cells: past a budget
+// (shared pro rata by the ranges) it stops, sets *over_budget and returns false (the k-d tree is
+// cheaper then).
+bool meanDistancesOnGrid(const PointCloud& finite, const CellTable& table, int mean_k,
+                         std::size_t first, std::size_t last, std::atomic<bool>* over_budget,
+                         std::vector<float>* mean_distance) {
+  const std::size_t n = finite.size();
+  const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
+  const std::int64_t budget =
+      400 * static_cast<std::int64_t>(last - first) +
+      static_cast<std::int64_t>(1000000.0 * static_cast<double>(last - first) / n) + 1;
+  std::int64_t visited = 0;
+  std::vector<float> candidates;
+  // Neighbouring points have similar k-th distances: the previous query's pre-selects the
+  // candidates, and the exact selection then runs on those few when they suffice.
+  float guess_kth = 0.f;
+  for (std::size_t ordered = first; ordered < last; ++ordered) {
+    const std::size_t i = static_cast<std::size_t>(table.order[ordered]);
+    nearestSquaredDistances(table, finite[i], i, want, guess_kth, &candidates, &visited);
+    if (visited > budget || over_budget->load(std::memory_order_relaxed)) {
+      *over_budget = true;
+      return false;
+    }
+    std::sort(candidates.begin(), candidates.end());
+    guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
+    double sum = 0.0;
+    for (std::size_t k = 1; k < want && k < candidates.size(); ++k) {
+      sum += std::sqrt(candidates[k]);
+    }
+    (*mean_distance)[i] = static_cast<float>(sum / mean_k);
+  }
+  return true;
+}
+
+}  // namespace
+
 PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& points, int mean_k,
                                                              double stddev_mul, double cell_m,
                                                              int threads) {
@@ -706,161 +990,19 @@ PointCloud PointCloudFilter::removeStatisticalOutliersOnGrid(const PointCloud& p
   // On a voxelised surface the k nearest lie within about sqrt(k) / 2 voxels: cells that wide keep
   // the search to the 27 cells around the point (the result does not depend on it).
   cell_m *= std::max(1.0, std::round(std::sqrt(mean_k + 1.0) / 1.5));
-  // Cells of the grid over the cloud's bounding box.
-  Eigen::Vector3f lo = finite[0];
-  Eigen::Vector3f hi = finite[0];
-  for (const Eigen::Vector3f& p : finite) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+  CellTable table;
+  if (!buildCellTable(finite, cell_m, &table)) {
+    return removeStatisticalOutliers(finite, mean_k, stddev_mul);
   }
-  const double inv_cell = 1.0 / cell_m;
-  Eigen::Array3i dims;
-  for (int d = 0; d < 3; ++d) {
-    const double cells = std::floor((static_cast<double>(hi[d]) - lo[d]) * inv_cell) + 1.0;
-    if (!(cells < 1e6)) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
-    dims[d] = static_cast<int>(cells);
-  }
-  const std::int64_t num_cells =
-      static_cast<std::int64_t>(dims[0]) * dims[1] * static_cast<std::int64_t>(dims[2]);
-  // A dense table of cells when it is small (a view of an object); else the k-d tree.
-  if (num_cells > 16 * 1000 * 1000) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
-  const std::size_t n = finite.size();
-  std::vector<Eigen::Array3i> cell_of(n);
-  std::vector<std::int32_t> count(static_cast<std::size_t>(num_cells) + 1, 0);
-  auto index_of = [&dims](const Eigen::Array3i& c) {
-    return (static_cast<std::int64_t>(c[2]) * dims[1] + c[1]) * dims[0] + c[0];
-  };
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) {
-      const int c =
-          static_cast<int>(std::floor((static_cast<double>(finite[i][d]) - lo[d]) * inv_cell));
-      cell_of[i][d] = std::min(std::max(c, 0), dims[d] - 1);
-    }
-    ++count[static_cast<std::size_t>(index_of(cell_of[i])) + 1];
-  }
-  // Points sorted by cell (counting sort): cell c holds order[start[c] .. start[c + 1]).
-  std::vector<std::int32_t>& start = count;
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::int32_t> order(n);
-  {
-    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      order[static_cast<std::size_t>(fill[static_cast<std::size_t>(index_of(cell_of[i]))]++)] =
-          static_cast<std::int32_t>(i);
-    }
-  }
-
-  // Points in cell order, for locality.
-  std::vector<Eigen::Vector3f> sorted(n);
-  for (std::size_t k = 0; k < n; ++k) sorted[k] = finite[static_cast<std::size_t>(order[k])];
-
-  // The exact k + 1 nearest (the query included, as PCL's search returns it), shell by shell of
-  // cells: a point in a cell s + 1 cells away (Chebyshev) is at least s cells away in space, so
-  // once the k + 1-th distance is within s cells nothing further can be nearer. Squared distances
-  // in float, summed dimension by dimension as FLANN's L2 does, and their roots added in ascending
-  // order as PCL does, so the result is PCL's.
-  const std::size_t want = static_cast<std::size_t>(mean_k) + 1;
-  std::vector<float> mean_distance(n);
-  const int max_shell = std::max({dims[0], dims[1], dims[2]});
-  // Sparse clouds (many isolated points far apart) would visit many empty cells: past this budget
-  // (shared pro rata by the threads) the k-d tree is cheaper.
+  std::vector<float> mean_distance(finite.size());
   std::atomic<bool> over_budget{false};
   // Each query is independent: the queries (in cell order) are split into contiguous ranges.
-  const auto search = [&](std::size_t first, std::size_t last) {
-    const std::int64_t budget =
-        400 * static_cast<std::int64_t>(last - first) +
-        static_cast<std::int64_t>(1000000.0 * static_cast<double>(last - first) / n) + 1;
-    std::int64_t visited = 0;
-    std::vector<float> candidates;
-    // Neighbouring points have similar k-th distances: the previous query's pre-selects the
-    // candidates, and the exact selection then runs on those few when they suffice.
-    float guess_kth = 0.f;
-    for (std::size_t ordered = first; ordered < last; ++ordered) {
-      const std::size_t i = static_cast<std::size_t>(order[ordered]);
-      const Eigen::Vector3f& q = finite[i];
-      const Eigen::Array3i& qc = cell_of[i];
-      candidates.clear();
-      auto visit = [&](int x, int y, int z) {
-        ++visited;
-        if (x < 0 || y < 0 || z < 0 || x >= dims[0] || y >= dims[1] || z >= dims[2]) return;
-        const std::size_t c = static_cast<std::size_t>(index_of(Eigen::Array3i(x, y, z)));
-        const std::int32_t end = start[c + 1];
-        for (std::int32_t k = start[c]; k < end; ++k) {
-          const Eigen::Vector3f& p = sorted[static_cast<std::size_t>(k)];
-          float d2 = 0.f;
-          const float dx = q.x() - p.x();
-          d2 += dx * dx;
-          const float dy = q.y() - p.y();
-          d2 += dy * dy;
-          const float dz = q.z() - p.z();
-          d2 += dz * dz;
-          candidates.push_back(d2);
-        }
-      };
-      for (int s = 0; s <= max_shell; ++s) {
-        for (int dz = -s; dz <= s; ++dz) {
-          for (int dy = -s; dy <= s; ++dy) {
-            const bool inner = std::abs(dz) < s && std::abs(dy) < s;
-            for (int dx = -s; dx <= s; dx += (inner ? 2 * s : 1)) {
-              visit(qc[0] + dx, qc[1] + dy, qc[2] + dz);
-              if (s == 0) break;
-            }
-          }
-        }
-        if (s > 0 && candidates.size() >= want) {
-          // Keep only the `want` smallest so far (those under the guess, when there are enough).
-          std::size_t under = 0;
-          if (guess_kth > 0.f) {
-            // A branch-free partition (each step swaps positions `under` and k).
-            for (std::size_t k = 0; k < candidates.size(); ++k) {
-              const float d2 = candidates[k];
-              candidates[k] = candidates[under];
-              candidates[under] = d2;
-              under += d2 <= guess_kth ? 1 : 0;
-            }
-          }
-          if (under < want) under = candidates.size();
-          std::nth_element(candidates.begin(), candidates.begin() + (want - 1),
-                           candidates.begin() + static_cast<std::ptrdiff_t>(under));
-          candidates.resize(want);
-          const float kth = *std::max_element(candidates.begin(), candidates.end());
-          const double reach = s * cell_m;
-          if (static_cast<double>(kth) < reach * reach * (1.0 - 1e-6)) break;
-        }
-      }
-      if (visited > budget || over_budget.load(std::memory_order_relaxed)) {
-        over_budget = true;
-        return;
-      }
-      std::sort(candidates.begin(), candidates.end());
-      guess_kth = candidates.empty() ? 0.f : 1.5f * candidates.back();
-      double sum = 0.0;
-      for (std::size_t k = 1; k < want && k < candidates.size(); ++k) {
-        sum += std::sqrt(candidates[k]);
-      }
-      mean_distance[i] = static_cast<float>(sum / mean_k);
-    }
-  };
   // Below a few thousand points a thread costs more than it saves.
-  parallelRanges(n, threads, 4096, search);
+  parallelRanges(finite.size(), threads, 4096, [&](std::size_t first, std::size_t last) {
+    meanDistancesOnGrid(finite, table, mean_k, first, last, &over_budget, &mean_distance);
+  });
   if (over_budget) return removeStatisticalOutliers(finite, mean_k, stddev_mul);
-  // PCL's threshold: mean + stddev_mul * standard deviation of the mean distances.
-  double sum = 0.0;
-  double sq_sum = 0.0;
-  for (const float distance : mean_distance) {
-    sum += distance;
-    sq_sum += distance * distance;
-  }
-  const double count_d = static_cast<double>(n);
-  const double mean = sum / count_d;
-  const double variance = (sq_sum - sum * sum / count_d) / (count_d - 1.0);
-  const double threshold = mean + stddev_mul * std::sqrt(variance);
-  PointCloud out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(mean_distance[i] > threshold)) out.push_back(finite[i]);
-  }
-  return out;
+  return keepBelowStatisticalThreshold(finite, mean_distance, stddev_mul, VarianceSum::kPcl);
 }
 
 }  // namespace mvod

@@ -11,9 +11,9 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/utils/flat_hash_map.h"
 #include "multiview_object_detection/pipeline/utils/morphology.h"
-#include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
@@ -357,61 +357,159 @@ SegmentSelector::DetectionMasks SegmentSelector::detectionMasks(const Detection2
   return masks;
 }
 
-Status SegmentSelector::select(const Input& input, Result* result) const {
-  if (result == nullptr || input.points_D == nullptr || input.segments == nullptr) {
-    return Status::Error("SegmentSelector::select: missing input");
-  }
-  *result = Result();
-  const PointCloud& points = *input.points_D;
-  const std::vector<std::vector<int>>& segments = *input.segments;
-  if (segments.empty() || segments[0].empty()) return Status::Error("no segment to select");
-  if (!config_.consistent() || input.detection == nullptr || input.frame == nullptr) {
-    // Eq. 2: the largest segment.
-    result->indices = segments[0];
-    std::sort(result->indices.begin(), result->indices.end());
-    result->kept_segments = 1;
-    return Status::Ok();
-  }
-  const RgbdFrame& frame = *input.frame;
-  DetectionMasks computed;
-  if (input.masks == nullptr) computed = detectionMasks(*input.detection, frame.color_bgr.size());
-  const DetectionMasks& masks = input.masks != nullptr ? *input.masks : computed;
-  if (!masks.status) return masks.status;
-  const cv::Rect& crop = masks.crop;
-  const cv::Mat& core = masks.core;
-  const cv::Mat& ring_mask = masks.ring;
+namespace {
 
-  // ---- Per point: in the core? World coordinates for the size limit.
-  std::vector<char> in_core(points.size(), 0);
-  for (size_t i = 0; i < points.size(); ++i) {
-    cv::Point pixel;
-    if (colorPixelOf(frame, points[i].cast<double>(), &pixel) && crop.contains(pixel)) {
-      in_core[i] = core.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] != 0;
+// Extents along 18 horizontal directions (every 10 degrees) and up: unions are min/max per
+// direction, and the narrowest direction with its perpendicular approximates the footprint
+// rectangle whatever the object's yaw.
+constexpr int kDirections = 18;
+struct Extent {
+  Eigen::Array<float, kDirections + 1, 1> lower =
+      Eigen::Array<float, kDirections + 1, 1>::Constant(std::numeric_limits<float>::infinity());
+  Eigen::Array<float, kDirections + 1, 1> upper = -lower;
+  void add(const Extent& other) {
+    lower = lower.min(other.lower);
+    upper = upper.max(other.upper);
+  }
+};
+
+// The segments' extents along `directions` (kDirections + 1 of them). Four directions at a time (a
+// fifth group holds the 19th and a zero direction): per lane the same float operations as
+// directions[k].dot(p_W) (Eigen's order, x + (y + z)), std::min and std::max, so the same extents
+// to the bit.
+std::vector<Extent> segmentExtents(const PointCloud& points_W,
+                                   const std::vector<std::vector<int>>& segments,
+                                   const std::vector<Eigen::Vector3f>& directions) {
+  typedef float Lanes __attribute__((vector_size(16)));
+  constexpr int kGroups = (kDirections + 1 + 3) / 4;
+  Lanes dx[kGroups], dy[kGroups], dz[kGroups];
+  for (int g = 0; g < kGroups; ++g) {
+    for (int l = 0; l < 4; ++l) {
+      const int k = 4 * g + l;
+      const Eigen::Vector3f d = k <= kDirections ? directions[k] : Eigen::Vector3f::Zero();
+      dx[g][l] = d.x();
+      dy[g][l] = d.y();
+      dz[g][l] = d.z();
     }
   }
+  const float inf = std::numeric_limits<float>::infinity();
+  std::vector<Extent> extents(segments.size());
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    Lanes lower[kGroups], upper[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      lower[g] = Lanes{inf, inf, inf, inf};
+      upper[g] = -lower[g];
+    }
+    for (const int i : segments[s]) {
+      const Eigen::Vector3f& p_W = points_W[i];
+      const float x = p_W.x();
+      const float y = p_W.y();
+      const float z = p_W.z();
+      for (int g = 0; g < kGroups; ++g) {
+        const Lanes q = dx[g] * x + (dy[g] * y + dz[g] * z);
+        lower[g] = q < lower[g] ? q : lower[g];
+        upper[g] = upper[g] < q ? q : upper[g];
+      }
+    }
+    for (int k = 0; k <= kDirections; ++k) {
+      extents[s].lower[k] = lower[k / 4][k % 4];
+      extents[s].upper[k] = upper[k / 4][k % 4];
+    }
+  }
+  return extents;
+}
 
-  const int num_segments = static_cast<int>(segments.size());
-  std::vector<int> core_count(num_segments, 0);
-  for (int s = 0; s < num_segments; ++s) {
-    for (const int i : segments[s]) core_count[s] += in_core[i];
+// The segments near each point of the ring: the segments with a point in one of the 27 cells of
+// cell_m around it. Neighbouring pixels mostly share a cell: its 27 lookups are done once per run
+// of them.
+class NearSegments {
+ public:
+  NearSegments(const CellSegments& cells, float cell_m) : cells_(cells), cell_m_(cell_m) {}
+  const std::vector<int>& at(const Eigen::Vector3f& p) {
+    const std::int64_t key = voxelKeyOf(p, cell_m_);
+    if (valid_ && key == key_) return touched_;
+    valid_ = true;
+    key_ = key;
+    touched_.clear();
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = cells_.find(offsetVoxelKey(key, dx, dy, dz));
+          if (it == cells_.end()) continue;
+          for (const int s : it->second) {
+            if (std::find(touched_.begin(), touched_.end(), s) == touched_.end()) {
+              touched_.push_back(s);
+            }
+          }
+        }
+      }
+    }
+    return touched_;
   }
 
-  // ---- Bounding surfaces: planar segments that continue in the ring outside the detection.
-  std::vector<char> bounding(num_segments, 0);
-  std::vector<Plane> planes(num_segments);  // rms_m infinite: under 20 points, no plane
-  for (int s = 0; s < num_segments; ++s) {
-    planes[s].rms_m = std::numeric_limits<double>::infinity();
-    if (segments[s].size() >= 20) planes[s] = fitPlane(points, segments[s]);
+ private:
+  const CellSegments& cells_;
+  float cell_m_;
+  std::vector<int> touched_;  // the segments near the last point's cell
+  std::int64_t key_ = 0;
+  bool valid_ = false;
+};
+
+// The view's points in the detection's ring; of them, per segment, those near it (*near) and those
+// also within plane_distance_m of its plane (*on_plane).
+int countRingPoints(const SegmentSelector::FrameView& view,
+                    const SegmentSelector::DetectionMasks& masks, bool registered,
+                    const std::vector<Plane>& planes, NearSegments near_segments,
+                    double plane_distance_m, std::vector<int>* near, std::vector<int>* on_plane) {
+  const cv::Rect& crop = masks.crop;
+  const cv::Mat& ring_mask = masks.ring;
+  int ring_points = 0;
+  // A registered frame's view points lie at their colour pixels: only the crop's rows.
+  const std::pair<std::size_t, std::size_t> range =
+      registered ? view.rows(crop.y, crop.y + crop.height)
+                 : std::make_pair(std::size_t{0}, view.points_D.size());
+  for (size_t k = range.first; k < range.second; ++k) {
+    const cv::Point& pixel = view.pixels_color[k];
+    if (!crop.contains(pixel)) continue;
+    if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
+    ++ring_points;
+    const Eigen::Vector3f& p = view.points_D[k];
+    for (const int s : near_segments.at(p)) {
+      ++(*near)[s];
+      if (std::abs(planes[s].normal.dot(p.cast<double>() - planes[s].point)) <= plane_distance_m) {
+        ++(*on_plane)[s];
+      }
+    }
   }
-  // The gravity frame; a horizontal planar segment's plane in the world frame, normal up.
-  const Eigen::Isometry3f T_W_D = frame.T_W_D.cast<float>();
-  const Eigen::Matrix3f R_W_D = T_W_D.linear();
-  const Eigen::Vector3f up = input.gravity.up.cast<float>();
-  const Eigen::Vector3f x_h = input.gravity.x_h.cast<float>();
-  const Eigen::Vector3f y_h = input.gravity.y_h.cast<float>();
-  const double cos_tilt = std::cos(config_.support_max_tilt_deg * kDegToRad);
-  auto horizontal = [&](int s, double max_rms_m, Eigen::Vector3f* normal_W,
-                        Eigen::Vector3f* point_W) {
+  return ring_points;
+}
+
+}  // namespace
+
+// One consistent selection's state: the input, and per segment what the phases of select() find.
+struct SegmentSelector::Work {
+  Work(const Input& in, const DetectionMasks& detection_masks, const Config& config)
+      : input(in),
+        points(*in.points_D),
+        segments(*in.segments),
+        frame(*in.frame),
+        masks(detection_masks),
+        num_segments(static_cast<int>(segments.size())),
+        T_W_D(frame.T_W_D.cast<float>()),
+        R_W_D(T_W_D.linear()),
+        up(in.gravity.up.cast<float>()),
+        x_h(in.gravity.x_h.cast<float>()),
+        y_h(in.gravity.y_h.cast<float>()),
+        cos_tilt(std::cos(config.support_max_tilt_deg * kDegToRad)),
+        on_floor(in.prior != nullptr && in.prior->on_floor),
+        bounding(num_segments, 0),
+        resting(num_segments, 0),
+        kept(num_segments, 0) {}
+
+  // A horizontal planar segment (RMS thickness at most max_rms_m): its plane in the world frame,
+  // normal up.
+  bool horizontal(int s, double max_rms_m, Eigen::Vector3f* normal_W,
+                  Eigen::Vector3f* point_W) const {
     if (!(planes[s].rms_m <= max_rms_m)) return false;
     Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
     if (n.dot(up) < 0.f) n = -n;
@@ -419,146 +517,9 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     *normal_W = n;
     *point_W = T_W_D * planes[s].point.cast<float>();
     return true;
-  };
-
-  const bool on_floor = input.prior != nullptr && input.prior->on_floor;
-  if (input.view != nullptr) {
-    const float near_cell_m = 0.05f;  // "near a segment": within one 5 cm cell of its points
-    CellSegments near_cells;
-    for (int s = 0; s < num_segments; ++s) {
-      if (planes[s].rms_m > config_.plane_max_thickness_m) continue;
-      for (const int i : segments[s]) addToCell(&near_cells, voxelKeyOf(points[i], near_cell_m), s);
-    }
-    if (!near_cells.empty()) {
-      std::vector<int> near(num_segments, 0);
-      std::vector<int> on_plane(num_segments, 0);
-      std::vector<int> touched;  // the segments near the last point's cell
-      std::int64_t touched_key = 0;
-      bool touched_valid = false;
-      int ring_points = 0;  // the view's points in the ring
-      const FrameView& view = *input.view;
-      // A registered frame's view points lie at their colour pixels: only the crop's rows.
-      const std::pair<std::size_t, std::size_t> range =
-          frame.registered ? view.rows(crop.y, crop.y + crop.height)
-                           : std::make_pair(std::size_t{0}, view.points_D.size());
-      for (size_t k = range.first; k < range.second; ++k) {
-        const cv::Point& pixel = view.pixels_color[k];
-        if (!crop.contains(pixel)) continue;
-        if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
-        ++ring_points;
-        const Eigen::Vector3f& p = view.points_D[k];
-        const std::int64_t key = voxelKeyOf(p, near_cell_m);
-        // Neighbouring pixels mostly share a cell: its 27 lookups are done once per run of them.
-        if (!touched_valid || key != touched_key) {
-          touched_valid = true;
-          touched_key = key;
-          touched.clear();
-          for (int dx = -1; dx <= 1; ++dx) {
-            for (int dy = -1; dy <= 1; ++dy) {
-              for (int dz = -1; dz <= 1; ++dz) {
-                const auto it = near_cells.find(offsetVoxelKey(key, dx, dy, dz));
-                if (it == near_cells.end()) continue;
-                for (const int s : it->second) {
-                  if (std::find(touched.begin(), touched.end(), s) == touched.end()) {
-                    touched.push_back(s);
-                  }
-                }
-              }
-            }
-          }
-        }
-        for (const int s : touched) {
-          ++near[s];
-          if (std::abs(planes[s].normal.dot(p.cast<double>() - planes[s].point)) <=
-              config_.plane_distance_m) {
-            ++on_plane[s];
-          }
-        }
-      }
-      const double ring_points_needed = config_.min_ring_share * ring_points;
-      for (int s = 0; s < num_segments; ++s) {
-        // What does not stand on the floor (a tv, a cup) stands on whatever horizontal surface
-        // runs past its box; a floor-standing object's box holds no support of its own, so a
-        // horizontal plane that crosses its ring narrowly is a part of it (a clipped seat).
-        Eigen::Vector3f n, p;
-        const bool support = !on_floor && horizontal(s, config_.plane_max_thickness_m, &n, &p);
-        bounding[s] = on_plane[s] >= config_.min_continuation_points &&
-                      (support || on_plane[s] >= ring_points_needed) &&
-                      on_plane[s] >= config_.min_continuation * near[s];
-        result->bounding_segments += bounding[s];
-      }
-    }
   }
-
-  // ---- Segments in the gravity frame: extents and support surfaces. The points in the world
-  // frame, once.
-  PointCloud points_W;
-  points_W.reserve(points.size());
-  for (const Eigen::Vector3f& p : points) points_W.push_back(T_W_D * p);
-  // Extents along 18 horizontal directions (every 10 degrees) and up: unions are min/max per
-  // direction, and the narrowest direction with its perpendicular approximates the footprint
-  // rectangle whatever the object's yaw.
-  constexpr int kDirections = 18;
-  struct Extent {
-    Eigen::Array<float, kDirections + 1, 1> lower =
-        Eigen::Array<float, kDirections + 1, 1>::Constant(std::numeric_limits<float>::infinity());
-    Eigen::Array<float, kDirections + 1, 1> upper = -lower;
-    void add(const Extent& other) {
-      lower = lower.min(other.lower);
-      upper = upper.max(other.upper);
-    }
-  };
-  std::vector<Eigen::Vector3f> directions;
-  for (int k = 0; k < kDirections; ++k) {
-    const float a = static_cast<float>(k * kPiOver18);
-    directions.push_back(std::cos(a) * x_h + std::sin(a) * y_h);
-  }
-  directions.push_back(up);
-  std::vector<Extent> extents(num_segments);
-  {
-    // Four directions at a time (a fifth group holds the 19th and a zero direction): per lane the
-    // same float operations as directions[k].dot(p_W) (Eigen's order, x + (y + z)), std::min and
-    // std::max, so the same extents to the bit.
-    typedef float Lanes __attribute__((vector_size(16)));
-    constexpr int kGroups = (kDirections + 1 + 3) / 4;
-    Lanes dx[kGroups], dy[kGroups], dz[kGroups];
-    for (int g = 0; g < kGroups; ++g) {
-      for (int l = 0; l < 4; ++l) {
-        const int k = 4 * g + l;
-        const Eigen::Vector3f d = k <= kDirections ? directions[k] : Eigen::Vector3f::Zero();
-        dx[g][l] = d.x();
-        dy[g][l] = d.y();
-        dz[g][l] = d.z();
-      }
-    }
-    const float inf = std::numeric_limits<float>::infinity();
-    for (int s = 0; s < num_segments; ++s) {
-      Lanes lower[kGroups], upper[kGroups];
-      for (int g = 0; g < kGroups; ++g) {
-        lower[g] = Lanes{inf, inf, inf, inf};
-        upper[g] = -lower[g];
-      }
-      for (const int i : segments[s]) {
-        const Eigen::Vector3f& p_W = points_W[i];
-        const float x = p_W.x();
-        const float y = p_W.y();
-        const float z = p_W.z();
-        for (int g = 0; g < kGroups; ++g) {
-          const Lanes q = dx[g] * x + (dy[g] * y + dz[g] * z);
-          lower[g] = q < lower[g] ? q : lower[g];
-          upper[g] = upper[g] < q ? q : upper[g];
-        }
-      }
-      for (int k = 0; k <= kDirections; ++k) {
-        extents[s].lower[k] = lower[k / 4][k % 4];
-        extents[s].upper[k] = upper[k / 4][k % 4];
-      }
-    }
-  }
-
-  // ---- Support surfaces.
   // A segment's footprint: the convex hull of its points on the horizontal plane.
-  const auto footprintHull = [&](int s) {
+  std::vector<cv::Point2f> footprintHull(int s) const {
     std::vector<cv::Point2f> footprint;
     footprint.reserve(segments[s].size());
     for (const int i : segments[s]) {
@@ -568,75 +529,218 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     std::vector<cv::Point2f> hull;
     if (!footprint.empty()) cv::convexHull(footprint, hull);
     return hull;
-  };
+  }
+  bool excluded(int s) const { return bounding[s] || resting[s]; }
+
+  const Input& input;
+  const PointCloud& points;
+  const std::vector<std::vector<int>>& segments;
+  const RgbdFrame& frame;
+  const DetectionMasks& masks;
+  const int num_segments;
+  // The gravity frame; horizontal planes in the world frame.
+  const Eigen::Isometry3f T_W_D;
+  const Eigen::Matrix3f R_W_D;
+  const Eigen::Vector3f up;
+  const Eigen::Vector3f x_h;
+  const Eigen::Vector3f y_h;
+  const double cos_tilt;
+  const bool on_floor;
+  std::vector<int> core_count;  // per segment: its points in the detection's core
+  std::vector<Plane> planes;    // per segment; rms_m infinite: under 20 points, no plane
+  std::vector<char> bounding;   // walls, surfaces running past the detection
+  std::vector<char> resting;    // standing on a horizontal bounding surface (on_floor classes)
+  PointCloud points_W;          // the points in the world frame
+  std::vector<Extent> extents;  // per segment, in the gravity frame
+  int seed = -1;
+  std::vector<char> kept;
+  std::size_t kept_points = 0;
+};
+
+Status SegmentSelector::select(const Input& input, Result* result) const {
+  if (result == nullptr || input.points_D == nullptr || input.segments == nullptr) {
+    return Status::Error("SegmentSelector::select: missing input");
+  }
+  *result = Result();
+  const std::vector<std::vector<int>>& segments = *input.segments;
+  if (segments.empty() || segments[0].empty()) return Status::Error("no segment to select");
+  if (!config_.consistent() || input.detection == nullptr || input.frame == nullptr) {
+    // Eq. 2: the largest segment.
+    result->indices = segments[0];
+    std::sort(result->indices.begin(), result->indices.end());
+    result->kept_segments = 1;
+    return Status::Ok();
+  }
+  DetectionMasks computed;
+  if (input.masks == nullptr) {
+    computed = detectionMasks(*input.detection, input.frame->color_bgr.size());
+  }
+  const DetectionMasks& masks = input.masks != nullptr ? *input.masks : computed;
+  if (!masks.status) return masks.status;
+
+  Work work(input, masks, config_);
+  countCorePoints(&work);
+  fitPlanes(&work);
+  if (input.view != nullptr) markBoundingSurfaces(*input.view, &work, result);
+  computeExtents(&work);
+  if (work.on_floor && config_.resting_distance_m > 0.0) markResting(&work, result);
+  const Status seeded = chooseSeed(&work, *result);
+  if (!seeded) return seeded;
+  growFromSeed(&work);
+  return collectKept(work, result);
+}
+
+void SegmentSelector::countCorePoints(Work* work) const {
+  // Per point: in the core?
+  const PointCloud& points = work->points;
+  const cv::Rect& crop = work->masks.crop;
+  const cv::Mat& core = work->masks.core;
+  std::vector<char> in_core(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    cv::Point pixel;
+    if (colorPixelOf(work->frame, points[i].cast<double>(), &pixel) && crop.contains(pixel)) {
+      in_core[i] = core.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] != 0;
+    }
+  }
+  work->core_count.assign(work->num_segments, 0);
+  for (int s = 0; s < work->num_segments; ++s) {
+    for (const int i : work->segments[s]) work->core_count[s] += in_core[i];
+  }
+}
+
+void SegmentSelector::fitPlanes(Work* work) const {
+  work->planes.resize(work->num_segments);
+  for (int s = 0; s < work->num_segments; ++s) {
+    work->planes[s].rms_m = std::numeric_limits<double>::infinity();
+    if (work->segments[s].size() >= 20) work->planes[s] = fitPlane(work->points, work->segments[s]);
+  }
+}
+
+void SegmentSelector::markBoundingSurfaces(const FrameView& view, Work* work,
+                                           Result* result) const {
+  // Bounding surfaces: planar segments that continue in the ring outside the detection.
+  const int num_segments = work->num_segments;
+  const std::vector<Plane>& planes = work->planes;
+  const float near_cell_m = 0.05f;  // "near a segment": within one 5 cm cell of its points
+  CellSegments near_cells;
+  for (int s = 0; s < num_segments; ++s) {
+    if (planes[s].rms_m > config_.plane_max_thickness_m) continue;
+    for (const int i : work->segments[s]) {
+      addToCell(&near_cells, voxelKeyOf(work->points[i], near_cell_m), s);
+    }
+  }
+  if (near_cells.empty()) return;
+  std::vector<int> near(num_segments, 0);
+  std::vector<int> on_plane(num_segments, 0);
+  const int ring_points = countRingPoints(view, work->masks, work->frame.registered, planes,
+                                          NearSegments(near_cells, near_cell_m),
+                                          config_.plane_distance_m, &near, &on_plane);
+  const double ring_points_needed = config_.min_ring_share * ring_points;
+  for (int s = 0; s < num_segments; ++s) {
+    // What does not stand on the floor (a tv, a cup) stands on whatever horizontal surface
+    // runs past its box; a floor-standing object's box holds no support of its own, so a
+    // horizontal plane that crosses its ring narrowly is a part of it (a clipped seat).
+    Eigen::Vector3f n, p;
+    const bool support =
+        !work->on_floor && work->horizontal(s, config_.plane_max_thickness_m, &n, &p);
+    work->bounding[s] = on_plane[s] >= config_.min_continuation_points &&
+                        (support || on_plane[s] >= ring_points_needed) &&
+                        on_plane[s] >= config_.min_continuation * near[s];
+    result->bounding_segments += work->bounding[s];
+  }
+}
+
+void SegmentSelector::computeExtents(Work* work) const {
+  // Segments in the gravity frame: the points in the world frame, once; the extents along 18
+  // horizontal directions and up.
+  work->points_W.reserve(work->points.size());
+  for (const Eigen::Vector3f& p : work->points) work->points_W.push_back(work->T_W_D * p);
+  std::vector<Eigen::Vector3f> directions;
+  for (int k = 0; k < kDirections; ++k) {
+    const float a = static_cast<float>(k * kPiOver18);
+    directions.push_back(std::cos(a) * work->x_h + std::sin(a) * work->y_h);
+  }
+  directions.push_back(work->up);
+  work->extents = segmentExtents(work->points_W, work->segments, directions);
+}
+
+void SegmentSelector::markResting(Work* work, Result* result) const {
   // on_floor classes: what rests on a horizontal bounding surface (a table top running past the
   // detection) is something on that surface, not part of the object.
-  std::vector<char> resting(num_segments, 0);
-  if (on_floor && config_.resting_distance_m > 0.0) {
-    const float rest_m = static_cast<float>(config_.resting_distance_m);
-    const float edge_m = static_cast<float>(config_.resting_edge_margin_m);
-    for (int b = 0; b < num_segments; ++b) {
-      Eigen::Vector3f n_b, p_b;
-      if (!bounding[b] || !horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) continue;
-      // The surface's footprint, so that what hides part of it (papers on a table) stands inside.
-      const std::vector<cv::Point2f> hull = footprintHull(b);
-      if (hull.size() < 3) continue;
-      for (int s = 0; s < num_segments; ++s) {
-        if (s == b || bounding[s] || resting[s]) continue;
-        // Its lowest point on the surface (heights along the surface's normal).
-        float bottom = std::numeric_limits<float>::infinity();
-        for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(points_W[i] - p_b));
-        if (std::abs(bottom) > rest_m) continue;
-        size_t over = 0;
-        for (const int i : segments[s]) {
-          const Eigen::Vector3f& p_W = points_W[i];
-          const cv::Point2f q(x_h.dot(p_W), y_h.dot(p_W));
-          over += edge_m > 0.f ? cv::pointPolygonTest(hull, q, true) >= edge_m
-                               : cv::pointPolygonTest(hull, q, false) >= 0;
-        }
-        if (over >= config_.resting_min_share * segments[s].size()) {
-          resting[s] = 1;
-          ++result->resting_segments;
-        }
+  const std::vector<std::vector<int>>& segments = work->segments;
+  const float rest_m = static_cast<float>(config_.resting_distance_m);
+  const float edge_m = static_cast<float>(config_.resting_edge_margin_m);
+  for (int b = 0; b < work->num_segments; ++b) {
+    Eigen::Vector3f n_b, p_b;
+    if (!work->bounding[b] || !work->horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) {
+      continue;
+    }
+    // The surface's footprint, so that what hides part of it (papers on a table) stands inside.
+    const std::vector<cv::Point2f> hull = work->footprintHull(b);
+    if (hull.size() < 3) continue;
+    for (int s = 0; s < work->num_segments; ++s) {
+      if (s == b || work->bounding[s] || work->resting[s]) continue;
+      // Its lowest point on the surface (heights along the surface's normal).
+      float bottom = std::numeric_limits<float>::infinity();
+      for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(work->points_W[i] - p_b));
+      if (std::abs(bottom) > rest_m) continue;
+      size_t over = 0;
+      for (const int i : segments[s]) {
+        const Eigen::Vector3f& p_W = work->points_W[i];
+        const cv::Point2f q(work->x_h.dot(p_W), work->y_h.dot(p_W));
+        over += edge_m > 0.f ? cv::pointPolygonTest(hull, q, true) >= edge_m
+                             : cv::pointPolygonTest(hull, q, false) >= 0;
+      }
+      if (over >= config_.resting_min_share * segments[s].size()) {
+        work->resting[s] = 1;
+        ++result->resting_segments;
       }
     }
   }
+}
 
-  // ---- The seed: the most points in the core.
+Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
+  // The seed: the most points in the core.
+  const std::vector<std::vector<int>>& segments = work->segments;
+  const std::vector<int>& core_count = work->core_count;
   int seed = -1;
-  for (int s = 0; s < num_segments; ++s) {
-    if (bounding[s] || resting[s] || core_count[s] == 0) continue;
+  for (int s = 0; s < work->num_segments; ++s) {
+    if (work->excluded(s) || core_count[s] == 0) continue;
     if (seed < 0 || core_count[s] > core_count[seed]) seed = s;
   }
-  if (seed < 0 && (result->bounding_segments > 0 || result->resting_segments > 0)) {
+  if (seed < 0 && (result.bounding_segments > 0 || result.resting_segments > 0)) {
     // The core holds only bounding surfaces and what rests on them (a chair pushed under a table
     // shows its backrest above the top, at the edge of its box): the largest other segment of
     // some size.
-    const size_t min_points = static_cast<size_t>(config_.fallback_min_share * points.size());
-    for (int s = 0; s < num_segments; ++s) {
-      if (bounding[s] || resting[s] || segments[s].size() < std::max<size_t>(min_points, 1)) {
-        continue;
-      }
+    const size_t min_points = static_cast<size_t>(config_.fallback_min_share * work->points.size());
+    for (int s = 0; s < work->num_segments; ++s) {
+      if (work->excluded(s) || segments[s].size() < std::max<size_t>(min_points, 1)) continue;
       if (seed < 0 || segments[s].size() > segments[seed].size()) seed = s;
     }
   }
   if (seed < 0) {
     return Status::Error(
-        result->bounding_segments > 0
+        result.bounding_segments > 0
             ? "only surfaces running past the detection (wall, floor, table top) in its core"
             : "no segment in the detection's core");
   }
+  work->seed = seed;
+  return Status::Ok();
+}
 
-  // ---- Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
+void SegmentSelector::growFromSeed(Work* work) const {
+  // Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
+  const std::vector<std::vector<int>>& segments = work->segments;
+  const std::vector<int>& core_count = work->core_count;
   const std::vector<std::vector<char>> adjacent =
-      segmentAdjacency(points, segments, config_.adjacency_distance_m);
-
-  // ---- Grow from the seed: touching segments join while the union stays plausible in size.
+      segmentAdjacency(work->points, segments, config_.adjacency_distance_m);
+  // Touching segments join while the union stays plausible in size.
   double max_height_m = std::numeric_limits<double>::infinity();
   double max_short_m = std::numeric_limits<double>::infinity();
   double max_long_m = std::numeric_limits<double>::infinity();
-  if (input.prior != nullptr && input.prior->has_size) {
-    const Eigen::Vector3d& size = input.prior->size_m;
+  const ClassPrior* prior = work->input.prior;
+  if (prior != nullptr && prior->has_size) {
+    const Eigen::Vector3d& size = prior->size_m;
     max_height_m = config_.prior_size_slack * size.z() + 0.1;
     max_short_m = config_.prior_size_slack * std::min(size.x(), size.y()) + 0.1;
     max_long_m = config_.prior_size_slack * std::max(size.x(), size.y()) + 0.1;
@@ -652,23 +756,23 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
            span[(narrow + kDirections / 2) % kDirections] <= max_long_m;
   };
 
-  std::vector<char> kept(num_segments, 0);
-  kept[seed] = 1;
-  Extent kept_extent = extents[seed];
-  size_t kept_points = segments[seed].size();
+  std::vector<char>& kept = work->kept;
+  kept[work->seed] = 1;
+  Extent kept_extent = work->extents[work->seed];
+  work->kept_points = segments[work->seed].size();
   for (bool grew = true; grew;) {
     grew = false;
     // Best candidate first: the most core points, then the largest.
     int best = -1;
-    for (int s = 0; s < num_segments; ++s) {
-      if (kept[s] || bounding[s] || resting[s]) continue;
+    for (int s = 0; s < work->num_segments; ++s) {
+      if (kept[s] || work->excluded(s)) continue;
       bool touches = false;
-      for (int t = 0; t < num_segments && !touches; ++t) touches = kept[t] && adjacent[s][t];
+      for (int t = 0; t < work->num_segments && !touches; ++t) touches = kept[t] && adjacent[s][t];
       if (!touches) continue;
       // A large segment with nothing in the core is background the detection only grazes.
-      if (core_count[s] == 0 && segments[s].size() > kept_points) continue;
+      if (core_count[s] == 0 && segments[s].size() > work->kept_points) continue;
       Extent grown = kept_extent;
-      grown.add(extents[s]);
+      grown.add(work->extents[s]);
       if (!plausible(grown)) continue;
       if (best < 0 || core_count[s] > core_count[best] ||
           (core_count[s] == core_count[best] && segments[s].size() > segments[best].size())) {
@@ -677,50 +781,61 @@ Status SegmentSelector::select(const Input& input, Result* result) const {
     }
     if (best >= 0) {
       kept[best] = 1;
-      kept_extent.add(extents[best]);
-      kept_points += segments[best].size();
+      kept_extent.add(work->extents[best]);
+      work->kept_points += segments[best].size();
       grew = true;
     }
   }
+}
+
+bool SegmentSelector::findFlatTop(const Work& work, Eigen::Vector3f* top_normal_W,
+                                  Eigen::Vector3f* top_point_W,
+                                  std::vector<cv::Point2f>* top_hull) const {
   // flat_top classes: nothing above the main horizontal surface of the kept set (its largest
   // horizontal planar segment, if large enough; up to twice plane_max_thickness_m thick, as a top
   // with papers on it is) belongs to the object.
+  const ClassPrior* prior = work.input.prior;
+  if (prior == nullptr || !prior->flat_top || !(config_.top_clearance_m > 0.0)) return false;
+  const std::vector<std::vector<int>>& segments = work.segments;
+  int top = -1;
+  for (int s = 0; s < work.num_segments; ++s) {
+    Eigen::Vector3f n, p;
+    if (!work.kept[s] || segments[s].size() < config_.top_min_share * work.kept_points) continue;
+    if (!work.horizontal(s, 2.0 * config_.plane_max_thickness_m, &n, &p)) continue;
+    if (top < 0 || segments[s].size() > segments[top].size()) {
+      top = s;
+      *top_normal_W = n;
+      *top_point_W = p;
+    }
+  }
+  if (top < 0) return false;
+  *top_hull = work.footprintHull(top);
+  return true;
+}
+
+Status SegmentSelector::collectKept(const Work& work, Result* result) const {
+  const std::vector<std::vector<int>>& segments = work.segments;
   Eigen::Vector3f top_normal_W, top_point_W;
   std::vector<cv::Point2f> top_hull;  // the top's footprint
-  bool has_top = false;
-  if (input.prior != nullptr && input.prior->flat_top && config_.top_clearance_m > 0.0) {
-    int top = -1;
-    for (int s = 0; s < num_segments; ++s) {
-      Eigen::Vector3f n, p;
-      if (!kept[s] || segments[s].size() < config_.top_min_share * kept_points) continue;
-      if (!horizontal(s, 2.0 * config_.plane_max_thickness_m, &n, &p)) continue;
-      if (top < 0 || segments[s].size() > segments[top].size()) {
-        top = s;
-        top_normal_W = n;
-        top_point_W = p;
-      }
-    }
-    has_top = top >= 0;
-    if (has_top) top_hull = footprintHull(top);
-  }
+  const bool has_top = findFlatTop(work, &top_normal_W, &top_point_W, &top_hull);
   // ... nor anything beyond the top's footprint (more than top_clearance_m outside its hull).
   const auto outside_top = [&](const Eigen::Vector3f& p_W) {
     return top_hull.size() >= 3 &&
-           cv::pointPolygonTest(top_hull, cv::Point2f(x_h.dot(p_W), y_h.dot(p_W)), true) <
+           cv::pointPolygonTest(top_hull, cv::Point2f(work.x_h.dot(p_W), work.y_h.dot(p_W)), true) <
                -config_.top_clearance_m;
   };
   const float top_clearance_m = static_cast<float>(config_.top_clearance_m);
   // The kept points marked, then collected in ascending order (segments do not share points).
-  std::vector<char> take(points.size(), 0);
+  std::vector<char> take(work.points.size(), 0);
   std::size_t taken = 0;
   std::vector<char> dropped;  // above the top, or beside it
-  for (int s = 0; s < num_segments; ++s) {
-    if (!kept[s]) continue;
+  for (int s = 0; s < work.num_segments; ++s) {
+    if (!work.kept[s]) continue;
     dropped.assign(segments[s].size(), 0);
     size_t num_above = 0;
     if (has_top) {
       for (size_t k = 0; k < segments[s].size(); ++k) {
-        const Eigen::Vector3f& p_W = points_W[segments[s][k]];
+        const Eigen::Vector3f& p_W = work.points_W[segments[s][k]];
         const bool above = top_normal_W.dot(p_W - top_point_W) > top_clearance_m;
         num_above += above;
         dropped[k] = above || outside_top(p_W);

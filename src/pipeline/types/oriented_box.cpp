@@ -97,25 +97,31 @@ Rectangle2d minimumAreaRectangle(const std::vector<Eigen::Vector2d>& points) {
   Rectangle2d best;
   double best_area = std::numeric_limits<double>::infinity();
   for (const double yaw : yaws) {
-    const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw));
-    const Eigen::Vector2d v(-u.y(), u.x());
-    double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
-    double min_v = min_u, max_v = -min_u;
-    for (const Eigen::Vector2d& q : hull) {
-      min_u = std::min(min_u, q.dot(u));
-      max_u = std::max(max_u, q.dot(u));
-      min_v = std::min(min_v, q.dot(v));
-      max_v = std::max(max_v, q.dot(v));
-    }
-    const double area = (max_u - min_u) * (max_v - min_v);
-    if (area < best_area - 1e-12) {
-      best_area = area;
-      best.yaw_rad = yaw;
-      best.center = 0.5 * (min_u + max_u) * u + 0.5 * (min_v + max_v) * v;
-      best.size = Eigen::Vector2d(max_u - min_u, max_v - min_v);
+    const Rectangle2d rectangle = rectangleAtYaw(hull, yaw);
+    if (rectangle.area() < best_area - 1e-12) {
+      best_area = rectangle.area();
+      best = rectangle;
     }
   }
   return best;
+}
+
+Rectangle2d rectangleAtYaw(const std::vector<Eigen::Vector2d>& points, double yaw_rad) {
+  const Eigen::Vector2d u(std::cos(yaw_rad), std::sin(yaw_rad));
+  const Eigen::Vector2d v(-u.y(), u.x());
+  double min_u = std::numeric_limits<double>::infinity(), max_u = -min_u;
+  double min_v = min_u, max_v = -min_u;
+  for (const Eigen::Vector2d& q : points) {
+    min_u = std::min(min_u, q.dot(u));
+    max_u = std::max(max_u, q.dot(u));
+    min_v = std::min(min_v, q.dot(v));
+    max_v = std::max(max_v, q.dot(v));
+  }
+  Rectangle2d rectangle;
+  rectangle.yaw_rad = yaw_rad;
+  rectangle.center = 0.5 * (min_u + max_u) * u + 0.5 * (min_v + max_v) * v;
+  rectangle.size = Eigen::Vector2d(max_u - min_u, max_v - min_v);
+  return rectangle;
 }
 
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,

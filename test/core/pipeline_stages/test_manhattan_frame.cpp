@@ -8,7 +8,9 @@
 #include <iostream>
 #include <random>
 
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 #include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/stages/normal_estimation.h"
 
 namespace mvod {
 namespace {

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/map/amodal_completion.h"
-#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/map/depth_view.h"
 #include "multiview_object_detection/pipeline/map/evidence_map.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
@@ -205,6 +205,36 @@ class ObjectDatabase {
   size_t size() const { return objects_.size(); }
 
  private:
+  // The per-keyframe step: a new keyframe's detections may fuse into the objects inserted by the
+  // previous one (no_fusion_within_keyframe).
+  void beginKeyframe(int keyframe);
+  bool insertedThisKeyframe(const MapObject& object) const;
+  // Eq. 6's candidate: the nearest object of the observation's class by box-centre distance (null
+  // and infinity when none).
+  MapObject* nearestSameClass(const ObjectObservation& observation, double* distance_m);
+  // Evidence fusion: the observation's fusion keys on this database's grid.
+  std::shared_ptr<const FusionKeys> fusionKeysOf(const ObjectObservation& observation) const;
+  // Evidence fusion's overlap candidate: the object (any class) whose voted voxels hold the largest
+  // share of the cut, if at least min_overlap_to_fuse; else null.
+  MapObject* mostOverlapping(const ObjectObservation& observation,
+                             const std::vector<std::int64_t>& cut);
+  // The share of the cut's voxels on the object's voted voxels (or within `reach` voxels of one).
+  static double overlapShare(const MapObject& object, const std::vector<std::int64_t>& cut,
+                             int reach);
+  // The per-observation fusion: one observation into one object. Eq. 8's probability and the
+  // observation count and times.
+  static void addObservation(const ObjectObservation& observation, MapObject* object);
+  // Evidence fusion: the class vote, the view's votes on the object's voxels, then the box now
+  // (`process`) or, with defer_rebox, at reboxPending().
+  void fuseEvidence(const ObjectObservation& observation, const FusionKeys& keys,
+                    const FusedCloudProcessor& process, bool defer_rebox, MapObject* object);
+  // Marks an object for reboxPending(), with the keyframe's depth (may be null).
+  void deferRebox(const MapObject& object, const std::shared_ptr<const DepthView>& depth_view);
+  // The paper's fusion (Eq. 7): the clouds merged and voxelised, the result re-processed.
+  void fusePaper(const ObjectObservation& observation, const FusedCloudProcessor& process,
+                 MapObject* object) const;
+  // A new object from the observation (keys: evidence fusion's, else null); returns its id.
+  int insert(const ObjectObservation& observation, const FusionKeys* keys);
   int takeNextId();
   // Boxes an object's supported voxels (`process`) and rebuilds its cloud from its evidence.
   // view: the keyframe's depth (its free space around the object), or null.

@@ -1,16 +1,13 @@
-// Sec. 3.3: Manhattan frame (Eq. 3) from surface normals and the oriented box (Eq. 4).
+// Sec. 3.3, Eq. 3: the Manhattan frame of a cloud's surface normals, gravity-constrained (a yaw
+// about the floor normal, found exactly) or over SO(3).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
-
-// Surface normals by PCA over neighbours within radius_m (at most max_neighbours); unit length,
-// oriented arbitrarily. Points with fewer than 3 neighbours get a NaN normal.
-std::vector<Eigen::Vector3f> estimateNormals(const PointCloud& points, double radius_m,
-                                             int max_neighbours = 30);
 
 class ManhattanFrameEstimator {
  public:
@@ -54,80 +51,63 @@ class ManhattanFrameEstimator {
   Config config_;
 };
 
-class BoxEstimator {
- public:
-  struct Config {
-    ManhattanFrameEstimator::Config manhattan;
-    int min_points = 10;  // fewer points: no box
-    // Robust extents: this fraction of the points is left out at each end of every axis (noisy
-    // Kinect points add 4-6 cm to min/max). 0 = Eq. 4's min/max.
-    double extent_trim_fraction = 0.005;
-    // Depth resolution of the sensor, Δz = depth_step_per_m2 · z² (Kinect v1's disparity steps:
-    // 2.85e-3, 2.6 cm at 3 m). Points of one view then lie on depth layers, and normals over a
-    // radius smaller than the layer spacing point along the viewing ray: the normal radius grows to
-    // 2 Δz at the view's median depth. 0 = fixed radius (the paper's method).
-    double depth_step_per_m2 = 2.85e-3;
-    // The footprint's minimum-area yaw replaces Eq. 3's when its rectangle (trimmed extents) has
-    // less than this fraction of the area Eq. 3's yaw gives. A table seen from above is mostly top:
-    // its few vertical normals (cups, edges, chair backs) gave the real redkitchen table a yaw 31°
-    // off and a footprint 1.4 times too large. 0 = Eq. 3's yaw whenever its peak stands out (the
-    // paper's).
-    double footprint_yaw_area_ratio = 0.8;
-    // Eq. 3 also counts the horizontal normals of the footprint's outline (the points' occupancy
-    // on a horizontal grid of this cell size, its boundary's gradient directions): the edges of a
-    // table top seen from above carry its yaw where its own normals, all vertical, carry none.
-    // 0 = the surface normals only (the paper's).
-    double outline_cell_m = 0.02;
-    // How a single view's normals are estimated (Eq. 3's input). "cells": from the summed moments
-    // of the cells of half the normal radius whose centres lie within the radius of the query's
-    // cell, one normal per cell; the cost does not grow with the radius, which grows with depth.
-    // "radius": PCA over the points within the radius (the nearest ones beyond a cap), per point;
-    // the paper's (PCL's normal estimation).
-    std::string normal_estimation = "cells";
-    // Threads for one cloud's normals (independent queries): the mapper sets its own num_threads
-    // here, as for the outlier removal. The result does not depend on it.
-    int num_threads = 1;
-    Status isValid() const;
-    std::string print() const;
-  };
+// The parts of the gravity-constrained search that BoxEstimator runs on its own normals: there the
+// sweep, the structure test and the polish share one HorizontalNormal per normal.
+namespace manhattan {
 
-  BoxEstimator() = default;
-  explicit BoxEstimator(const Config& config) : config_(config), manhattan_(config.manhattan) {}
-  const Config& config() const { return config_; }
+// cos δ of Eq. 3.
+double cosInlierAngle(double inlier_angle_deg);
+// Folds a yaw into [-pi/4, pi/4): the four horizontal axes of a gravity-aligned frame are
+// equivalent.
+double foldYaw(double yaw_rad);
+// Deterministic stride so that at most max_count of n items are kept.
+int strideFor(std::size_t n, int max_count);
+// Finite, non-zero normals (normalised, double), subsampled by stride to at most max_normals.
+std::vector<Eigen::Vector3d> unitNormals(const std::vector<Eigen::Vector3f>& normals,
+                                         int max_normals);
 
-  // Eq. 4: Manhattan frame of the cloud (normals -> estimator), the frame put at the centroid, the
-  // points expressed in it, min/max per axis. The returned box's third column is gravity.up; its
-  // centre is the middle of the min/max extent (not the centroid).
-  // normals_W (optional): the normals it used, one per point of points_W, unit length and oriented
-  // arbitrarily; NaN where none was computed (beyond max_normals only a stride subsample has one).
-  // view_depth_m: the points' median depth in the camera that saw them (one view), for the
-  // depth-dependent normal radius; 0 = unknown or fused (the configured radius).
-  Status estimate(const PointCloud& points_W, const GravityFrame& gravity, OrientedBox* box,
-                  ManhattanFrameEstimator::Result* frame = nullptr,
-                  std::vector<Eigen::Vector3f>* normals_W = nullptr,
-                  double view_depth_m = 0.0) const;
-  // The normal radius estimate() uses at that depth.
-  double normalRadius(double view_depth_m) const;
-  // The same box from normals the caller already has (any number, not tied to the points; NaN or
-  // zero ones are ignored), e.g. the per-voxel normals kept by evidence fusion: no neighbour
-  // search.
-  Status estimateFromNormals(const PointCloud& points_W,
-                             const std::vector<Eigen::Vector3f>& normals_W,
-                             const GravityFrame& gravity, OrientedBox* box,
-                             ManhattanFrameEstimator::Result* frame = nullptr) const;
-
- private:
-  // The checks both estimates share; the finite points (and their indices in points_W, if asked).
-  Status checkedInput(const std::string& caller, const PointCloud& points_W,
-                      const GravityFrame& gravity, const OrientedBox* box, PointCloud* points,
-                      std::vector<int>* source) const;
-  // Eq. 3 on the normals, then Eq. 4 on the (finite) points.
-  Status boxFromNormals(const PointCloud& points, const std::vector<Eigen::Vector3f>& normals,
-                        const GravityFrame& gravity, OrientedBox* box,
-                        ManhattanFrameEstimator::Result* frame) const;
-
-  Config config_;
-  ManhattanFrameEstimator manhattan_;
+// Arc of yaw (folded into one quarter turn) over which a normal is an inlier of a horizontal axis.
+struct YawArc {
+  enum Kind { kNever, kAlways, kArc } kind = kNever;
+  double start = 0.0;       // in [0, pi/2)
+  double half_width = 0.0;  // < pi/4 for an arc
 };
 
+// A unit normal's horizontal geometry in a gravity frame, computed once and shared by Eq. 3's yaw
+// sweep, the structure test and the polish (each used to redo the trigonometry per normal).
+struct HorizontalNormal {
+  bool vertical = false;  // within δ of ±up: an inlier at every yaw, and not horizontal
+  double h = 0.0;         // length of the horizontal part (not computed for vertical normals)
+  double theta = 0.0;     // its angle from x_h (computed only where h >= cos δ)
+  YawArc arc;
+};
+std::vector<HorizontalNormal> horizontalNormals(const std::vector<Eigen::Vector3d>& unit_normals,
+                                                const Eigen::Vector3d& up,
+                                                const Eigen::Vector3d& x_h,
+                                                const Eigen::Vector3d& y_h, double cos_delta);
+
+struct YawSweepResult {
+  double psi = 0.0;  // in [0, pi/2)
+  int inliers = 0;
+};
+// Exact maximiser of the gravity-constrained Eq. 3 over yaw: each normal is an inlier on a closed
+// arc of yaw (mod 90°); a sweep over the sorted arc end points visits every piece of the
+// piecewise-constant count. Among the maximal pieces the widest wins and its middle is returned.
+YawSweepResult sweepArcs(const std::vector<HorizontalNormal>& normals);
+
+// Eq. 3's count is flat over a few degrees around its maximum: the yaw moves to the mean (folded)
+// horizontal angle of the normals that are inliers of a horizontal axis, repeated a few times (a
+// flat-kernel mean shift).
+double polishYaw(const std::vector<HorizontalNormal>& normals, double yaw_rad, double cos_delta);
+
+// True if, at this yaw, the horizontal inliers clearly stand out from their average over all yaws
+// (a cylinder or a flat slab gives a nearly flat inlier-vs-yaw curve): the Manhattan yaw is then
+// meaningful.
+bool hasHorizontalStructure(const std::vector<HorizontalNormal>& normals, double yaw_rad);
+
+// Eq. 3 objective on unit normals: how many lie within δ (cos_delta) of one of the axes ±R e_j.
+int countInliers(const std::vector<Eigen::Vector3d>& unit_normals, const Eigen::Matrix3d& R,
+                 double cos_delta);
+
+}  // namespace manhattan
 }  // namespace mvod

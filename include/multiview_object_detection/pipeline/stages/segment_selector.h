@@ -158,6 +158,29 @@ class SegmentSelector {
                            double clearance_m, double min_share, PointCloud* below_W);
 
  private:
+  // One consistent selection's per-segment state (segment_selector.cpp).
+  struct Work;
+  // select()'s phases, in order.
+  void countCorePoints(Work* work) const;
+  // Planes of the segments of 20 points or more (thickness: RMS distance to the plane).
+  void fitPlanes(Work* work) const;
+  // Bounding surfaces: planar segments that continue in the ring outside the detection.
+  void markBoundingSurfaces(const FrameView& view, Work* work, Result* result) const;
+  // The points in the world frame and the segments' extents in the gravity frame.
+  void computeExtents(Work* work) const;
+  // on_floor classes: segments resting on a horizontal bounding surface.
+  void markResting(Work* work, Result* result) const;
+  // The segment with the most points in the core (or, when the core holds only excluded
+  // segments, the largest other one of some size); an error where there is none.
+  Status chooseSeed(Work* work, const Result& result) const;
+  // Touching segments join the seed while the union stays plausible in size.
+  void growFromSeed(Work* work) const;
+  // flat_top classes: the kept set's main horizontal surface, its plane and footprint.
+  bool findFlatTop(const Work& work, Eigen::Vector3f* top_normal_W, Eigen::Vector3f* top_point_W,
+                   std::vector<cv::Point2f>* top_hull) const;
+  // The kept segments' points (less what rises above a flat top or lies beside it), ascending.
+  Status collectKept(const Work& work, Result* result) const;
+
   Config config_;
 };
 

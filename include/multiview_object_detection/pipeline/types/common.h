@@ -59,17 +59,6 @@ PointCloud transformCloud(const PointCloud& points_A, const Eigen::Isometry3d& T
 // only nearly orthonormal.
 Eigen::Matrix3d nearestRotation(const Eigen::Matrix3d& M);
 
-// Runs job(begin, end) over [0, count) split into contiguous ranges, on up to `threads` threads
-// (the caller's included), never with fewer than min_per_thread items per thread. For loops whose
-// iterations are independent: the result must not depend on how the range is split.
-void parallelRanges(std::size_t count, int threads, std::size_t min_per_thread,
-                    const std::function<void(std::size_t, std::size_t)>& job);
-
-// Runs job(i) for each i in [0, count) on up to `threads` threads (the caller's included), each
-// thread taking the next index as it finishes one: for jobs of very different sizes, given largest
-// first. The jobs must be independent (their result must not depend on the thread that ran them).
-void parallelForEach(std::size_t count, int threads, const std::function<void(std::size_t)>& job);
-
 // std::fmod(x, y) for y > 0, bit for bit, without the library call where |x| < 16 y (angles
 // folded into a quarter turn): the multiples 8y, 4y, 2y, y are exact, and each subtraction from a
 // remainder between one and two of them is exact (Sterbenz), so the result is the exact remainder

@@ -51,8 +51,12 @@ struct Rectangle2d {
   double yaw_rad = 0.0;
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
   Eigen::Vector2d size = Eigen::Vector2d::Zero();
+  double area() const { return size.x() * size.y(); }
 };
 Rectangle2d minimumAreaRectangle(const std::vector<Eigen::Vector2d>& points);
+// The rectangle around 2D points whose first side has direction yaw_rad (infinite area for no
+// points).
+Rectangle2d rectangleAtYaw(const std::vector<Eigen::Vector2d>& points, double yaw_rad);
 
 // Area of the intersection of two convex polygons given counter-clockwise (Sutherland-Hodgman).
 double convexPolygonIntersectionArea(const std::vector<Eigen::Vector2d>& a,
