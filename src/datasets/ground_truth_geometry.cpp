@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
+#include "multiview_object_detection/pipeline/stages/box_estimator.h"
 
 namespace mvod {
 
