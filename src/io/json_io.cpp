@@ -16,6 +16,8 @@
 #include <set>
 #include <sstream>
 
+#include "history_json.h"
+#include "json_fields.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace mvod {
@@ -23,25 +25,10 @@ namespace {
 
 using nlohmann::json;
 
-constexpr double kMaxMapCoordinateM = 1e5;
+using namespace json_fields;  // NOLINT: the map's field readers
+
 // A voxel's summed unit normals: bounded by the points that fell in it over all views.
 constexpr double kMaxNormalSum = 1e7;
-
-// Clouds are stored at 1 mm: finer than any sensor here and it keeps map files small.
-double roundToMillimetre(float value) {
-  return std::round(static_cast<double>(value) * 1000.0) / 1000.0;
-}
-
-json vectorToJson(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-json cloudToJson(const PointCloud& cloud) {
-  json points = json::array();
-  for (const Eigen::Vector3f& p : cloud) {
-    points.push_back(json::array(
-        {roundToMillimetre(p.x()), roundToMillimetre(p.y()), roundToMillimetre(p.z())}));
-  }
-  return points;
-}
 
 json stageTimesToJson(const StageTimes& t) {
   return json{{"extraction", t.extraction_ms},
@@ -51,87 +38,6 @@ json stageTimesToJson(const StageTimes& t) {
               {"fusion", t.fusion_ms},
               {"refinement", t.refinement_ms},
               {"total", t.total_ms}};
-}
-
-// Field readers: each names the field (path) it failed on.
-Status fieldError(const std::string& path, const std::string& what) {
-  return Status::Error("objects.json: " + path + ": " + what);
-}
-
-Status member(const json& parent, const std::string& path, const char* key, const json** value) {
-  const auto it = parent.find(key);
-  if (it == parent.end()) return fieldError(path + key, "missing");
-  *value = &*it;
-  return Status::Ok();
-}
-
-Status readInt(const json& parent, const std::string& path, const char* key, int min_value,
-               int* out) {
-  const json* value = nullptr;
-  Status status = member(parent, path, key, &value);
-  if (!status) return status;
-  if (!value->is_number_integer()) return fieldError(path + key, "expected an integer");
-  // An unsigned value above LLONG_MAX would wrap to a negative long long (2^64 - 1 -> -1).
-  const bool huge = value->is_number_unsigned() &&
-                    value->get<unsigned long long>() > std::numeric_limits<int>::max();
-  const long long v = huge ? std::numeric_limits<long long>::max() : value->get<long long>();
-  if (v < min_value || v > std::numeric_limits<int>::max()) {
-    return fieldError(path + key, "out of range (" + std::to_string(v) + ")");
-  }
-  *out = static_cast<int>(v);
-  return Status::Ok();
-}
-
-Status readNumber(const json& parent, const std::string& path, const char* key, double* out) {
-  const json* value = nullptr;
-  Status status = member(parent, path, key, &value);
-  if (!status) return status;
-  if (!value->is_number()) return fieldError(path + key, "expected a number");
-  const double v = value->get<double>();
-  if (!std::isfinite(v)) return fieldError(path + key, "not finite");
-  *out = v;
-  return Status::Ok();
-}
-
-Status readVector3(const json& value, const std::string& path, Eigen::Vector3d* out) {
-  if (!value.is_array() || value.size() != 3) return fieldError(path, "expected [x, y, z]");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) {
-    if (!value[i].is_number()) return fieldError(path, "expected numbers");
-    v[i] = value[i].get<double>();
-    if (!std::isfinite(v[i])) return fieldError(path, "not finite");
-    // Every vector of a map is a position, size or direction in metres: beyond this it is not
-    // a room, and it would not survive float storage and the next save.
-    if (std::abs(v[i]) > kMaxMapCoordinateM) {
-      std::ostringstream text;
-      text << "beyond +-" << kMaxMapCoordinateM << " m (" << v[i] << ")";
-      return fieldError(path, text.str());
-    }
-  }
-  *out = v;
-  return Status::Ok();
-}
-
-Status readVector3(const json& parent, const std::string& path, const char* key,
-                   Eigen::Vector3d* out) {
-  const json* value = nullptr;
-  Status status = member(parent, path, key, &value);
-  if (!status) return status;
-  return readVector3(*value, path + key, out);
-}
-
-Status readCloud(const json& value, const std::string& path, PointCloud* out) {
-  if (!value.is_array()) return fieldError(path, "expected an array of [x, y, z]");
-  PointCloud cloud;
-  cloud.reserve(value.size());
-  for (size_t i = 0; i < value.size(); ++i) {
-    Eigen::Vector3d p;
-    const Status status = readVector3(value[i], path + "[" + std::to_string(i) + "]", &p);
-    if (!status) return status;
-    cloud.push_back(p.cast<float>());
-  }
-  *out = std::move(cloud);
-  return Status::Ok();
 }
 
 // id, class, probability and observations.
@@ -410,7 +316,7 @@ std::vector<MapObject> databaseObjects(const ObjectDatabase& database) {
 }
 
 std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
-                          bool include_clouds) {
+                          bool include_clouds, const std::deque<KeyframeRecord>* history) {
   json doc;
   doc["frames"] = summary.frames;
   doc["keyframes"] = summary.keyframes;
@@ -501,13 +407,16 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
   doc["counts"] = {{"detections", c.detections}, {"above_threshold", c.above_threshold},
                    {"with_box", c.with_box},     {"inserted", c.inserted},
                    {"fused", c.fused},           {"before_refinement", c.before_refinement}};
+  if (history != nullptr && !history->empty()) {
+    doc["keyframe_history"] = history_json::historyToJson(*history);
+  }
   // With clouds the document is large: compact. Without, indented for people to read.
   // Names come from detectors: bytes that are not UTF-8 are replaced rather than failing the save.
   return doc.dump(include_clouds ? -1 : 2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
-                       MapSummary* summary) {
+                       MapSummary* summary, std::deque<KeyframeRecord>* history) {
   json doc;
   try {
     doc = json::parse(text);
@@ -581,8 +490,17 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
     parsed_objects.push_back(std::move(object));
   }
 
+  // The keyframe history (optional: a map without it loads, but cannot follow corrections).
+  std::deque<KeyframeRecord> parsed_history;
+  const auto history_it = doc.find("keyframe_history");
+  if (history_it != doc.end()) {
+    status = history_json::historyFromJson(*history_it, "keyframe_history", &parsed_history);
+    if (!status) return status;
+  }
+
   if (objects != nullptr) *objects = std::move(parsed_objects);
   if (summary != nullptr) *summary = parsed;
+  if (history != nullptr) *history = std::move(parsed_history);
   return Status::Ok();
 }
 

@@ -125,6 +125,7 @@ Status ObjectMapper::Config::isValid() const {
   if (!(status = checkSection("prior_filter", prior_filter.isValid()))) return status;
   if (!(status = checkSection("intersection_filter", intersection_filter.isValid()))) return status;
   if (!(status = checkSection("gravity", gravity.isValid()))) return status;
+  if (!(status = checkSection("corrections", corrections.isValid()))) return status;
   return Status::Ok();
 }
 
@@ -145,6 +146,7 @@ std::string ObjectMapper::Config::print() const {
   appendSection("prior_filter", prior_filter.print(), &out);
   appendSection("intersection_filter", intersection_filter.print(), &out);
   appendSection("gravity", gravity.print(), &out);
+  appendSection("corrections", corrections.print(), &out);
   return out.str();
 }
 
@@ -163,6 +165,7 @@ void ObjectMapper::Config::usePaperMethod() {
   intersection_filter.duplicate_ratio = 0.0;
   intersection_filter.container_support_ratio = 0.0;
   database.amodal.enable = false;
+  corrections.enable = false;
 }
 
 namespace {
@@ -213,7 +216,8 @@ ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
       database_(config.database, priors),
       prior_filter_(config.prior_filter),
       intersection_filter_(config.intersection_filter),
-      gravity_estimator_(config.gravity) {}
+      gravity_estimator_(config.gravity),
+      history_(config.corrections) {}
 
 Status ObjectMapper::updateConfig(const Config& config) {
   const Status valid = config.isValid();
@@ -230,6 +234,7 @@ Status ObjectMapper::updateConfig(const Config& config) {
   database_.setConfig(config.database);
   prior_filter_ = PriorSizeFilter(config.prior_filter);
   intersection_filter_ = IntersectionFilter(config.intersection_filter);
+  history_.setConfig(config.corrections);
   return Status::Ok();
 }
 
@@ -254,6 +259,8 @@ bool ObjectMapper::updateGravity(const RgbdFrame& frame) {
 
 void ObjectMapper::reset() {
   database_.clear();
+  history_.clear();
+  refined_ = false;
   gravity_estimator_ = GravityEstimator(config_.gravity);
   floor_.reset();
   keyframes_ = 0;
@@ -291,6 +298,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   out.times.extraction_ms = msSince(t);
   std::vector<SingleView> views = runSingleViews(frame, kept, clouds);
   fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
+  recordKeyframe(frame, keyframe, clouds.floor_layer_m, &views);
   out.times.total_ms = msSince(start);
   return Status::Ok();
 }
@@ -371,7 +379,7 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
       clouds.view = SegmentSelector::makeFrameView(frame, 2, config_.extractor.min_valid_depth_m,
                                                    config_.extractor.max_valid_depth_m);
     }
-    if (config_.floor.enable) addFloorSample(clouds.view);
+    if (config_.floor.enable) clouds.floor_layer_m = addFloorSample(clouds.view);
   };
   const auto depth_and_clouds = [&]() {
     // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
@@ -379,7 +387,7 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
     if (config_.database.fusion == "evidence" &&
         (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
         !kept.detections.empty()) {
-      clouds.depth_view = makeDepthView(frame);
+      clouds.depth_view = makeDepthView(frame.depth, frame.K_depth, frame.T_W_D);
     }
     clouds.clouds_D = extractClouds(frame, kept, label, warnings);
   };
@@ -387,35 +395,24 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
   return clouds;
 }
 
-void ObjectMapper::addFloorSample(const SegmentSelector::FrameView& view) {
+double ObjectMapper::addFloorSample(const SegmentSelector::FrameView& view) {
   // Every 2nd point of the view is plenty for the floor's layer.
   PointCloud sample_W;
   sample_W.reserve(view.points_W.size() / 2 + 1);
   for (size_t i = 0; i < view.points_W.size(); i += 2) sample_W.push_back(view.points_W[i]);
-  floor_.addFrame(sample_W, gravity());
+  double layer_m = std::numeric_limits<double>::quiet_NaN();
+  floor_.addFrame(sample_W, gravity(), &layer_m);
+  return layer_m;
 }
 
-std::shared_ptr<DepthView> ObjectMapper::makeDepthView(const RgbdFrame& frame) const {
-  auto depth_view = std::make_shared<DepthView>();
-  // Metres, 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too).
-  frame.depth.convertTo(depth_view->depth_m, CV_32FC1,
-                        frame.depth.type() == CV_16UC1 ? 0.001 : 1.0);
-  const float min_m = static_cast<float>(config_.extractor.min_valid_depth_m);
-  const float max_m = static_cast<float>(config_.extractor.max_valid_depth_m);
-  for (int v = 0; v < depth_view->depth_m.rows; ++v) {
-    float* row = depth_view->depth_m.ptr<float>(v);
-    for (int u = 0; u < depth_view->depth_m.cols; ++u) {
-      row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
-    }
-  }
-  // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
-  depth_view->prepareNeighbourhoods();
-  depth_view->K = frame.K_depth;
-  depth_view->T_D_W = frame.T_W_D.inverse();
-  // The band, plus three depth steps: what lies further behind the measured surface is hidden.
-  depth_view->truncation_m = config_.database.surface_band_m;
-  depth_view->truncation_per_m2 = 3.0 * config_.extractor.depth_step_per_m2;
-  return depth_view;
+std::shared_ptr<DepthView> ObjectMapper::makeDepthView(const cv::Mat& depth,
+                                                       const CameraIntrinsics& K_depth,
+                                                       const Eigen::Isometry3d& T_W_D) const {
+  // 0 where invalid (NaN, or outside the extractor's valid range: 0 and 65535 mm too). The band,
+  // plus three depth steps: what lies further behind the measured surface is hidden.
+  return mvod::makeDepthView(depth, K_depth, T_W_D, config_.extractor.min_valid_depth_m,
+                             config_.extractor.max_valid_depth_m, config_.database.surface_band_m,
+                             3.0 * config_.extractor.depth_step_per_m2);
 }
 
 std::vector<PointCloud> ObjectMapper::extractClouds(const RgbdFrame& frame,
@@ -501,6 +498,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     observation.depth_view = depth_view;
     const ObjectDatabase::FusionResult result =
         fuseObservation(observation, defer_rebox, &out->times);
+    view.object_id = result.object_id;
     if (result.decision == ObjectDatabase::Decision::kFused) {
       ++out->fused;
     } else {
@@ -844,6 +842,20 @@ bool ObjectMapper::processFused(const std::string& class_name, const PointCloud&
 }
 
 ObjectMapper::RefinementReport ObjectMapper::refine() {
+  refined_ = true;
+  const RefinementReport report = refineDatabase();
+  // A merged duplicate's views are the kept object's now.
+  for (const auto& merged : report.merged_ids) {
+    for (KeyframeRecord& record : history_.mutableRecords()) {
+      for (RecordedView& view : record.views) {
+        if (view.object_id == merged.first) view.object_id = merged.second;
+      }
+    }
+  }
+  return report;
+}
+
+ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
   const Clock::time_point start = Clock::now();
   RefinementReport report;
   // Sec. 3.5.1 first; Algorithm 1 then only sees the survivors.

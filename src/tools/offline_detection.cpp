@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "cli_options.h"
+#include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
@@ -91,6 +92,12 @@ const char* const kUsage =
     "                         under a table is its backrest)\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
+    "  --corrected-poses DIR  the SLAM's corrections, as at a loop closure: frame-NNNNNN.pose.txt\n"
+    "                         files (the 7-Scenes layout); every keyframe processed before\n"
+    "                         --correct-at that has a file there takes that pose, and the map\n"
+    "                         follows (not with --paper, which keeps no keyframe history)\n"
+    "  --correct-at N         apply --corrected-poses just before frame N (default: after the\n"
+    "                         last frame)\n"
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
     "  --help                 this text\n"
     "\n"
@@ -129,21 +136,25 @@ struct Options {
   bool estimate_gravity = false;
   bool simulated_perfect = false;
   long simulated_seed = 1;
+  std::string corrected_poses;
+  int correct_at = std::numeric_limits<int>::max();
   bool quiet = false;
 };
 
 // Input, detector and output options.
 void addInputOptions(CLI::App* app, Options* options) {
-  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset),
-                                    std::make_pair("--detections", &options->detections),
-                                    std::make_pair("--detector", &options->detector),
-                                    std::make_pair("--model-dir", &options->model_dir),
-                                    std::make_pair("--output", &options->output),
-                                    std::make_pair("--save-clouds", &options->save_clouds),
-                                    std::make_pair("--overlays", &options->overlays),
-                                    std::make_pair("--timings", &options->timings),
-                                    std::make_pair("--priors", &options->priors),
-                                    std::make_pair("--backend", &options->backend)}) {
+  for (const auto& [name, value] :
+       {std::make_pair("--dataset", &options->dataset),
+        std::make_pair("--detections", &options->detections),
+        std::make_pair("--detector", &options->detector),
+        std::make_pair("--model-dir", &options->model_dir),
+        std::make_pair("--output", &options->output),
+        std::make_pair("--save-clouds", &options->save_clouds),
+        std::make_pair("--overlays", &options->overlays),
+        std::make_pair("--timings", &options->timings),
+        std::make_pair("--priors", &options->priors),
+        std::make_pair("--backend", &options->backend),
+        std::make_pair("--corrected-poses", &options->corrected_poses)}) {
     cli::addText(app, name, value, std::string(name) + " needs a value");
   }
   cli::addValue(app, "--format", [options](const std::string& text) {
@@ -178,6 +189,9 @@ void addInputOptions(CLI::App* app, Options* options) {
                   &options->first, "--first needs an integer");
   cli::addInteger(app, "--last", std::numeric_limits<int>::min(), std::numeric_limits<int>::max(),
                   &options->last, "--last needs an integer");
+  cli::addInteger(app, "--correct-at", std::numeric_limits<int>::min(),
+                  std::numeric_limits<int>::max(), &options->correct_at,
+                  "--correct-at needs an integer");
   cli::addFlag(app, "--quiet", &options->quiet);
 }
 
@@ -228,6 +242,11 @@ int parseArguments(int argc, char** argv, Options* options) {
     error = "--first is after --last";
   } else if (options->detector == "files" && options->detections.empty()) {
     error = "--detector files needs --detections DIR";
+  } else if (options->correct_at != std::numeric_limits<int>::max() &&
+             options->corrected_poses.empty()) {
+    error = "--correct-at needs --corrected-poses DIR";
+  } else if (!options->corrected_poses.empty() && !fs::is_directory(options->corrected_poses)) {
+    error = "--corrected-poses: no folder " + options->corrected_poses;
   }
   return error.empty() ? -1 : cli::usageError("offline_detection", error, kUsage);
 }
@@ -468,6 +487,8 @@ struct RunStats {
   int keyframes = 0;
   int errors = 0;
   mvod::MapSummary::Counts counts;
+  std::vector<double> correction_ms;  // --corrected-poses: each correction's time
+  int keyframes_corrected = 0;
 };
 
 // Every N-th frame through load -> detect -> ObjectMapper::processKeyframe, with a progress line.
@@ -482,11 +503,17 @@ class KeyframeLoop {
         progress_(num_frames, !options.quiet) {}
 
   void run(const std::vector<int>& frames) {
+    bool corrected = options_.corrected_poses.empty();
     for (size_t i = 0; i < frames.size(); ++i) {
+      if (!corrected && frames[i] >= options_.correct_at) {
+        correctPoses(frames[i]);
+        corrected = true;
+      }
       if (i % static_cast<size_t>(options_.every) == 0) processFrame(frames[i]);
       progress_.update(i + 1, stats_.keyframes, mapper_.database().size());
     }
     progress_.breakLine();
+    if (!corrected) correctPoses(-1);
   }
   const RunStats& stats() const { return stats_; }
 
@@ -505,6 +532,52 @@ class KeyframeLoop {
     if (!detect(frame, name, &detections)) return;
     if (!options_.overlays.empty()) writeOverlay(frame, name, detections);
     mapKeyframe(frame, name, detections);
+    keyframes_.push_back({index, frame.stamp_s, frame.T_C_D});
+  }
+
+  // --corrected-poses: the keyframes so far that have a pose file there take that pose
+  // (before_frame: the frame it happens before; -1 after the last).
+  void correctPoses(int before_frame) {
+    std::vector<mvod::PoseCorrection> corrections;
+    for (const ProcessedKeyframe& keyframe : keyframes_) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", keyframe.index);
+      const fs::path path = fs::path(options_.corrected_poses) / name;
+      std::error_code error;
+      if (!fs::exists(path, error)) continue;
+      Eigen::Isometry3d T_W_D;
+      const mvod::Status read = mvod::SevenScenesDataset::readPose(path.string(), &T_W_D);
+      if (!read) {
+        ++stats_.errors;
+        report("error: corrected pose " + path.string() + ": " + read.message(), true);
+        continue;
+      }
+      mvod::PoseCorrection correction;
+      correction.stamp_s = keyframe.stamp_s;
+      correction.T_W_C = T_W_D * keyframe.T_C_D.inverse();
+      corrections.push_back(correction);
+    }
+    mvod::ObjectMapper::CorrectionReport correction;
+    const mvod::Status applied = mapper_.correctPoses(corrections, &correction);
+    const std::string when =
+        before_frame >= 0 ? "before frame " + std::to_string(before_frame) : "after the last frame";
+    if (!applied) {
+      ++stats_.errors;
+      report("error: corrections " + when + ": " + applied.message(), true);
+      return;
+    }
+    std::ostringstream line;
+    if (correction.ignored) {
+      line << "corrections " << when << " ignored: the paper's method keeps no keyframe history";
+    } else {
+      line << "corrections " << when << ": " << corrections.size() << " pose files, "
+           << correction.keyframes_moved << " keyframes moved, " << correction.views_replayed
+           << " views fused again, objects " << correction.objects_before << " -> "
+           << correction.objects_after << " (" << correction.time_ms << " ms)";
+    }
+    report(line.str(), false);
+    stats_.correction_ms.push_back(correction.time_ms);
+    stats_.keyframes_corrected += correction.keyframes_moved;
   }
 
   // The detector on the frame, timed; false (an error counted) when it fails.
@@ -573,6 +646,12 @@ class KeyframeLoop {
   mvod::ObjectMapper& mapper_;
   Progress progress_;
   RunStats stats_;
+  struct ProcessedKeyframe {
+    int index;
+    double stamp_s;
+    Eigen::Isometry3d T_C_D;
+  };
+  std::vector<ProcessedKeyframe> keyframes_;
 };
 
 // The map's summary; Table 5's split as medians per keyframe (over the keyframes that had

@@ -1,12 +1,15 @@
 // libFuzzer harness: the map loader (io/json_io objectsFromJson, what ~load_map and the tools
-// read). Whatever loads must save (objectsToJson with clouds, as ~save_map writes) and reload to
-// the same map: every field of every object and of the summary, clouds within the 1 mm they are
-// stored at. The second save must then be byte-identical to the first (saving is a fixed point).
-// Any mismatch aborts, which libFuzzer reports as a crash with the input that caused it.
+// read), with its keyframe history. Whatever loads must save (objectsToJson with clouds, as
+// ~save_map writes) and reload to the same map: every field of every object and of the summary,
+// clouds within the 1 mm they are stored at. The second save must then be byte-identical to the
+// first (saving is a fixed point). Any mismatch aborts, which libFuzzer reports as a crash with the
+// input that caused it.
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -104,30 +107,87 @@ void compareObjects(const MapObject& a, const MapObject& b, size_t index) {
          where + "seen times differ");
 }
 
+bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+bool sameTriples(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (!sameFloat(a[i][k], b[i][k])) return false;
+    }
+  }
+  return true;
+}
+
+// The keyframe history: every field exactly (points and normals are stored as float32 bits).
+void compareHistories(const std::deque<mvod::KeyframeRecord>& a,
+                      const std::deque<mvod::KeyframeRecord>& b) {
+  expect(a.size() == b.size(), "history length differs");
+  for (size_t i = 0; i < a.size(); ++i) {
+    const std::string where = "keyframe record " + std::to_string(i) + ": ";
+    const mvod::KeyframeRecord& r = a[i];
+    const mvod::KeyframeRecord& s = b[i];
+    expect(r.keyframe == s.keyframe && same(r.stamp_s, s.stamp_s) && r.name == s.name,
+           where + "keyframe, stamp or name differs");
+    expect(r.T_W_D_recorded.matrix() == s.T_W_D_recorded.matrix() &&
+               r.T_W_D.matrix() == s.T_W_D.matrix() && r.T_C_D.matrix() == s.T_C_D.matrix(),
+           where + "poses differ");
+    expect(same(r.K_depth.fx, s.K_depth.fx) && same(r.K_depth.fy, s.K_depth.fy) &&
+               same(r.K_depth.cx, s.K_depth.cx) && same(r.K_depth.cy, s.K_depth.cy) &&
+               r.K_depth.width == s.K_depth.width && r.K_depth.height == s.K_depth.height,
+           where + "intrinsics differ");
+    expect(r.has_floor == s.has_floor && (!r.has_floor || r.floor_point_D == s.floor_point_D),
+           where + "floor point differs");
+    expect(r.depth.type() == s.depth.type() && r.depth.size() == s.depth.size() &&
+               (r.depth.empty() ||
+                std::memcmp(r.depth.data, s.depth.data, r.depth.total() * r.depth.elemSize()) == 0),
+           where + "depth differs");
+    expect(r.views.size() == s.views.size(), where + "view count differs");
+    for (size_t k = 0; k < r.views.size(); ++k) {
+      const mvod::RecordedView& u = r.views[k];
+      const mvod::RecordedView& v = s.views[k];
+      expect(u.class_id == v.class_id && u.class_name == v.class_name &&
+                 same(u.probability, v.probability) && u.object_id == v.object_id &&
+                 same(u.yaw_rad, v.yaw_rad) && sameVector(u.box.center_m, v.box.center_m) &&
+                 sameVector(u.box.size_m, v.box.size_m) && u.box.rotation == v.box.rotation,
+             where + "view fields differ");
+      expect(sameTriples(u.cut->cut_W, v.cut->cut_W) &&
+                 sameTriples(u.cut->normals_W, v.cut->normals_W) &&
+                 u.cut->outside_keys == v.cut->outside_keys &&
+                 same(u.cut->voxel_size_m, v.cut->voxel_size_m),
+             where + "view cut differs");
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   std::vector<MapObject> loaded;
   MapSummary summary;
-  const mvod::Status status = mvod::objectsFromJson(text, &loaded, &summary);
+  std::deque<mvod::KeyframeRecord> history;
+  const mvod::Status status = mvod::objectsFromJson(text, &loaded, &summary, &history);
   if (!status) {
     expect(!status.message().empty(), "an error without a message");
     return 0;
   }
 
-  const std::string saved = mvod::objectsToJson(loaded, summary, /*include_clouds=*/true);
+  const std::string saved = mvod::objectsToJson(loaded, summary, /*include_clouds=*/true, &history);
   std::vector<MapObject> reloaded;
   MapSummary reloaded_summary;
-  const mvod::Status reload = mvod::objectsFromJson(saved, &reloaded, &reloaded_summary);
+  std::deque<mvod::KeyframeRecord> reloaded_history;
+  const mvod::Status reload =
+      mvod::objectsFromJson(saved, &reloaded, &reloaded_summary, &reloaded_history);
   if (!reload) fail("a loaded map saves to a file that does not load: " + reload.message());
 
   compareSummaries(summary, reloaded_summary);
   expect(loaded.size() == reloaded.size(), "object count differs");
   for (size_t i = 0; i < loaded.size(); ++i) compareObjects(loaded[i], reloaded[i], i);
+  compareHistories(history, reloaded_history);
 
-  const std::string saved_again =
-      mvod::objectsToJson(reloaded, reloaded_summary, /*include_clouds=*/true);
+  const std::string saved_again = mvod::objectsToJson(reloaded, reloaded_summary,
+                                                      /*include_clouds=*/true, &reloaded_history);
   expect(saved_again == saved, "saving the reloaded map writes a different file");
   return 0;
 }

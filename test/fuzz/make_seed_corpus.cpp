@@ -1,12 +1,16 @@
 // Writes the seed corpora of the fuzz harnesses (test/fuzz/<harness>_corpus/): small files in the
 // real formats, made here rather than copied from data. Run once when a format changes:
 //   clang++ -std=c++17 -Iinclude -I/usr/include/eigen3 $(pkg-config --cflags opencv4) \
-//     test/fuzz/make_seed_corpus.cpp src/io/json_io.cpp -lopencv_imgcodecs -lopencv_core \
+//     test/fuzz/make_seed_corpus.cpp src/io/json_io.cpp src/io/history_json.cpp src/io/image_io.cpp
+//     \
+//     src/pipeline/types/common.cpp -lopencv_imgcodecs -lopencv_imgproc -lopencv_core \
 //     -o /tmp/make_seed_corpus && /tmp/make_seed_corpus test/fuzz
 #include <cstdint>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
@@ -93,6 +97,34 @@ void mapCorpus(const fs::path& dir) {
   const size_t at = empty_evidence.rfind("\"points\":");
   empty_evidence.insert(at, "\"evidence\":{\"voxel_size_m\":0.02,\"voxels\":[]},");
   writeBytes(dir / "regression_empty_evidence.json", empty_evidence);
+
+  // A map with its keyframe history (a 16-bit depth image, one view).
+  mvod::KeyframeRecord record;
+  record.keyframe = 4;
+  record.stamp_s = 12.5;
+  record.name = "frame-000040";
+  record.T_W_D_recorded.translation() = Eigen::Vector3d(0.5, 0.25, 1.0);
+  record.T_W_D = record.T_W_D_recorded;
+  record.K_depth = mvod::CameraIntrinsics{525.0, 525.0, 3.5, 2.5, 8, 6};
+  record.depth = cv::Mat(6, 8, CV_16UC1, cv::Scalar(1500));
+  record.has_floor = true;
+  record.floor_point_D = Eigen::Vector3d(0.0, 1.2, 0.5);
+  mvod::RecordedView view;
+  view.class_id = 56;
+  view.class_name = "chair";
+  view.probability = 0.75;
+  view.box = chair.box;
+  view.yaw_rad = chair.yaw_rad;
+  view.object_id = chair.id;
+  auto cut = std::make_shared<mvod::RecordedCut>();
+  cut->cut_W = {Eigen::Vector3f(1.25f, -0.5f, 0.5f), Eigen::Vector3f(1.3f, -0.45f, 0.6f)};
+  cut->normals_W = {Eigen::Vector3f(0.f, 0.f, 1.f), Eigen::Vector3f(1.f, 0.f, 0.f)};
+  cut->outside_keys = {mvod::packVoxel(Eigen::Vector3i(125, -50, 40))};
+  cut->voxel_size_m = 0.01;
+  view.cut = cut;
+  record.views.push_back(view);
+  const std::deque<mvod::KeyframeRecord> history = {record};
+  writeBytes(dir / "with_history.json", mvod::objectsToJson({chair}, summary, true, &history));
 }
 
 void detectionCorpus(const fs::path& dir) {

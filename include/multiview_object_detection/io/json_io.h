@@ -1,6 +1,7 @@
 // objects.json: the object database as JSON, the offline runner's output and the map file format.
 #pragma once
 
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -33,13 +34,14 @@ struct MapSummary {
 //  "observations", "center", "size", "rotation" (3x3, columns = box axes), "yaw", "num_points",
 //  ...}], "removed": {"atypical", "intersecting"}, "stage_ms": {...}, "counts": {...}}. With
 //  include_clouds the fused and segmented
-// clouds are stored too (a map that can be reloaded and fused into).
+// clouds are stored too (a map that can be reloaded and fused into). With a history, its keyframes
+// too ("keyframe_history"): a map that still follows the SLAM's corrections once reloaded.
 std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
-                          bool include_clouds);
+                          bool include_clouds, const std::deque<KeyframeRecord>* history = nullptr);
 // Parses what objectsToJson wrote; a malformed document is an error naming the field, and leaves
-// the outputs untouched.
+// the outputs untouched. history (optional): the keyframe history, empty when the file has none.
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
-                       MapSummary* summary);
+                       MapSummary* summary, std::deque<KeyframeRecord>* history = nullptr);
 
 // Atomic write: a temporary file beside `path`, then rename. A replaced file keeps its mode; the
 // temporaries of `path` a killed save left behind are removed first. Refuses to replace anything

@@ -2,13 +2,16 @@
 // and the tests all drive it.
 #pragma once
 
+#include <deque>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/map/keyframe_history.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/map/refinement.h"
 #include "multiview_object_detection/pipeline/stages/box_estimator.h"
@@ -72,6 +75,9 @@ class ObjectMapper {
     PriorSizeFilter::Config prior_filter;
     IntersectionFilter::Config intersection_filter;
     GravityEstimator::Config gravity;
+    // What each keyframe contributed, kept so that the map follows the SLAM's corrections
+    // (correctPoses). Evidence fusion only.
+    KeyframeHistory::Config corrections;
     Status isValid() const;  // checks every sub-config
     std::string print() const;
     // The paper's method as published: Eq. 2's largest segment, Eq. 7's literal fusion, min/max
@@ -85,6 +91,18 @@ class ObjectMapper {
     // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
     // (deleted id, id merged into).
     std::vector<std::pair<int, int>> merged_ids;
+    double time_ms = 0.0;
+  };
+
+  // What one correctPoses() did.
+  struct CorrectionReport {
+    bool ignored = false;     // the paper's method, or corrections off: nothing changes
+    int keyframes_moved = 0;  // keyframes whose pose changed
+    int unmatched = 0;        // corrections whose stamp matched no keyframe
+    int views_replayed = 0;   // detections fused again
+    int objects_before = 0;
+    int objects_after = 0;
+    int objects_kept_unmoved = 0;  // objects without recorded views (e.g. from an older map file)
     double time_ms = 0.0;
   };
 
@@ -105,6 +123,17 @@ class ObjectMapper {
   // Sec. 3.5: removes atypical and intersecting objects from the database.
   RefinementReport refine();
 
+  // The SLAM corrected keyframe poses (a loop closure, a global bundle adjustment): every keyframe
+  // a correction names (by stamp) takes its new pose, and the map is rebuilt from the recorded
+  // views at their keyframes' current poses, in keyframe order, as if these poses had been known
+  // from the start: objects move, re-fuse, and those that now coincide become one (keeping the id
+  // most of its views had). The refinement runs again if it ran before. Keyframes not named keep
+  // their pose. The paper's method keeps no history: report->ignored.
+  Status correctPoses(const std::vector<PoseCorrection>& corrections, CorrectionReport* report);
+  const KeyframeHistory& history() const { return history_; }
+  // The history as loaded with a map (the map's objects and the views that made them).
+  void setHistory(std::deque<KeyframeRecord> records);
+
   // Single-view processing of one object cloud in the depth camera frame: floor cut, filter, LCCP,
   // segment selection, box. Without a frame and detection the largest segment is kept. Used by
   // processKeyframe; public for tests and the single-frame baseline.
@@ -121,7 +150,8 @@ class ObjectMapper {
   GravityFrame gravity() const;
   bool hasGravity() const;
   int keyframesProcessed() const { return keyframes_; }
-  // Empties the database and forgets the gravity estimate; ids keep counting (never reused).
+  // Empties the database and the history and forgets the gravity estimate; ids keep counting
+  // (never reused).
   void reset();
 
  private:
@@ -135,6 +165,8 @@ class ObjectMapper {
   // depth in metres (evidence fusion; may be null) and each kept detection's cloud.
   struct KeyframeClouds {
     bool has_view = false;
+    // The height of this keyframe's own floor layer (NaN: none seen), for the history.
+    double floor_layer_m = std::numeric_limits<double>::quiet_NaN();
     SegmentSelector::FrameView view;
     std::shared_ptr<DepthView> depth_view;
     std::vector<PointCloud> clouds_D;
@@ -144,6 +176,7 @@ class ObjectMapper {
     Status status;
     ObjectObservation observation;
     StageTimes times;
+    int object_id = -1;  // the object it was fused into or inserted as
   };
 
   // processKeyframe's phases, in order.
@@ -158,8 +191,10 @@ class ObjectMapper {
   // depth view and the detections' clouds.
   KeyframeClouds prepareKeyframe(const RgbdFrame& frame, const KeptDetections& kept,
                                  const std::string& label, std::vector<std::string>* warnings);
-  void addFloorSample(const SegmentSelector::FrameView& view);
-  std::shared_ptr<DepthView> makeDepthView(const RgbdFrame& frame) const;
+  // Adds the view's floor layer to the floor estimate; the layer's own height, NaN if none.
+  double addFloorSample(const SegmentSelector::FrameView& view);
+  std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntrinsics& K_depth,
+                                           const Eigen::Isometry3d& T_W_D) const;
   // One cloud per kept detection; a detection whose extraction fails gets an empty cloud and a
   // warning, the others their clouds.
   std::vector<PointCloud> extractClouds(const RgbdFrame& frame, const KeptDetections& kept,
@@ -178,6 +213,22 @@ class ObjectMapper {
                                                bool defer_rebox, StageTimes* times);
   // Evidence fusion, once per keyframe: the objects that changed boxed, in parallel.
   void reboxPending(StageTimes* times);
+  // Sec. 3.5 on the database; the views of merged duplicates follow them into the history.
+  RefinementReport refineDatabase();
+
+  // The history (object_mapper_history.cpp): what the keyframe contributed, kept after its fusion;
+  // the map rebuilt from it at the keyframes' current poses; a recorded view as the fusion takes it
+  // again (its box re-estimated when the correction tilted it off gravity).
+  void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
+                      std::vector<SingleView>* views);
+  void rebuildFromHistory(CorrectionReport* report);
+  ObjectObservation replayView(const KeyframeRecord& record, const RecordedView& view) const;
+  // The ids of the rebuilt objects: each takes the id most of its views had before (the better
+  // supported objects choose first), else a new one; objects of the old map that no view made are
+  // kept as they were.
+  // rebuilt_ids: the rebuilt object of each recorded view, in history order.
+  void adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,
+                       CorrectionReport* report);
 
   bool processFused(const std::string& class_name, const PointCloud& points_W,
                     const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,
@@ -237,6 +288,8 @@ class ObjectMapper {
   PriorSizeFilter prior_filter_;
   IntersectionFilter intersection_filter_;
   GravityEstimator gravity_estimator_;
+  KeyframeHistory history_;
+  bool refined_ = false;  // refine() ran: a rebuilt map is refined again
   int keyframes_ = 0;
 };
 

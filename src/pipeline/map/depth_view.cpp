@@ -87,4 +87,28 @@ DepthView::Visibility DepthView::visibility(const Eigen::Vector3f& p_W, double m
   return measured - z > beyond_m ? Visibility::kSeenFree : Visibility::kNotSeenFree;
 }
 
+std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntrinsics& K_depth,
+                                         const Eigen::Isometry3d& T_W_D, double min_valid_m,
+                                         double max_valid_m, double truncation_m,
+                                         double truncation_per_m2) {
+  auto view = std::make_shared<DepthView>();
+  // Metres, 0 where invalid (NaN, or outside the valid range: 0 and 65535 mm too).
+  depth.convertTo(view->depth_m, CV_32FC1, depth.type() == CV_16UC1 ? 0.001 : 1.0);
+  const float min_m = static_cast<float>(min_valid_m);
+  const float max_m = static_cast<float>(max_valid_m);
+  for (int v = 0; v < view->depth_m.rows; ++v) {
+    float* row = view->depth_m.ptr<float>(v);
+    for (int u = 0; u < view->depth_m.cols; ++u) {
+      row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
+    }
+  }
+  // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
+  view->prepareNeighbourhoods();
+  view->K = K_depth;
+  view->T_D_W = T_W_D.inverse();
+  view->truncation_m = truncation_m;
+  view->truncation_per_m2 = truncation_per_m2;
+  return view;
+}
+
 }  // namespace mvod

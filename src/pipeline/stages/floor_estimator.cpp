@@ -50,7 +50,8 @@ void FloorEstimator::setFloor(double height_m, const Eigen::Vector3d& up) {
   up_ = up;
 }
 
-bool FloorEstimator::addFrame(const PointCloud& points_W, const GravityFrame& gravity) {
+bool FloorEstimator::addFrame(const PointCloud& points_W, const GravityFrame& gravity,
+                              double* layer_height_m) {
   constexpr double kCosOneDegree = 0.99984769515639;
   if (!up_.isZero() && up_.dot(gravity.up) < kCosOneDegree) reset();
   up_ = gravity.up;
@@ -86,6 +87,7 @@ bool FloorEstimator::addFrame(const PointCloud& points_W, const GravityFrame& gr
     if (hi - lo < needed) continue;
     // The floor surface: the median of the layer (its noise is symmetric about the surface).
     const double height_m = heights[lo + (hi - lo) / 2];
+    if (layer_height_m != nullptr) *layer_height_m = height_m;
     if (!has_floor_ || height_m < floor_height_m_) {
       floor_height_m_ = height_m;
       has_floor_ = true;

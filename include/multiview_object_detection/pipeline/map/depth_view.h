@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <opencv2/core.hpp>
 
 #include "multiview_object_detection/pipeline/types/common.h"
@@ -41,5 +42,12 @@ struct DepthView {
   // no valid depth at the pixel.
   Visibility visibility(const Eigen::Vector3f& p_W, double margin_m) const;
 };
+
+// The keyframe's depth as DepthView measures it: metres, 0 where invalid or outside [min_m, max_m],
+// with its 3 x 3 ranges prepared, at pose T_W_D.
+std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntrinsics& K_depth,
+                                         const Eigen::Isometry3d& T_W_D, double min_valid_m,
+                                         double max_valid_m, double truncation_m,
+                                         double truncation_per_m2);
 
 }  // namespace mvod

@@ -2,6 +2,7 @@
 // clouds re-processed (Eq. 7) and probabilities averaged (Eq. 8).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -202,6 +203,8 @@ class ObjectDatabase {
   // (and keeps the content) ids outside [0, kMaxObjectId] or repeated.
   Status setObjects(const std::vector<MapObject>& objects);
   int nextId() const { return next_id_; }
+  // Ids below next_id are never given to new objects (a rebuilt map continues its predecessor's).
+  void reserveIdsBelow(int next_id) { next_id_ = std::max(next_id_, next_id); }
   size_t size() const { return objects_.size(); }
 
  private:

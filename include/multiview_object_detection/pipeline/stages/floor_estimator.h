@@ -38,8 +38,10 @@ class FloorEstimator {
 
   // One frame's points in the world frame (any subsample). Keeps the lowest floor layer seen so
   // far; a frame that shows no floor changes nothing. Returns true when this frame showed a floor.
-  // A different `up` than before (a new gravity estimate) starts over.
-  bool addFrame(const PointCloud& points_W, const GravityFrame& gravity);
+  // A different `up` than before (a new gravity estimate) starts over. layer_height_m (optional):
+  // the height of this frame's own floor layer, when it showed one.
+  bool addFrame(const PointCloud& points_W, const GravityFrame& gravity,
+                double* layer_height_m = nullptr);
   bool hasFloor() const { return has_floor_; }
   // Height of the floor surface along gravity.up (m), valid when hasFloor().
   double floorHeight_m() const { return floor_height_m_; }

@@ -1,0 +1,234 @@
+// ObjectMapper's keyframe history: what each keyframe contributed, recorded after its fusion, and
+// the map rebuilt from it when the SLAM corrects keyframe poses (keyframe_history.h).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "multiview_object_detection/pipeline/object_mapper.h"
+
+namespace mvod {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+bool isRigid(const PoseCorrection& correction) {
+  return std::isfinite(correction.stamp_s) && isValidPose(correction.T_W_C, 1e-3);
+}
+
+}  // namespace
+
+void ObjectMapper::recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
+                                  std::vector<SingleView>* views) {
+  if (!config_.corrections.enable || config_.database.fusion != "evidence") return;
+  KeyframeRecord record;
+  record.keyframe = keyframe;
+  record.stamp_s = frame.stamp_s;
+  record.name = frame.name;
+  record.T_W_D_recorded = frame.T_W_D;
+  record.T_W_D = frame.T_W_D;
+  record.T_C_D = frame.T_C_D;
+  record.K_depth = frame.K_depth;
+  record.depth = frame.depth.clone();
+  if (std::isfinite(floor_layer_m)) {
+    // The floor below the camera: its height follows the keyframe's pose.
+    const Eigen::Vector3d up = gravity().up;
+    const Eigen::Vector3d camera_W = frame.T_W_D.translation();
+    const Eigen::Vector3d floor_W = camera_W - (up.dot(camera_W) - floor_layer_m) * up;
+    record.has_floor = true;
+    record.floor_point_D = frame.T_W_D.inverse() * floor_W;
+  }
+  for (SingleView& view : *views) {
+    if (!view.status || view.object_id < 0) continue;
+    ObjectObservation& observation = view.observation;
+    RecordedView recorded;
+    recorded.class_id = observation.class_id;
+    recorded.class_name = observation.class_name;
+    recorded.probability = observation.probability;
+    std::shared_ptr<const FusionKeys> keys = observation.fusion_keys;
+    if (keys == nullptr || keys->voxel_size_m != config_.database.fusion_voxel_size_m) {
+      keys = std::make_shared<const FusionKeys>(makeFusionKeys(
+          observation.segment_W, observation.seen_W, config_.database.fusion_voxel_size_m));
+    }
+    auto cut = std::make_shared<RecordedCut>();
+    cut->outside_keys = keys->outside;
+    cut->voxel_size_m = keys->voxel_size_m;
+    // The fusion is done with the observation: its cut moves into the history.
+    cut->cut_W = std::move(observation.segment_W);
+    cut->normals_W = std::move(observation.segment_normals_W);
+    recorded.cut = std::move(cut);
+    recorded.box = observation.box;
+    recorded.yaw_rad = observation.yaw_rad;
+    recorded.object_id = view.object_id;
+    record.views.push_back(std::move(recorded));
+  }
+  history_.add(std::move(record));
+}
+
+void ObjectMapper::setHistory(std::deque<KeyframeRecord> records) {
+  history_.clear();
+  for (KeyframeRecord& record : records) history_.add(std::move(record));
+  keyframes_ = std::max(keyframes_, history_.empty() ? 0 : history_.records().back().keyframe + 1);
+}
+
+Status ObjectMapper::correctPoses(const std::vector<PoseCorrection>& corrections,
+                                  CorrectionReport* out) {
+  const Clock::time_point start = Clock::now();
+  CorrectionReport local;
+  CorrectionReport& report = out != nullptr ? *out : local;
+  report = CorrectionReport();
+  for (std::size_t i = 0; i < corrections.size(); ++i) {
+    if (!isRigid(corrections[i])) {
+      return Status::Error("correction " + std::to_string(i) + " (stamp " +
+                           std::to_string(corrections[i].stamp_s) +
+                           ") is not a finite rigid transform; no correction applied");
+    }
+  }
+  report.objects_before = static_cast<int>(database_.size());
+  if (!config_.corrections.enable || config_.database.fusion != "evidence") {
+    report.ignored = true;
+    report.objects_after = report.objects_before;
+    return Status::Ok();
+  }
+  std::vector<PoseCorrection> unmatched;
+  const std::vector<std::size_t> moved = history_.correct(corrections, &unmatched);
+  report.unmatched = static_cast<int>(unmatched.size());
+  report.keyframes_moved = static_cast<int>(moved.size());
+  if (!moved.empty()) rebuildFromHistory(&report);
+  report.objects_after = static_cast<int>(database_.size());
+  report.time_ms = msSince(start);
+  return Status::Ok();
+}
+
+ObjectObservation ObjectMapper::replayView(const KeyframeRecord& record,
+                                           const RecordedView& view) const {
+  ObjectObservation observation =
+      replayedObservation(view, record.correction(), config_.database.fusion_voxel_size_m);
+  observation.keyframe = record.keyframe;
+  observation.stamp_s = record.stamp_s;
+  if (!record.corrected()) return observation;
+  // A correction that tilts the keyframe tilts its boxes: the box is estimated again from the
+  // moved cut and its normals, as the single view would have with this pose.
+  const GravityFrame gravity_frame = gravity();
+  if (observation.box.rotation.col(2).dot(gravity_frame.up) < 0.999) {
+    OrientedBox box;
+    if (box_estimator_
+            .estimateFromNormals(observation.segment_W, observation.segment_normals_W,
+                                 gravity_frame, &box)
+            .ok()) {
+      groundBox(observation.class_name, &box);
+      observation.box = box;
+    }
+  }
+  observation.yaw_rad = gravity_frame.yawOf(observation.box.rotation.col(0));
+  return observation;
+}
+
+void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
+  ObjectDatabase previous = std::move(database_);
+  database_ = ObjectDatabase(config_.database, previous.priors());
+  database_.setGravityUp(gravity().up);
+  const bool measure = config_.database.surface_band_m > 0.0 || config_.database.amodal.enable;
+  // The floor as the keyframes saw it so far, at their current poses (the single views' floor).
+  floor_.reset();
+  // The rebuilt object of each view, in history order.
+  std::vector<int> rebuilt_ids;
+  StageTimes times;
+  for (const KeyframeRecord& record : history_.records()) {
+    if (config_.floor.enable && record.has_floor) {
+      const Eigen::Vector3d up = gravity().up;
+      const double height_m = up.dot(record.T_W_D * record.floor_point_D);
+      if (!floor_.hasFloor() || height_m < floor_.floorHeight_m()) floor_.setFloor(height_m, up);
+    }
+    if (record.views.empty()) continue;
+    database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
+                                              : std::numeric_limits<double>::quiet_NaN());
+    std::shared_ptr<const DepthView> depth_view;
+    if (measure && !record.depth.empty()) {
+      depth_view = makeDepthView(record.depth, record.K_depth, record.T_W_D);
+    }
+    for (const RecordedView& view : record.views) {
+      ObjectObservation observation = replayView(record, view);
+      observation.depth_view = depth_view;
+      rebuilt_ids.push_back(fuseObservation(observation, true, &times).object_id);
+      ++report->views_replayed;
+    }
+    if (!database_.pendingRebox().empty()) reboxPending(&times);
+  }
+  if (refined_) {
+    const RefinementReport refinement = refineDatabase();
+    for (const auto& merged : refinement.merged_ids) {
+      std::replace(rebuilt_ids.begin(), rebuilt_ids.end(), merged.first, merged.second);
+    }
+  }
+  adoptRebuiltIds(&previous, rebuilt_ids, report);
+}
+
+void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,
+                                   CorrectionReport* report) {
+  // Each rebuilt object's views, and the ids they had.
+  std::map<int, int> support;
+  std::map<int, std::map<int, int>> votes;
+  std::set<int> referenced;
+  std::size_t k = 0;
+  for (const KeyframeRecord& record : history_.records()) {
+    for (const RecordedView& view : record.views) {
+      const int rebuilt = rebuilt_ids[k++];
+      if (view.object_id >= 0) referenced.insert(view.object_id);
+      if (database_.find(rebuilt) == nullptr) continue;  // refined away
+      ++support[rebuilt];
+      if (view.object_id >= 0) ++votes[rebuilt][view.object_id];
+    }
+  }
+  // The better supported objects choose first; each takes its views' most frequent id.
+  std::vector<int> order;
+  for (const auto& entry : database_.objects()) order.push_back(entry.first);
+  std::stable_sort(order.begin(), order.end(),
+                   [&support](int a, int b) { return support[a] > support[b]; });
+  std::map<int, int> final_id;
+  std::set<int> taken;
+  int next_id = previous->nextId();
+  for (const int rebuilt : order) {
+    int best = -1;
+    int best_votes = 0;
+    for (const auto& vote : votes[rebuilt]) {
+      if (taken.count(vote.first) == 0 && vote.second > best_votes) {
+        best = vote.first;
+        best_votes = vote.second;
+      }
+    }
+    final_id[rebuilt] = best >= 0 ? best : next_id++;
+    taken.insert(final_id[rebuilt]);
+  }
+  std::vector<MapObject> objects;
+  objects.reserve(database_.size());
+  for (const auto& entry : database_.objects()) {
+    MapObject object = entry.second;
+    object.id = final_id[entry.first];
+    objects.push_back(std::move(object));
+  }
+  // Objects no view made (a map loaded from a file without history) cannot move: kept as they are.
+  for (const auto& entry : previous->objects()) {
+    if (referenced.count(entry.first) != 0 || taken.count(entry.first) != 0) continue;
+    objects.push_back(entry.second);
+    ++report->objects_kept_unmoved;
+  }
+  database_.setObjects(objects);
+  database_.reserveIdsBelow(std::max(next_id, previous->nextId()));
+  k = 0;
+  for (KeyframeRecord& record : history_.mutableRecords()) {
+    for (RecordedView& view : record.views) {
+      const auto it = final_id.find(rebuilt_ids[k++]);
+      if (it != final_id.end()) view.object_id = it->second;  // else refined away: keeps its id
+    }
+  }
+}
+
+}  // namespace mvod

@@ -1,0 +1,173 @@
+// The keyframe history in the map file: everything the map needs to follow the SLAM's corrections
+// once reloaded (poses, intrinsics, depth, each view's cut, normals and voxel keys) round-trips
+// exactly, and a malformed history is refused with the field named.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/pipeline/utils/voxel_key.h"
+
+namespace mvod {
+namespace {
+
+KeyframeRecord makeRecord(int keyframe, int depth_type) {
+  KeyframeRecord record;
+  record.keyframe = keyframe;
+  record.stamp_s = 100.25 + keyframe;
+  record.name = "frame-" + std::to_string(keyframe);
+  record.T_W_D_recorded.linear() =
+      Eigen::AngleAxisd(0.3 * keyframe + 0.1, Eigen::Vector3d(0.2, 1.0, -0.4).normalized())
+          .matrix();
+  record.T_W_D_recorded.translation() = Eigen::Vector3d(1.5, -0.25, 0.125 * keyframe);
+  record.T_W_D = Eigen::Translation3d(0.01, 0.02, -0.03) * record.T_W_D_recorded;
+  record.T_C_D.translation() = Eigen::Vector3d(0.025, 0.0, 0.0);
+  record.K_depth = CameraIntrinsics{525.0, 526.5, 319.5, 239.25, 8, 6};
+  if (depth_type == CV_16UC1) {
+    record.depth = cv::Mat(6, 8, CV_16UC1);
+    for (int i = 0; i < 48; ++i)
+      record.depth.at<std::uint16_t>(i) = static_cast<std::uint16_t>(i * 997);
+  } else {
+    record.depth = cv::Mat(6, 8, CV_32FC1);
+    for (int i = 0; i < 48; ++i) record.depth.at<float>(i) = 0.5f + 0.0123f * i;
+    record.depth.at<float>(3) = std::numeric_limits<float>::quiet_NaN();
+  }
+  record.has_floor = keyframe % 2 == 0;
+  if (record.has_floor) record.floor_point_D = Eigen::Vector3d(0.1, 1.2, 2.3);
+  RecordedView view;
+  view.class_id = 56;
+  view.class_name = "chair";
+  view.probability = 0.8125;
+  view.box.center_m = Eigen::Vector3d(1.0, 2.0, 0.45);
+  view.box.size_m = Eigen::Vector3d(0.5, 0.55, 0.9);
+  view.box.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).matrix();
+  view.yaw_rad = 0.7;
+  view.object_id = 3 + keyframe;
+  auto cut = std::make_shared<RecordedCut>();
+  cut->cut_W = {Eigen::Vector3f(1.0001f, 2.123456f, 0.3f), Eigen::Vector3f(-3.5f, 1e-7f, 9.75f)};
+  cut->normals_W = {Eigen::Vector3f(0.f, 0.6f, 0.8f),
+                    Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN())};
+  cut->outside_keys = {packVoxel(Eigen::Vector3i(-5, 3, 100)),
+                       packVoxel(Eigen::Vector3i(7, -1, 0))};
+  std::sort(cut->outside_keys.begin(), cut->outside_keys.end());
+  cut->voxel_size_m = 0.01;
+  view.cut = cut;
+  record.views.push_back(view);
+  return record;
+}
+
+bool sameFloats(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (std::isnan(a[i][k]) != std::isnan(b[i][k])) return false;
+      if (!std::isnan(a[i][k]) && a[i][k] != b[i][k]) return false;
+    }
+  }
+  return true;
+}
+
+std::string saveMap(const std::deque<KeyframeRecord>& history) {
+  return objectsToJson({}, MapSummary(), true, &history);
+}
+
+TEST(HistoryJson, RoundTripsExactly) {
+  const std::deque<KeyframeRecord> history = {makeRecord(0, CV_16UC1), makeRecord(3, CV_32FC1)};
+  const std::string text = saveMap(history);
+  std::deque<KeyframeRecord> loaded;
+  ASSERT_TRUE(objectsFromJson(text, nullptr, nullptr, &loaded).ok());
+  ASSERT_EQ(loaded.size(), history.size());
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    const KeyframeRecord& a = history[i];
+    const KeyframeRecord& b = loaded[i];
+    EXPECT_EQ(a.keyframe, b.keyframe);
+    EXPECT_EQ(a.stamp_s, b.stamp_s);
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.T_W_D_recorded.matrix(), b.T_W_D_recorded.matrix());
+    EXPECT_EQ(a.T_W_D.matrix(), b.T_W_D.matrix());
+    EXPECT_EQ(a.T_C_D.matrix(), b.T_C_D.matrix());
+    EXPECT_EQ(a.K_depth.fx, b.K_depth.fx);
+    EXPECT_EQ(a.K_depth.cy, b.K_depth.cy);
+    EXPECT_EQ(a.K_depth.width, b.K_depth.width);
+    EXPECT_EQ(a.has_floor, b.has_floor);
+    if (a.has_floor) EXPECT_EQ(a.floor_point_D, b.floor_point_D);
+    ASSERT_EQ(a.depth.type(), b.depth.type());
+    ASSERT_EQ(a.depth.size(), b.depth.size());
+    EXPECT_EQ(std::memcmp(a.depth.data, b.depth.data, a.depth.total() * a.depth.elemSize()), 0);
+    ASSERT_EQ(b.views.size(), 1u);
+    const RecordedView& u = a.views[0];
+    const RecordedView& v = b.views[0];
+    EXPECT_EQ(u.class_name, v.class_name);
+    EXPECT_EQ(u.class_id, v.class_id);
+    EXPECT_EQ(u.probability, v.probability);
+    EXPECT_EQ(u.object_id, v.object_id);
+    EXPECT_EQ(u.yaw_rad, v.yaw_rad);
+    EXPECT_EQ(u.box.center_m, v.box.center_m);
+    EXPECT_EQ(u.box.size_m, v.box.size_m);
+    EXPECT_EQ(u.box.rotation, v.box.rotation);
+    ASSERT_NE(v.cut, nullptr);
+    EXPECT_TRUE(sameFloats(u.cut->cut_W, v.cut->cut_W));
+    EXPECT_TRUE(sameFloats(u.cut->normals_W, v.cut->normals_W));
+    EXPECT_EQ(u.cut->outside_keys, v.cut->outside_keys);
+    EXPECT_EQ(u.cut->voxel_size_m, v.cut->voxel_size_m);
+  }
+  // Saving is a fixed point.
+  EXPECT_EQ(saveMap(loaded), text);
+}
+
+TEST(HistoryJson, AMapWithoutHistoryLoadsWithAnEmptyOne) {
+  std::deque<KeyframeRecord> loaded = {makeRecord(0, CV_16UC1)};
+  ASSERT_TRUE(
+      objectsFromJson(objectsToJson({}, MapSummary(), true), nullptr, nullptr, &loaded).ok());
+  EXPECT_TRUE(loaded.empty());
+}
+
+// Each corruption of a valid history is refused, naming the field.
+TEST(HistoryJson, MalformedHistoriesAreRefused) {
+  const nlohmann::json valid = nlohmann::json::parse(saveMap({makeRecord(0, CV_16UC1)}));
+  struct Case {
+    const char* what;
+    std::function<void(nlohmann::json*)> corrupt;
+    const char* field;
+  };
+  const std::vector<Case> cases = {
+      {"not rigid", [](nlohmann::json* k) { (*k)["T_W_D"][0][0] = 2.0; }, "T_W_D"},
+      {"far away", [](nlohmann::json* k) { (*k)["T_W_D"][0][3] = 1e9; }, "T_W_D"},
+      {"bad K", [](nlohmann::json* k) { (*k)["K"][0] = -1.0; }, "K"},
+      {"bad base64", [](nlohmann::json* k) { (*k)["views"][0]["cut"] = "@@@@"; }, "cut"},
+      {"cut not triples", [](nlohmann::json* k) { (*k)["views"][0]["cut"] = "AAAA"; }, "cut"},
+      {"normals count", [](nlohmann::json* k) { (*k)["views"][0]["normals"] = "AAAAAAAAAAAAAAAA"; },
+       "normals"},
+      {"negative key", [](nlohmann::json* k) { (*k)["views"][0]["outside"] = "//////////8="; },
+       "outside"},
+      {"probability", [](nlohmann::json* k) { (*k)["views"][0]["probability"] = 3.0; },
+       "probability"},
+      {"depth size", [](nlohmann::json* k) { (*k)["depth"]["width"] = 9; }, "depth"},
+      {"depth encoding", [](nlohmann::json* k) { (*k)["depth"]["encoding"] = "exr"; }, "encoding"},
+      {"depth data", [](nlohmann::json* k) { (*k)["depth"]["data"] = "AAAA"; }, "depth"},
+      {"huge depth", [](nlohmann::json* k) { (*k)["depth"]["width"] = 100000; }, "depth"},
+      {"views not array", [](nlohmann::json* k) { (*k)["views"] = 3; }, "views"},
+      {"no stamp", [](nlohmann::json* k) { k->erase("stamp"); }, "stamp"},
+  };
+  for (const Case& c : cases) {
+    nlohmann::json doc = valid;
+    c.corrupt(&doc["keyframe_history"][0]);
+    std::deque<KeyframeRecord> loaded;
+    const Status status = objectsFromJson(doc.dump(), nullptr, nullptr, &loaded);
+    EXPECT_FALSE(status.ok()) << c.what;
+    EXPECT_NE(status.message().find(c.field), std::string::npos)
+        << c.what << ": " << status.message();
+  }
+  // Keyframes out of order.
+  nlohmann::json doc =
+      nlohmann::json::parse(saveMap({makeRecord(4, CV_16UC1), makeRecord(2, CV_16UC1)}));
+  EXPECT_FALSE(objectsFromJson(doc.dump(), nullptr, nullptr, nullptr).ok());
+}
+
+}  // namespace
+}  // namespace mvod

@@ -1,0 +1,222 @@
+// The map follows the SLAM's corrections (ObjectMapper::correctPoses): a rendered room walked
+// twice, the first lap's poses drifting as a visual SLAM's do (0.36 m and 4 degrees of yaw by the
+// lap's end), the second lap's right, as after a loop closure. Corrected at the loop, the map must
+// equal the one the right poses give from the start.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/pipeline/object_mapper.h"
+#include "room_walk.h"
+
+namespace mvod {
+namespace {
+
+constexpr int kFramesPerLap = 12;
+constexpr int kLaps = 2;
+
+class PoseCorrectionTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scene_ = new SyntheticScene(SyntheticScene::makeDefault(test::walkConfig(kFramesPerLap)));
+    for (int k = 0; k < kFramesPerLap * kLaps; ++k) {
+      RgbdFrame frame;
+      std::vector<Detection2D> detections;
+      test::renderKeyframe(*scene_, k % kFramesPerLap, k, &frame, &detections);
+      frames_.push_back(frame);
+      detections_.push_back(detections);
+    }
+  }
+  static void TearDownTestSuite() {
+    delete scene_;
+    scene_ = nullptr;
+    frames_.clear();
+    detections_.clear();
+  }
+
+  void SetUp() override {
+    ASSERT_TRUE(
+        ClassPriors::loadYaml(std::string(MVOD_SOURCE_DIR) + "/config/class_priors.yaml", &priors_)
+            .ok());
+    config_.gravity_down_W = Eigen::Vector3d(0, 0, -1);
+    config_.num_threads = 2;
+  }
+
+  // Keyframe k as the SLAM gave it: the first lap drifts, the second is right.
+  RgbdFrame drifted(int k) const {
+    RgbdFrame frame = frames_[k];
+    if (k < kFramesPerLap) {
+      const double share = static_cast<double>(k) / (kFramesPerLap - 1);
+      frame.T_W_D = drift_.at(share, frames_[0].T_W_D.translation()) * frame.T_W_D;
+    }
+    return frame;
+  }
+  // The right colour-camera pose of keyframe k, as a correction.
+  PoseCorrection truth(int k) const {
+    PoseCorrection correction;
+    correction.stamp_s = frames_[k].stamp_s;
+    correction.T_W_C = frames_[k].T_W_D * frames_[k].T_C_D.inverse();
+    return correction;
+  }
+  std::vector<PoseCorrection> truths(int first, int last) const {
+    std::vector<PoseCorrection> corrections;
+    for (int k = first; k <= last; ++k) corrections.push_back(truth(k));
+    return corrections;
+  }
+
+  // Runs every keyframe (drifted or right), calling before(k, mapper) before keyframe k and
+  // before(n, mapper) after the last.
+  std::vector<MapObject> run(bool drift,
+                             const std::function<void(int, ObjectMapper*)>& before = nullptr) {
+    ObjectMapper mapper(config_, priors_);
+    const int n = static_cast<int>(frames_.size());
+    for (int k = 0; k <= n; ++k) {
+      if (before) before(k, &mapper);
+      if (k == n) break;
+      KeyframeReport report;
+      EXPECT_TRUE(
+          mapper.processKeyframe(drift ? drifted(k) : frames_[k], detections_[k], &report).ok());
+    }
+    return test::objectsOf(mapper);
+  }
+
+  static SyntheticScene* scene_;
+  static std::vector<RgbdFrame> frames_;
+  static std::vector<std::vector<Detection2D>> detections_;
+  ClassPriors priors_;
+  ObjectMapper::Config config_;
+  test::Drift drift_;
+};
+
+SyntheticScene* PoseCorrectionTest::scene_ = nullptr;
+std::vector<RgbdFrame> PoseCorrectionTest::frames_;
+std::vector<std::vector<Detection2D>> PoseCorrectionTest::detections_;
+
+TEST_F(PoseCorrectionTest, DriftWithoutCorrectionMisplacesObjects) {
+  const std::vector<MapObject> truth = run(false);
+  ASSERT_GE(truth.size(), 6u);
+  const test::MapDifference d = test::compareMaps(truth, run(true));
+  std::printf("drifted, not corrected: centre %.3f m, size %.3f m, %d missing, %d extra of %zu\n",
+              d.centre_m, d.size_m, d.missing, d.extra, truth.size());
+  // What the correction has to repair: boxes off or objects mapped twice.
+  EXPECT_TRUE(d.centre_m > 0.05 || d.size_m > 0.05 || d.extra > 0 || d.missing > 0)
+      << "centre " << d.centre_m << " size " << d.size_m << " extra " << d.extra;
+}
+
+TEST_F(PoseCorrectionTest, CorrectionAtTheLoopGivesTheMapOfTheRightPoses) {
+  const std::vector<MapObject> truth = run(false);
+  ObjectMapper::CorrectionReport report;
+  const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
+    if (k != kFramesPerLap) return;
+    ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), &report).ok());
+  });
+  EXPECT_FALSE(report.ignored);
+  EXPECT_EQ(report.keyframes_moved, kFramesPerLap - 1);  // keyframe 0 did not drift
+  EXPECT_EQ(report.unmatched, 0);
+  EXPECT_GT(report.views_replayed, 0);
+  const test::MapDifference d = test::compareMaps(truth, corrected);
+  std::printf(
+      "corrected at the loop: centre %.3f m, size %.3f m, %d missing, %d extra of %zu; "
+      "%d views replayed in %.1f ms\n",
+      d.centre_m, d.size_m, d.missing, d.extra, truth.size(), report.views_replayed,
+      report.time_ms);
+  EXPECT_EQ(d.missing, 0);
+  EXPECT_EQ(d.extra, 0);  // nothing mapped twice
+  EXPECT_LE(d.centre_m, 0.02);
+  EXPECT_LE(d.size_m, 0.02);
+}
+
+TEST_F(PoseCorrectionTest, CorrectionAfterTheLastKeyframe) {
+  const std::vector<MapObject> truth = run(false);
+  const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
+    if (k == kFramesPerLap * kLaps) {
+      ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), nullptr).ok());
+    }
+  });
+  const test::MapDifference d = test::compareMaps(truth, corrected);
+  EXPECT_EQ(d.missing, 0);
+  EXPECT_EQ(d.extra, 0);
+  EXPECT_LE(d.centre_m, 0.02);
+  EXPECT_LE(d.size_m, 0.02);
+}
+
+TEST_F(PoseCorrectionTest, PartialThenSecondCorrection) {
+  const std::vector<MapObject> truth = run(false);
+  std::vector<MapObject> after_first;
+  const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
+    if (k == kFramesPerLap) {
+      // Only the lap's second half first; the rest keeps its drifted pose.
+      ASSERT_TRUE(mapper->correctPoses(truths(kFramesPerLap / 2, kFramesPerLap - 1), nullptr).ok());
+      after_first = test::objectsOf(*mapper);
+    }
+    if (k == kFramesPerLap * kLaps) {
+      ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap / 2 - 1), nullptr).ok());
+    }
+  });
+  EXPECT_FALSE(after_first.empty());
+  const test::MapDifference d = test::compareMaps(truth, corrected);
+  EXPECT_EQ(d.missing, 0);
+  EXPECT_EQ(d.extra, 0);
+  EXPECT_LE(d.centre_m, 0.02);
+  EXPECT_LE(d.size_m, 0.02);
+}
+
+TEST_F(PoseCorrectionTest, IdsAreKeptAndNeverReused) {
+  int next_id_before = 0;
+  std::vector<int> ids_before;
+  const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
+    if (k != kFramesPerLap * kLaps) return;
+    next_id_before = mapper->database().nextId();
+    for (const auto& entry : mapper->database().objects()) ids_before.push_back(entry.first);
+    ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), nullptr).ok());
+    EXPECT_GE(mapper->database().nextId(), next_id_before);
+  });
+  // Every object keeps an id it had (the duplicates the drift made merge into one of theirs).
+  for (const MapObject& object : corrected) {
+    EXPECT_NE(std::find(ids_before.begin(), ids_before.end(), object.id), ids_before.end())
+        << object.class_name << " #" << object.id << " has a new id";
+  }
+  EXPECT_LE(corrected.size(), ids_before.size());
+}
+
+TEST_F(PoseCorrectionTest, UnmatchedAndInvalidCorrections) {
+  ObjectMapper mapper(config_, priors_);
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_TRUE(mapper.processKeyframe(drifted(k), detections_[k], nullptr).ok());
+  }
+  const std::vector<MapObject> before = test::objectsOf(mapper);
+  ObjectMapper::CorrectionReport report;
+  PoseCorrection stray = truth(1);
+  stray.stamp_s = 1000.0;  // no keyframe has it
+  ASSERT_TRUE(mapper.correctPoses({stray}, &report).ok());
+  EXPECT_EQ(report.unmatched, 1);
+  EXPECT_EQ(report.keyframes_moved, 0);
+  PoseCorrection bad = truth(1);
+  bad.T_W_C.linear() *= 2.0;  // not a rotation
+  EXPECT_FALSE(mapper.correctPoses({truth(2), bad}, &report).ok());
+  PoseCorrection nan = truth(1);
+  nan.T_W_C.translation().x() = std::nan("");
+  EXPECT_FALSE(mapper.correctPoses({nan}, &report).ok());
+  // Refused batches change nothing.
+  const test::MapDifference d = test::compareMaps(before, test::objectsOf(mapper));
+  EXPECT_EQ(d.centre_m, 0.0);
+  EXPECT_EQ(d.extra + d.missing, 0);
+}
+
+TEST_F(PoseCorrectionTest, ThePapersMethodIgnoresCorrections) {
+  config_.usePaperMethod();
+  ObjectMapper mapper(config_, priors_);
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(mapper.processKeyframe(drifted(k), detections_[k], nullptr).ok());
+  }
+  EXPECT_TRUE(mapper.history().empty());  // nothing kept: no memory spent
+  ObjectMapper::CorrectionReport report;
+  ASSERT_TRUE(mapper.correctPoses(truths(0, 2), &report).ok());
+  EXPECT_TRUE(report.ignored);
+  EXPECT_EQ(report.keyframes_moved, 0);
+}
+
+}  // namespace
+}  // namespace mvod
