@@ -95,21 +95,50 @@ void KeyframeWorker::enqueue(KeyframeJob job) {
 void KeyframeWorker::clearQueue() {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   queue_.clear();
+  pending_corrections_.clear();
+}
+
+void KeyframeWorker::enqueueCorrections(std::vector<PoseCorrection> corrections) {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    for (const PoseCorrection& correction : corrections) {
+      pending_corrections_[correction.stamp_s] = correction;
+    }
+  }
+  queue_cv_.notify_one();
 }
 
 void KeyframeWorker::workerLoop() {
   while (true) {
     KeyframeJob job;
+    bool have_job = false;
+    std::vector<PoseCorrection> corrections;
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (queue_.empty()) return;  // stopping and nothing left
-      job = std::move(queue_.front());
-      queue_.pop_front();
+      queue_cv_.wait(lock,
+                     [this] { return stop_ || !queue_.empty() || !pending_corrections_.empty(); });
+      if (queue_.empty() && pending_corrections_.empty()) return;  // stopping and nothing left
+      // Corrections first: the keyframes they name are in the map already.
+      for (auto& entry : pending_corrections_) corrections.push_back(entry.second);
+      pending_corrections_.clear();
+      if (!queue_.empty()) {
+        job = std::move(queue_.front());
+        queue_.pop_front();
+        have_job = true;
+      }
       const int queue_length = static_cast<int>(queue_.size());
       stats_->update(
           [queue_length](ObjectDetectionStatistics& stats) { stats.queue_length = queue_length; });
     }
+    if (!corrections.empty()) {
+      try {
+        applyCorrections(std::move(corrections));
+      } catch (const std::exception& e) {
+        errorThrottled(std::string("keyframe pose correction failed with an exception: ") +
+                       e.what());
+      }
+    }
+    if (!have_job) continue;
     try {
       processKeyframe(job);
     } catch (const std::exception& e) {
@@ -119,6 +148,45 @@ void KeyframeWorker::workerLoop() {
       stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
     }
   }
+}
+
+void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
+  ObjectMapper::CorrectionReport report;
+  Status applied;
+  {
+    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    applied = mapper_->correctPoses(corrections, &report);
+    if (applied && report.keyframes_moved > 0) updateSnapshotLocked();
+  }
+  if (!applied) {
+    errorThrottled("keyframe poses refused: " + applied.message());
+    return;
+  }
+  if (report.ignored) {
+    warnThrottled(
+        "keyframe poses ignored: the paper's method (or corrections/enable false) keeps "
+        "no keyframe history, so the map cannot follow the SLAM's corrections");
+    return;
+  }
+  if (report.unmatched > 0) {
+    warnThrottled("keyframe poses: " + std::to_string(report.unmatched) + " of " +
+                  std::to_string(corrections.size()) +
+                  " stamps match no keyframe of the map (within corrections/stamp_tolerance_s; "
+                  "run the node on the SLAM's keyframes, keyframe_mode topic)");
+  }
+  stats_->update([&report](ObjectDetectionStatistics& stats) {
+    ++stats.corrections_applied;
+    stats.keyframes_corrected += report.keyframes_moved;
+    stats.keyframe_poses_unmatched += report.unmatched;
+    stats.correction_ms = report.time_ms;
+  });
+  if (report.keyframes_moved == 0) return;
+  ROS_INFO(
+      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d "
+      "(%.1f ms)",
+      report.keyframes_moved, report.views_replayed, report.objects_before, report.objects_after,
+      report.time_ms);
+  publishers_->publishMap(snapshot()->objects, ros::Time::now());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -333,6 +401,7 @@ void KeyframeWorker::updateSnapshotLocked() {
   snapshot->summary.gravity_down_W = -mapper_->gravity().up;
   snapshot->summary.removed_atypical = removed_atypical_;
   snapshot->summary.removed_intersecting = removed_intersecting_;
+  snapshot->history = mapper_->history().records();
   std::lock_guard<std::mutex> lock(snapshot_mutex_);
   snapshot_ = std::move(snapshot);
 }
@@ -344,17 +413,20 @@ std::shared_ptr<const KeyframeWorker::MapSnapshot> KeyframeWorker::snapshot() co
 
 std::vector<MapObject> KeyframeWorker::objects() const { return snapshot()->objects; }
 
-void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const {
+void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
+                                 std::deque<KeyframeRecord>* history) const {
   const std::shared_ptr<const MapSnapshot> map = snapshot();
   *objects = map->objects;
   *summary = map->summary;
+  if (history != nullptr) *history = map->history;
 }
 
-Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects,
-                                  const MapSummary& summary) {
+Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary,
+                                  std::deque<KeyframeRecord> history) {
   std::lock_guard<std::mutex> lock(mapper_mutex_);
   const Status replaced = mapper_->mutableDatabase().setObjects(objects);
   if (!replaced) return replaced;
+  mapper_->setHistory(std::move(history));
   removed_atypical_ = summary.removed_atypical;
   removed_intersecting_ = summary.removed_intersecting;
   updateSnapshotLocked();

@@ -6,6 +6,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/detections_buffer.h"
 #include "multiview_object_detection/ros/keyframe_buffer.h"
+#include "multiview_object_detection/ros/keyframe_poses_input.h"
 #include "multiview_object_detection/ros/keyframe_worker.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
 #include "multiview_object_detection/ros/object_detection_services.h"
@@ -92,6 +93,11 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   buffer_ = std::make_unique<KeyframeBuffer>(
       config, input_->topics(), *tf_buffer_, publishers_.get(), &stats_, shut_down_,
       [this](KeyframeJob job) { worker_->enqueue(std::move(job)); });
+  keyframe_poses_ = std::make_unique<KeyframePosesInput>(
+      config.world_frame, *tf_buffer_, &stats_, shut_down_,
+      [this](std::vector<PoseCorrection> corrections) {
+        worker_->enqueueCorrections(std::move(corrections));
+      });
   if (detections_) {
     buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
   }
@@ -114,6 +120,7 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh_);
   input_->subscribe([this](PendingFrame frame) { buffer_->addFrame(std::move(frame)); });
   if (detections_) detections_->subscribe(nh_);
+  keyframe_poses_->subscribe(nh_);
   buffer_->start(nh_);
   publishers_->startDiagnostics();
 }
@@ -132,6 +139,7 @@ void ObjectDetectionRos::shutdown() {
   buffer_->stop();
   publishers_->stopDiagnostics();
   input_->unsubscribe();
+  keyframe_poses_->unsubscribe();
   worker_->stop();
   if (detections_) detections_->unsubscribe();
 

@@ -64,9 +64,10 @@ bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Reque
   }
   std::vector<MapObject> objects;
   MapSummary summary;
-  worker_->mapSnapshot(&objects, &summary);
+  std::deque<KeyframeRecord> history;
+  worker_->mapSnapshot(&objects, &summary, &history);
   summary.frames = stats_->get().frames_received;
-  const Status written = writeFileAtomic(path, objectsToJson(objects, summary, true));
+  const Status written = writeFileAtomic(path, objectsToJson(objects, summary, true, &history));
   response.success = written.ok();
   response.message = written ? "saved " + std::to_string(objects.size()) + " objects to " + path
                              : "save_map: " + written.message();
@@ -83,11 +84,12 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
   std::string text;
   std::vector<MapObject> loaded;
   MapSummary summary;
+  std::deque<KeyframeRecord> history;
   std::string path;
   Status status = resolveMapPath(request.path, map_paths_, false, &path);
   if (status) status = readFile(path, &text);
-  if (status) status = objectsFromJson(text, &loaded, &summary);
-  if (status) status = worker_->replaceMap(loaded, summary);
+  if (status) status = objectsFromJson(text, &loaded, &summary, &history);
+  if (status) status = worker_->replaceMap(loaded, summary, std::move(history));
   if (!status) {
     response.success = false;
     response.message = "load_map refused '" + request.path + "': " + status.message() +

@@ -255,6 +255,17 @@ GravityEstimator::Config getGravityEstimatorConfigFromRosParam(
   return c;
 }
 
+KeyframeHistory::Config getKeyframeHistoryConfigFromRosParam(const ros::NodeHandle& nh_corrections,
+                                                             const KeyframeHistory::Config& start,
+                                                             ParamErrors* errors) {
+  const ParamReader p(nh_corrections, errors);
+  KeyframeHistory::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("stamp_tolerance_s", &c.stamp_tolerance_s);
+  p.read("max_keyframes_with_depth", &c.max_keyframes_with_depth);
+  return c;
+}
+
 ObjectMapper::Config getObjectMapperConfigFromRosParam(const ros::NodeHandle& nh_private,
                                                        ParamErrors* errors) {
   const ParamReader p(nh_private, errors);
@@ -279,6 +290,7 @@ ObjectMapper::Config getObjectMapperConfigFromRosParam(const ros::NodeHandle& nh
   m.intersection_filter = getIntersectionFilterConfigFromRosParam(ns("intersection_filter"),
                                                                   m.intersection_filter, errors);
   m.gravity = getGravityEstimatorConfigFromRosParam(ns("gravity"), m.gravity, errors);
+  m.corrections = getKeyframeHistoryConfigFromRosParam(ns("corrections"), m.corrections, errors);
   return m;
 }
 

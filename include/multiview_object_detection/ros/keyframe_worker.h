@@ -8,6 +8,7 @@
 
 #include <condition_variable>
 #include <deque>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -16,8 +17,8 @@
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
-#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/detections_buffer.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
@@ -53,6 +54,11 @@ class KeyframeWorker {
 
   // Queues a keyframe (any thread, never blocks); the oldest is dropped when the queue is full.
   void enqueue(KeyframeJob job);
+  // Queues corrected keyframe poses (any thread, never blocks): the worker applies them before its
+  // next keyframe, or at once when idle (ObjectMapper::correctPoses). Corrections that arrive
+  // before the worker took the previous ones merge with them (the latest pose per stamp), so a
+  // long path published often costs one map rebuild per keyframe at most.
+  void enqueueCorrections(std::vector<PoseCorrection> corrections);
   void clearQueue();
 
   // The map as of the last finished keyframe or map change: reading it never waits for a keyframe
@@ -60,15 +66,21 @@ class KeyframeWorker {
   struct MapSnapshot {
     std::vector<MapObject> objects;
     MapSummary summary;  // all but `frames`
+    // What the map follows corrections with (records share their depth and cuts: cheap copies).
+    std::deque<KeyframeRecord> history;
   };
   std::shared_ptr<const MapSnapshot> snapshot() const;
   std::vector<MapObject> objects() const;
   // The objects and the summary for objects.json (all but `frames`).
-  void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary) const;
+  void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
+                   std::deque<KeyframeRecord>* history = nullptr) const;
   // The map changes below wait for the keyframe being processed (bounded by
   // max_detections_per_frame). Replaces the objects (~load_map); the keyframe count and gravity are
   // kept. Refused (map unchanged) when the ids are out of range or repeated.
-  Status replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary);
+  // The keyframe history loaded with the map replaces the mapper's (an empty one: the map's objects
+  // cannot follow corrections).
+  Status replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary,
+                    std::deque<KeyframeRecord> history = {});
   // Empties the map; ids keep counting. Returns the number of objects removed.
   size_t resetMap();
   // Sec. 3.5 on the current map.
@@ -77,6 +89,7 @@ class KeyframeWorker {
  private:
   void workerLoop();
   void processKeyframe(const KeyframeJob& job);
+  void applyCorrections(std::vector<PoseCorrection> corrections);
   void applyPendingReconfigure();
   // Keeps the max_detections highest-scoring detections (in their order), counted and warned.
   void capDetections(int max_detections, const std::string& what,
@@ -97,6 +110,7 @@ class KeyframeWorker {
   std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
   std::deque<KeyframeJob> queue_;
+  std::map<double, PoseCorrection> pending_corrections_;  // by stamp, the latest pose
   bool stop_ = false;
   std::thread thread_;
 

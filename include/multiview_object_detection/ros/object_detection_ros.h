@@ -31,6 +31,7 @@ namespace mvod {
 
 class DetectionsBuffer;
 class KeyframeBuffer;
+class KeyframePosesInput;
 class KeyframeWorker;
 class ObjectDetectionPublishers;
 class ObjectDetectionServices;
@@ -92,6 +93,7 @@ class ObjectDetectionRos {
   std::unique_ptr<DetectionsBuffer> detections_;  // detector "topic" only
   std::unique_ptr<KeyframeWorker> worker_;
   std::unique_ptr<KeyframeBuffer> buffer_;
+  std::unique_ptr<KeyframePosesInput> keyframe_poses_;
   std::unique_ptr<RgbdInput> input_;
   std::unique_ptr<ObjectDetectionServices> services_;
   boost::recursive_mutex reconfigure_mutex_;

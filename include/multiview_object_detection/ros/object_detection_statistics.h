@@ -23,6 +23,15 @@ struct ObjectDetectionStatistics {
   int removed_atypical = 0;
   int removed_intersecting = 0;
   bool waiting_for_gravity = false;
+  // SLAM corrections (keyframe_poses): messages received, poses refused (NaN, not unit, unknown
+  // frame), corrections applied, keyframes moved, poses that matched no keyframe; the last
+  // correction's time.
+  int keyframe_pose_messages = 0;
+  int keyframe_poses_refused = 0;
+  int corrections_applied = 0;
+  int keyframes_corrected = 0;
+  int keyframe_poses_unmatched = 0;
+  double correction_ms = 0.0;
   double detection_ms = 0.0;  // last keyframe
   StageTimes stage_times;     // last keyframe
   // From a keyframe's images arriving to its objects being published (queueing, pose wait,

@@ -55,6 +55,9 @@ IntersectionFilter::Config getIntersectionFilterConfigFromRosParam(
 GravityEstimator::Config getGravityEstimatorConfigFromRosParam(
     const ros::NodeHandle& nh_gravity, const GravityEstimator::Config& start,
     ParamErrors* errors);  // (gravity)
+KeyframeHistory::Config getKeyframeHistoryConfigFromRosParam(const ros::NodeHandle& nh_corrections,
+                                                             const KeyframeHistory::Config& start,
+                                                             ParamErrors* errors);  // (corrections)
 // The whole core: paper_method first (every setting read afterwards starts from the paper's), then
 // min_probability, min_object_points, num_threads and every section above.
 ObjectMapper::Config getObjectMapperConfigFromRosParam(const ros::NodeHandle& nh_private,
