@@ -118,6 +118,12 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
       keyValue("keyframe total ms", stats.stage_times.total_ms),
       keyValue("latency ms", stats.latency_ms),
       keyValue("latency median ms", stats.latency_median_ms),
+      keyValue("keyframe pose messages", stats.keyframe_pose_messages),
+      keyValue("keyframe poses refused", stats.keyframe_poses_refused),
+      keyValue("keyframe poses unmatched", stats.keyframe_poses_unmatched),
+      keyValue("corrections applied", stats.corrections_applied),
+      keyValue("keyframes corrected", stats.keyframes_corrected),
+      keyValue("correction ms", stats.correction_ms),
   };
   diagnostic_msgs::DiagnosticArray array;
   array.header.stamp = ros::Time::now();
