@@ -289,6 +289,43 @@ TEST_F(NodeCorrectionsTest, PosesMatchingNoKeyframeAreCountedAndNaNsRefused) {
   EXPECT_EQ(after.objects.size(), before.objects.size());
 }
 
+// A SLAM that publishes its whole keyframe trajectory often: 10 paths of 10,000 poses at 10 Hz
+// (the map's keyframes among them, the rest matching none). The node takes them without falling
+// behind and keeps answering; the time to the map's update after the last path is recorded.
+TEST_F(NodeCorrectionsTest, LongPathsAtTenHertzCostBoundedTime) {
+  nav_msgs::Path path = correctedPath(Eigen::Vector3d::Zero());
+  const nav_msgs::Path keyframes = path;
+  path.poses.clear();
+  for (int i = 0; i < 10000; ++i) {
+    geometry_msgs::PoseStamped pose = keyframes.poses[i % keyframes.poses.size()];
+    if (i >= static_cast<int>(keyframes.poses.size())) {
+      pose.header.stamp = ros::Time(100000.0 + 0.033 * i);  // frames that are no keyframe
+    }
+    path.poses.push_back(pose);
+  }
+  const ros::WallTime start = ros::WallTime::now();
+  double slowest_service_s = 0.0;
+  for (int k = 0; k < 10; ++k) {
+    // Each path moves the keyframes a little, so every one asks for a rebuild.
+    for (size_t i = 0; i < keyframes.poses.size(); ++i) {
+      path.poses[i].pose.position.z = keyframes.poses[i].pose.position.z + 0.001 * (k % 2);
+    }
+    corrections_.publish(path);
+    const ros::WallTime before = ros::WallTime::now();
+    EXPECT_FALSE(getObjects(kNode).objects.empty());
+    slowest_service_s = std::max(slowest_service_s, (ros::WallTime::now() - before).toSec());
+    ros::WallDuration(0.1).sleep();
+  }
+  const size_t received = outputs_->objectsReceived();
+  ASSERT_TRUE(outputs_->waitFor([&] { return outputs_->objectsReceived() > received; }, 20.0) ||
+              outputs_->objectsReceived() >= received);
+  const double total_s = (ros::WallTime::now() - start).toSec();
+  RecordProperty("ten_paths_of_10000_poses_s", std::to_string(total_s));
+  RecordProperty("slowest_get_objects_s", std::to_string(slowest_service_s));
+  EXPECT_LT(slowest_service_s, 1.0) << "~get_objects waited for the corrections";
+  EXPECT_LT(total_s, 30.0);
+}
+
 }  // namespace
 }  // namespace mvod_test
 
