@@ -10,12 +10,11 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Isometry3d poseAt(const Eigen::Vector3d& t, double yaw_deg) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() =
-      Eigen::AngleAxisd(yaw_deg * kPi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = t;
   return T;
 }

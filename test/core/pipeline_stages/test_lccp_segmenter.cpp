@@ -16,7 +16,6 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The mask's rectangle grows by this fraction of the box's image size on every side: floor and wall
 // together then hold more points than the box, each of them alone fewer (Eq. 2 keeps the largest).
 constexpr double kMaskMargin = 0.15;
@@ -26,7 +25,7 @@ using test::Surface;
 // The LCCP scenes: a box yawed 30 degrees in front of a wall 0.5 m behind it.
 test::BoxScene lccpScene() {
   test::BoxScene scene;
-  scene.box_yaw_rad = 30.0 * kPi / 180.0;
+  scene.box_yaw_rad = 30.0 * M_PI / 180.0;
   return scene;
 }
 
@@ -405,7 +404,7 @@ TEST(LccpGridSupervoxels, SameSegmentsAsPcl) {
   const Eigen::Isometry3d T_W_C = test::cameraLookingAlongY(Eigen::Vector3d(0.3, 0.0, 1.2), 25.0);
   for (const double yaw_deg : {0.0, 30.0, 60.0}) {
     test::BoxScene scene = lccpScene();
-    scene.box_yaw_rad = yaw_deg * kPi / 180.0;
+    scene.box_yaw_rad = yaw_deg * M_PI / 180.0;
     const LabeledCloud cloud = renderMaskedView(scene, T_W_C, kMaskMargin, 1.0);
     Eigen::Isometry3d R_W_C = T_W_C;
     R_W_C.translation().setZero();
@@ -529,7 +528,7 @@ TEST(LccpConvexity, ConvexRidgeJoinsAndConcaveCornerSeparates) {
 TEST(LccpConvexity, ShallowConcavityWithinToleranceJoins) {
   LccpSegmenter::Config config;
   // Two patches of a slightly concave surface (normals 6 degrees apart, bending up).
-  const float a = static_cast<float>(3.0 * kPi / 180.0);
+  const float a = static_cast<float>(3.0 * M_PI / 180.0);
   const Eigen::Vector3f n_s(-std::sin(a), 0.0f, std::cos(a));
   const Eigen::Vector3f n_t(std::sin(a), 0.0f, std::cos(a));
   const Eigen::Vector3f c_s(0.05f, 0.0f, 0.05f * std::tan(a));
@@ -557,7 +556,7 @@ TEST(LccpConvexity, SanityCriterionRejectsConnectionsAlongTheBendAxis) {
   LccpSegmenter::Config config;
   // Normals 60 degrees apart bending about x; the centroids lie along x, on the bend axis:
   // convexity is undefined there.
-  const float a = static_cast<float>(30.0 * kPi / 180.0);
+  const float a = static_cast<float>(30.0 * M_PI / 180.0);
   const Eigen::Vector3f n_s(0.0f, -std::sin(a), std::cos(a));
   const Eigen::Vector3f n_t(0.0f, std::sin(a), std::cos(a));
   const Eigen::Vector3f c_s(0.05f, 0.0f, 0.0f), c_t(0.0f, 0.0f, 0.0f);

@@ -37,7 +37,7 @@ Eigen::Matrix3d zUpToYUp() {
   return M;
 }
 
-OrientedBox inflated(const OrientedBox& box, double margin_m) {
+OrientedBox inflatedBox(const OrientedBox& box, double margin_m) {
   OrientedBox result = box;
   result.size_m += Eigen::Vector3d::Constant(2.0 * margin_m);
   return result;
@@ -176,7 +176,7 @@ TEST_F(SyntheticSceneNNTest, RoomsAreDeterministicPlausibleAndFree) {
       for (int i = 0; i < room.num_frames; ++i) {
         const Eigen::Vector3d camera = scene.cameraPose(i).translation();
         for (const Solid& solid : solids) {
-          EXPECT_FALSE(inflated(solid.box, 0.3).contains(camera))
+          EXPECT_FALSE(inflatedBox(solid.box, 0.3).contains(camera))
               << where << " frame " << i << " " << pieces[solid.piece]->class_name;
         }
       }
@@ -433,7 +433,7 @@ TEST_F(SyntheticSceneNNTest, WritesSceneNNThatReadsBack) {
         const Eigen::Vector3d p_zup = M.transpose() * p_yup;
         ++checked;
         // Within the Kinect noise (sigma 2.6 cm at 4 m, 4.1 cm at 5 m) of the labelled box.
-        inside += inflated(by_id[id]->box, 0.12).contains(p_zup);
+        inside += inflatedBox(by_id[id]->box, 0.12).contains(p_zup);
         ++measured_pixels[id];
       }
     }
@@ -454,7 +454,7 @@ TEST_F(SyntheticSceneNNTest, WritesSceneNNThatReadsBack) {
     if (id == 0) continue;
     ASSERT_TRUE(by_id.count(id)) << id;
     const Eigen::Vector3d p_zup = M.transpose() * vertices[i].cast<double>();
-    outside += !inflated(by_id[id]->box, 0.01).contains(p_zup);
+    outside += !inflatedBox(by_id[id]->box, 0.01).contains(p_zup);
   }
   EXPECT_LT(outside, static_cast<int>(vertices.size() / 1000) + 1);
   EXPECT_GT(vertex_count[0], 1000);  // floor and walls
@@ -525,7 +525,7 @@ TEST_F(SyntheticSceneNNTest, SevenScenesGroundTruthHasObservedSurfacePoints) {
     }
     for (const nlohmann::json& p : points) {
       const Eigen::Vector3d point(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
-      ASSERT_TRUE(inflated(box, 0.002).contains(point)) << k << " " << point.transpose();
+      ASSERT_TRUE(inflatedBox(box, 0.002).contains(point)) << k << " " << point.transpose();
     }
   }
   // The evaluation reads them instead of sampling the box surface.
