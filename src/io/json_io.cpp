@@ -31,13 +31,10 @@ using namespace json_fields;  // NOLINT: the map's field readers
 constexpr double kMaxNormalSum = 1e7;
 
 json stageTimesToJson(const StageTimes& t) {
-  return json{{"extraction", t.extraction_ms},
-              {"filter", t.filter_ms},
-              {"lccp", t.lccp_ms},
-              {"manhattan", t.manhattan_ms},
-              {"fusion", t.fusion_ms},
-              {"refinement", t.refinement_ms},
-              {"total", t.total_ms}};
+  return json{
+      {"extraction", t.extraction_ms}, {"filter", t.filter_ms}, {"lccp", t.lccp_ms},
+      {"manhattan", t.manhattan_ms},   {"fusion", t.fusion_ms}, {"existence", t.existence_ms},
+      {"refinement", t.refinement_ms}, {"total", t.total_ms}};
 }
 
 // id, class, probability and observations.
@@ -293,12 +290,33 @@ Status readCompletion(const json& value, const std::string& prefix, MapObject* o
   return Status::Ok();
 }
 
+// Existence evidence (optional: a map saved before it starts every object afresh).
+Status readExistence(const json& value, const std::string& prefix, MapObject* object) {
+  const auto existence = value.find("existence");
+  if (existence == value.end()) return Status::Ok();
+  const std::string where = prefix + "existence.";
+  if (!existence->is_object()) return fieldError(prefix + "existence", "expected an object");
+  ExistenceEvidence& e = object->existence;
+  Status status;
+  if (!(status = readNumber(*existence, where, "log_odds", &e.log_odds))) return status;
+  if (std::abs(e.log_odds) > 100.0) return fieldError(where + "log_odds", "beyond +-100");
+  int counts[3] = {0, 0, 0};
+  const char* names[3] = {"detected", "missed", "seen_through"};
+  for (int i = 0; i < 3; ++i) {
+    if (!(status = readInt(*existence, where, names[i], 0, &counts[i]))) return status;
+  }
+  e.detected = static_cast<std::uint32_t>(counts[0]);
+  e.missed = static_cast<std::uint32_t>(counts[1]);
+  e.seen_through = static_cast<std::uint32_t>(counts[2]);
+  return Status::Ok();
+}
+
 Status readObject(const json& value, const std::string& path, MapObject* out) {
   if (!value.is_object()) return fieldError(path, "expected an object");
   const std::string prefix = path + ".";
   MapObject object;
   for (const auto read : {readIdentity, readBox, readSeen, readClouds, readClassScores,
-                          readEvidence, readFreeSpace, readCompletion}) {
+                          readEvidence, readFreeSpace, readCompletion, readExistence}) {
     const Status status = read(value, prefix, &object);
     if (!status) return status;
   }
@@ -342,7 +360,13 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
                   {"last_keyframe", object.last_keyframe},
                   {"first_seen", object.first_seen_s},
                   {"last_seen", object.last_seen_s},
-                  {"box_completed", object.box_completed}};
+                  {"box_completed", object.box_completed},
+                  {"existence",
+                   {{"log_odds", object.existence.log_odds},
+                    {"probability", object.existence.probability()},
+                    {"detected", object.existence.detected},
+                    {"missed", object.existence.missed},
+                    {"seen_through", object.existence.seen_through}}}};
     if (object.box_completed) {
       entry["observed_box"] = {{"center", vectorToJson(object.observed_box.center_m)},
                                {"size", vectorToJson(object.observed_box.size_m)}};
@@ -401,7 +425,8 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
   }
   doc["objects"] = std::move(list);
   doc["removed"] = {{"atypical", summary.removed_atypical},
-                    {"intersecting", summary.removed_intersecting}};
+                    {"intersecting", summary.removed_intersecting},
+                    {"gone", summary.removed_gone}};
   doc["stage_ms"] = stageTimesToJson(summary.stage_ms_median);
   const MapSummary::Counts& c = summary.counts;
   doc["counts"] = {{"detections", c.detections}, {"above_threshold", c.above_threshold},
@@ -445,6 +470,10 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   if (!(status = readInt(*removed, "removed.", "intersecting", 0, &parsed.removed_intersecting))) {
     return status;
   }
+  if (removed->contains("gone") &&  // maps of 0.9.0 and before have none
+      !(status = readInt(*removed, "removed.", "gone", 0, &parsed.removed_gone))) {
+    return status;
+  }
 
   const json* stages = nullptr;
   if (!(status = member(doc, "", "stage_ms", &stages))) return status;
@@ -460,6 +489,10 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   for (const auto& field : stage_fields) {
     if (!(status = readNumber(*stages, "stage_ms.", field.first, field.second))) return status;
     if (*field.second < 0.0) return fieldError(std::string("stage_ms.") + field.first, "negative");
+  }
+  if (stages->contains("existence")) {  // maps of 0.9.0 and before have none
+    if (!(status = readNumber(*stages, "stage_ms.", "existence", &t.existence_ms))) return status;
+    if (t.existence_ms < 0.0) return fieldError("stage_ms.existence", "negative");
   }
 
   if (doc.contains("counts")) {

@@ -165,6 +165,7 @@ void ObjectMapper::Config::usePaperMethod() {
   intersection_filter.duplicate_ratio = 0.0;
   intersection_filter.container_support_ratio = 0.0;
   database.amodal.enable = false;
+  database.existence.enable = false;
   corrections.enable = false;
 }
 
@@ -384,9 +385,11 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
   const auto depth_and_clouds = [&]() {
     // Evidence fusion's surface test: the keyframe's depth in metres, shared by its detections.
     // Also amodal completion's free space.
+    // The existence evidence tests every object against every keyframe's depth.
     if (config_.database.fusion == "evidence" &&
-        (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
-        !kept.detections.empty()) {
+        (((config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
+          !kept.detections.empty()) ||
+         existenceActive())) {
       clouds.depth_view = makeDepthView(frame.depth, frame.K_depth, frame.T_W_D);
     }
     clouds.clouds_D = extractClouds(frame, kept, label, warnings);
@@ -506,6 +509,24 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     }
   }
   if (!database_.pendingRebox().empty()) reboxPending(&out->times);
+  if (existenceActive()) {
+    std::vector<int> detected_ids;
+    for (const SingleView& view : *views) {
+      if (view.status && view.object_id >= 0) detected_ids.push_back(view.object_id);
+    }
+    const Clock::time_point t = Clock::now();
+    updateExistence(depth_view.get(), detected_ids, &out->removed);
+    out->times.existence_ms += msSince(t);
+  }
+}
+
+void ObjectMapper::updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
+                                   std::vector<MapObject>* removed) {
+  for (const int id : database_.updateExistence(view, detected_ids)) {
+    if (removed != nullptr && database_.find(id) != nullptr)
+      removed->push_back(*database_.find(id));
+    database_.remove(id);
+  }
 }
 
 ObjectDatabase::FusionResult ObjectMapper::fuseObservation(const ObjectObservation& observation,

@@ -135,32 +135,12 @@ void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
   ObjectDatabase previous = std::move(database_);
   database_ = ObjectDatabase(config_.database, previous.priors());
   database_.setGravityUp(gravity().up);
-  const bool measure = config_.database.surface_band_m > 0.0 || config_.database.amodal.enable;
   // The floor as the keyframes saw it so far, at their current poses (the single views' floor).
   floor_.reset();
   // The rebuilt object of each view, in history order.
   std::vector<int> rebuilt_ids;
-  StageTimes times;
   for (const KeyframeRecord& record : history_.records()) {
-    if (config_.floor.enable && record.has_floor) {
-      const Eigen::Vector3d up = gravity().up;
-      const double height_m = up.dot(record.T_W_D * record.floor_point_D);
-      if (!floor_.hasFloor() || height_m < floor_.floorHeight_m()) floor_.setFloor(height_m, up);
-    }
-    if (record.views.empty()) continue;
-    database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
-                                              : std::numeric_limits<double>::quiet_NaN());
-    std::shared_ptr<const DepthView> depth_view;
-    if (measure && !record.depth.empty()) {
-      depth_view = makeDepthView(record.depth, record.K_depth, record.T_W_D);
-    }
-    for (const RecordedView& view : record.views) {
-      ObjectObservation observation = replayView(record, view);
-      observation.depth_view = depth_view;
-      rebuilt_ids.push_back(fuseObservation(observation, true, &times).object_id);
-      ++report->views_replayed;
-    }
-    if (!database_.pendingRebox().empty()) reboxPending(&times);
+    replayRecord(record, &rebuilt_ids, report);
   }
   if (refined_) {
     const RefinementReport refinement = refineDatabase();
@@ -169,6 +149,39 @@ void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
     }
   }
   adoptRebuiltIds(&previous, rebuilt_ids, report);
+}
+
+void ObjectMapper::replayRecord(const KeyframeRecord& record, std::vector<int>* rebuilt_ids,
+                                CorrectionReport* report) {
+  if (config_.floor.enable && record.has_floor) {
+    const Eigen::Vector3d up = gravity().up;
+    const double height_m = up.dot(record.T_W_D * record.floor_point_D);
+    if (!floor_.hasFloor() || height_m < floor_.floorHeight_m()) floor_.setFloor(height_m, up);
+  }
+  const bool measure = (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
+                       !record.views.empty();
+  if (record.views.empty() && !existenceActive()) return;
+  database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
+                                            : std::numeric_limits<double>::quiet_NaN());
+  std::shared_ptr<const DepthView> depth_view;
+  if ((measure || existenceActive()) && !record.depth.empty()) {
+    depth_view = makeDepthView(record.depth, record.K_depth, record.T_W_D);
+  }
+  StageTimes times;
+  std::vector<int> detected_ids;
+  for (const RecordedView& view : record.views) {
+    ObjectObservation observation = replayView(record, view);
+    observation.depth_view = depth_view;
+    detected_ids.push_back(fuseObservation(observation, true, &times).object_id);
+    rebuilt_ids->push_back(detected_ids.back());
+    ++report->views_replayed;
+  }
+  if (!database_.pendingRebox().empty()) reboxPending(&times);
+  if (existenceActive()) {
+    std::vector<MapObject> gone;
+    updateExistence(depth_view.get(), detected_ids, &gone);
+    report->objects_gone += static_cast<int>(gone.size());
+  }
 }
 
 void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,

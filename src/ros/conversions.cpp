@@ -564,6 +564,10 @@ multiview_object_detection::Object objectToMsg(const MapObject& object) {
   msg.size.z = object.box.size_m.z();
   msg.yaw = static_cast<float>(object.yaw_rad);
   msg.box_completed = object.box_completed;
+  msg.existence = static_cast<float>(object.existence.probability());
+  msg.views_detected = object.existence.detected;
+  msg.views_missed = object.existence.missed;
+  msg.views_seen_through = object.existence.seen_through;
   msg.num_points = static_cast<int32_t>(object.segment_W.empty() ? object.points_W.size()
                                                                  : object.segment_W.size());
   msg.first_seen = timeFromSeconds(object.first_seen_s);
@@ -593,6 +597,12 @@ Status objectFromMsg(const multiview_object_detection::Object& msg, MapObject* o
   out.observed_box = out.box;  // the message carries no observed part: the box stands in
   out.first_seen_s = msg.first_seen.toSec();
   out.last_seen_s = msg.last_seen.toSec();
+  if (std::isfinite(msg.existence) && msg.existence > 0.f && msg.existence < 1.f) {
+    out.existence.log_odds = std::log(msg.existence / (1.0 - msg.existence));
+  }
+  out.existence.detected = msg.views_detected;
+  out.existence.missed = msg.views_missed;
+  out.existence.seen_through = msg.views_seen_through;
   *object = std::move(out);
   return Status::Ok();
 }

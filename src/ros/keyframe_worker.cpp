@@ -175,6 +175,7 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
                   "run the node on the SLAM's keyframes, keyframe_mode topic)");
   }
   stats_->update([&report](ObjectDetectionStatistics& stats) {
+    stats.removed_gone += report.objects_gone;
     ++stats.corrections_applied;
     stats.keyframes_corrected += report.keyframes_moved;
     stats.keyframe_poses_unmatched += report.unmatched;
@@ -334,6 +335,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   {
     std::lock_guard<std::mutex> lock(mapper_mutex_);
     processed = mapper_->processKeyframe(frame, detections, &report);
+    removed_gone_ += static_cast<int>(report.removed.size());
     if (processed && config.refine_every_n_keyframes > 0 &&
         mapper_->keyframesProcessed() % config.refine_every_n_keyframes == 0) {
       refineLocked("every " + std::to_string(config.refine_every_n_keyframes) + " keyframes");
@@ -348,8 +350,16 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   ROS_DEBUG("%s: %d detections, %d above lambda, %d boxes, %d inserted, %d fused, %.1f ms",
             what.c_str(), report.detections, report.above_threshold, report.with_box,
             report.inserted, report.fused, report.times.total_ms);
+  if (!report.removed.empty()) {
+    std::vector<int> ids;
+    for (const MapObject& object : report.removed) ids.push_back(object.id);
+    ROS_INFO("%s: %zu objects gone (their places seen through, or not detected where seen): %s",
+             what.c_str(), ids.size(), idList(ids).c_str());
+    publishers_->publishRemoved(report.removed, header.stamp);
+  }
   stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
     ++stats.keyframes_processed;
+    stats.removed_gone += static_cast<int>(report.removed.size());
     stats.waiting_for_gravity = report.waiting_for_gravity;
     stats.detection_ms = detection_ms;
     stats.stage_times = report.times;
@@ -401,6 +411,7 @@ void KeyframeWorker::updateSnapshotLocked() {
   snapshot->summary.gravity_down_W = -mapper_->gravity().up;
   snapshot->summary.removed_atypical = removed_atypical_;
   snapshot->summary.removed_intersecting = removed_intersecting_;
+  snapshot->summary.removed_gone = removed_gone_;
   snapshot->history = mapper_->history().records();
   std::lock_guard<std::mutex> lock(snapshot_mutex_);
   snapshot_ = std::move(snapshot);
@@ -429,6 +440,7 @@ Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const M
   mapper_->setHistory(std::move(history));
   removed_atypical_ = summary.removed_atypical;
   removed_intersecting_ = summary.removed_intersecting;
+  removed_gone_ = summary.removed_gone;
   updateSnapshotLocked();
   return Status::Ok();
 }
@@ -439,6 +451,7 @@ size_t KeyframeWorker::resetMap() {
   mapper_->reset();
   removed_atypical_ = 0;
   removed_intersecting_ = 0;
+  removed_gone_ = 0;
   updateSnapshotLocked();
   return removed;
 }

@@ -31,12 +31,23 @@ ObjectDetectionPublishers::ObjectDetectionPublishers(const ros::NodeHandle& nh,
     : nh_(nh), config_(config), stats_(stats) {
   ros::NodeHandle private_nh(nh_private);
   objects_pub_ = private_nh.advertise<multiview_object_detection::ObjectArray>("objects", 1, true);
+  removed_objects_pub_ =
+      private_nh.advertise<multiview_object_detection::ObjectArray>("removed_objects", 10);
   markers_pub_ = private_nh.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
   object_cloud_pub_ = private_nh.advertise<sensor_msgs::PointCloud2>("object_cloud", 1, true);
   keyframes_pub_ = private_nh.advertise<nav_msgs::Path>("keyframes", 1, true);
   diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   private_it_ = std::make_unique<image_transport::ImageTransport>(private_nh);
   detections_image_pub_ = private_it_->advertise("detections_image", 1);
+}
+
+void ObjectDetectionPublishers::publishRemoved(const std::vector<MapObject>& objects,
+                                               const ros::Time& stamp) {
+  if (objects.empty()) return;
+  std_msgs::Header header;
+  header.stamp = stamp;
+  header.frame_id = config_.world_frame;
+  removed_objects_pub_.publish(objectsToMsg(objects, header));
 }
 
 void ObjectDetectionPublishers::publishMap(const std::vector<MapObject>& objects,
@@ -114,10 +125,12 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
       keyValue("lccp ms", stats.stage_times.lccp_ms),
       keyValue("manhattan ms", stats.stage_times.manhattan_ms),
       keyValue("fusion ms", stats.stage_times.fusion_ms),
+      keyValue("existence ms", stats.stage_times.existence_ms),
       keyValue("refinement ms", stats.stage_times.refinement_ms),
       keyValue("keyframe total ms", stats.stage_times.total_ms),
       keyValue("latency ms", stats.latency_ms),
       keyValue("latency median ms", stats.latency_median_ms),
+      keyValue("removed gone", stats.removed_gone),
       keyValue("keyframe pose messages", stats.keyframe_pose_messages),
       keyValue("keyframe poses refused", stats.keyframe_poses_refused),
       keyValue("keyframe poses unmatched", stats.keyframe_poses_unmatched),

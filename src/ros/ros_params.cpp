@@ -200,6 +200,27 @@ AmodalCompletion::Config getAmodalCompletionConfigFromRosParam(
   return c;
 }
 
+ExistenceModel::Config getExistenceModelConfigFromRosParam(const ros::NodeHandle& nh_existence,
+                                                           const ExistenceModel::Config& start,
+                                                           ParamErrors* errors) {
+  const ParamReader p(nh_existence, errors);
+  ExistenceModel::Config c = start;
+  p.read("enable", &c.enable);
+  p.read("detected_log_odds", &c.detected_log_odds);
+  p.read("missed_log_odds", &c.missed_log_odds);
+  p.read("seen_through_log_odds", &c.seen_through_log_odds);
+  p.read("min_log_odds", &c.min_log_odds);
+  p.read("max_log_odds", &c.max_log_odds);
+  p.read("remove_below", &c.remove_below);
+  p.read("sample_voxels", &c.sample_voxels);
+  p.read("min_voxels_in_view", &c.min_voxels_in_view);
+  p.read("min_in_view_share", &c.min_in_view_share);
+  p.read("seen_through_share", &c.seen_through_share);
+  p.read("free_margin_m", &c.free_margin_m);
+  p.read("max_depth_m", &c.max_depth_m);
+  return c;
+}
+
 ObjectDatabase::Config getObjectDatabaseConfigFromRosParam(const ros::NodeHandle& nh_database,
                                                            const ObjectDatabase::Config& start,
                                                            ParamErrors* errors) {
@@ -214,6 +235,8 @@ ObjectDatabase::Config getObjectDatabaseConfigFromRosParam(const ros::NodeHandle
   p.readNumber("surface_band_m", &c.surface_band_m);
   c.amodal =
       getAmodalCompletionConfigFromRosParam(child(nh_database, "amodal"), start.amodal, errors);
+  c.existence =
+      getExistenceModelConfigFromRosParam(child(nh_database, "existence"), start.existence, errors);
   return c;
 }
 

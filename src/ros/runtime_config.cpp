@@ -25,6 +25,8 @@ RuntimeConfig::ReconfigureValues reconfigureFromConfig(const ObjectDetectionRosC
   rc.intersection_filter_enable = config.mapper.intersection_filter.enable;
   rc.intersection_filter_volume_ratio_threshold =
       config.mapper.intersection_filter.volume_ratio_threshold;
+  rc.database_existence_enable = config.mapper.database.existence.enable;
+  rc.database_existence_remove_below = config.mapper.database.existence.remove_below;
   return rc;
 }
 
@@ -46,6 +48,8 @@ void applyReconfigure(const RuntimeConfig::ReconfigureValues& rc,
   config->mapper.intersection_filter.enable = rc.intersection_filter_enable;
   config->mapper.intersection_filter.volume_ratio_threshold =
       rc.intersection_filter_volume_ratio_threshold;
+  config->mapper.database.existence.enable = rc.database_existence_enable;
+  config->mapper.database.existence.remove_below = rc.database_existence_remove_below;
 }
 
 }  // namespace

@@ -90,6 +90,11 @@ const char* const kUsage =
     "  --no-floor             no floor cut before LCCP and no grounding of boxes on the floor\n"
     "  --no-amodal            no amodal completion (boxes are only what the views saw: a chair\n"
     "                         under a table is its backrest)\n"
+    "  --no-existence         keep every object once mapped (no existence evidence: objects\n"
+    "                         whose place later views see through, or that are detected in\n"
+    "                         few of the views that show them, are not removed)\n"
+    "  --existence-remove-below L  remove an object once its existence log-odds fall below L\n"
+    "                         (default -1; the log-odds lie in [-2, 2])\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
     "  --corrected-poses DIR  the SLAM's corrections, as at a loop closure: frame-NNNNNN.pose.txt\n"
@@ -128,6 +133,8 @@ struct Options {
   bool paper = false;
   bool no_floor = false;
   bool no_amodal = false;
+  bool no_existence = false;
+  double existence_remove_below = std::numeric_limits<double>::quiet_NaN();
   std::string selection;
   std::string fusion;
   std::string outlier_removal;
@@ -212,6 +219,11 @@ void addMethodOptions(CLI::App* app, Options* options) {
   cli::addFlag(app, "--paper", &options->paper);
   cli::addFlag(app, "--no-floor", &options->no_floor);
   cli::addFlag(app, "--no-amodal", &options->no_amodal);
+  cli::addFlag(app, "--no-existence", &options->no_existence);
+  cli::addNumber(
+      app, "--existence-remove-below", &options->existence_remove_below,
+      [](double value) { return std::isfinite(value); },
+      "--existence-remove-below needs a finite number");
   cli::addFlag(app, "--estimate-gravity", &options->estimate_gravity);
   cli::addChoice(app, "--selection", {"largest", "consistent"}, &options->selection,
                  "--selection needs largest or consistent");
@@ -439,6 +451,10 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   }
   if (options.no_floor) config->floor.enable = false;
   if (options.no_amodal) config->database.amodal.enable = false;
+  if (options.no_existence) config->database.existence.enable = false;
+  if (std::isfinite(options.existence_remove_below)) {
+    config->database.existence.remove_below = options.existence_remove_below;
+  }
   config->min_probability = options.min_probability;
   config->num_threads = options.threads;
   config->filter.enable = !options.no_filter;
@@ -489,6 +505,7 @@ struct RunStats {
   mvod::MapSummary::Counts counts;
   std::vector<double> correction_ms;  // --corrected-poses: each correction's time
   int keyframes_corrected = 0;
+  int removed_gone = 0;  // by the existence evidence
 };
 
 // Every N-th frame through load -> detect -> ObjectMapper::processKeyframe, with a progress line.
@@ -625,6 +642,7 @@ class KeyframeLoop {
       counts.with_box += keyframe.with_box;
       counts.inserted += keyframe.inserted;
       counts.fused += keyframe.fused;
+      stats_.removed_gone += static_cast<int>(keyframe.removed.size());
       if (keyframe.above_threshold > 0 && !keyframe.waiting_for_gravity) {
         stats_.stage_times.push_back(keyframe.times);
         stats_.stage_frames.push_back(name);
@@ -664,6 +682,7 @@ mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
   summary.keyframes = stats.keyframes;
   summary.removed_atypical = static_cast<int>(refinement.atypical_ids.size());
   summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
+  summary.removed_gone = stats.removed_gone;
   summary.gravity_down_W = -mapper.gravity().up;
   summary.counts = stats.counts;
   auto stage_median = [&](double mvod::StageTimes::*field) {
@@ -677,6 +696,7 @@ mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
   med.lccp_ms = stage_median(&mvod::StageTimes::lccp_ms);
   med.manhattan_ms = stage_median(&mvod::StageTimes::manhattan_ms);
   med.fusion_ms = stage_median(&mvod::StageTimes::fusion_ms);
+  med.existence_ms = stage_median(&mvod::StageTimes::existence_ms);
   med.total_ms = stage_median(&mvod::StageTimes::total_ms);
   med.refinement_ms = refinement.time_ms;
   return summary;
@@ -699,11 +719,12 @@ void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times) {
 // --timings: per-keyframe stage times as CSV.
 int writeTimings(const std::string& path, const RunStats& stats) {
   std::ofstream csv(path);
-  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms\n";
+  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms,existence_ms\n";
   for (size_t k = 0; k < stats.stage_times.size(); ++k) {
     const mvod::StageTimes& t = stats.stage_times[k];
     csv << stats.stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
-        << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "\n";
+        << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "," << t.existence_ms
+        << "\n";
   }
   if (!csv) {
     std::cerr << "offline_detection: cannot write " << path << "\n";
@@ -738,17 +759,19 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
   const mvod::MapSummary::Counts& counts = summary.counts;
   std::fprintf(stderr,
                "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
-               "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate)\n"
+               "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
+               "%d gone by the existence evidence)\n"
                "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
-               "manhattan %.1f  fusion %.1f  total %.1f  refinement %.1f\n"
+               "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f  refinement %.1f\n"
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
                num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
                refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
-               refinement.merged_ids.size(), median(stats.detection_ms), med.extraction_ms,
-               med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms, med.total_ms,
-               med.refinement_ms, counts.detections, counts.above_threshold, counts.with_box,
-               counts.inserted, counts.fused, counts.before_refinement);
+               refinement.merged_ids.size(), stats.removed_gone, median(stats.detection_ms),
+               med.extraction_ms, med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms,
+               med.existence_ms, med.total_ms, med.refinement_ms, counts.detections,
+               counts.above_threshold, counts.with_box, counts.inserted, counts.fused,
+               counts.before_refinement);
 }
 
 // Refinement (Sec. 3.5), the printed table, objects.json, the clouds, the report.

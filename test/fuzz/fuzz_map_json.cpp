@@ -105,6 +105,11 @@ void compareObjects(const MapObject& a, const MapObject& b, size_t index) {
          where + "keyframes differ");
   expect(same(a.first_seen_s, b.first_seen_s) && same(a.last_seen_s, b.last_seen_s),
          where + "seen times differ");
+  expect(same(a.existence.log_odds, b.existence.log_odds) &&
+             a.existence.detected == b.existence.detected &&
+             a.existence.missed == b.existence.missed &&
+             a.existence.seen_through == b.existence.seen_through,
+         where + "existence differs");
 }
 
 bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; }

@@ -28,8 +28,8 @@
 
 #include "multiview_object_detection/InstanceDetections.h"
 #include "multiview_object_detection/ObjectArray.h"
-#include "multiview_object_detection/simulation/synthetic_scene.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/simulation/synthetic_scene.h"
 
 namespace mvod_test {
 
@@ -101,10 +101,13 @@ class SyntheticStream {
     int min_mask_pixels = 50;
     // Object index -> class name to report instead of the true one (e.g. an atypical object).
     std::map<int, std::string> relabel;
+    // The room changed: object index -> its move (world frame), and the objects taken away.
+    std::map<int, Eigen::Vector3d> moved;
+    std::set<int> removed;
   };
 
   explicit SyntheticStream(const Options& options)
-      : options_(options), scene_(mvod::SyntheticScene::makeDefault(sceneConfig(options))) {}
+      : options_(options), scene_(changedScene(options)) {}
 
   const mvod::SyntheticScene& scene() const { return scene_; }
   const Options& options() const { return options_; }
@@ -168,6 +171,23 @@ class SyntheticStream {
         525.0 * scale, 525.0 * scale, (options.width - 1) / 2.0, (options.height - 1) / 2.0,
         options.width, options.height};
     return config;
+  }
+
+  static mvod::SyntheticScene changedScene(const Options& options) {
+    const mvod::SyntheticScene room = mvod::SyntheticScene::makeDefault(sceneConfig(options));
+    if (options.moved.empty() && options.removed.empty()) return room;
+    std::vector<mvod::SyntheticObject> objects;
+    for (int i = 0; i < static_cast<int>(room.objects().size()); ++i) {
+      if (options.removed.count(i)) continue;
+      mvod::SyntheticObject object = room.objects()[i];
+      const auto move = options.moved.find(i);
+      if (move != options.moved.end()) {
+        object.box.center_m += move->second;
+        for (mvod::OrientedBox& part : object.parts) part.center_m += move->second;
+      }
+      objects.push_back(object);
+    }
+    return mvod::SyntheticScene(room.config(), objects, room.clutter());
   }
 
   Options options_;

@@ -15,6 +15,7 @@ struct MapSummary {
   int keyframes = 0;
   int removed_atypical = 0;
   int removed_intersecting = 0;
+  int removed_gone = 0;        // the existence evidence showed them gone (optional in the file)
   StageTimes stage_ms_median;  // medians per keyframe
   // Table 4's counts over the whole run (sums of the KeyframeReports). Optional in the file: maps
   // written without them read as zeros.
@@ -32,8 +33,8 @@ struct MapSummary {
 // {"frames", "keyframes", "gravity_down", "objects": [{"id", "class_name", "class_id",
 // "probability",
 //  "observations", "center", "size", "rotation" (3x3, columns = box axes), "yaw", "num_points",
-//  ...}], "removed": {"atypical", "intersecting"}, "stage_ms": {...}, "counts": {...}}. With
-//  include_clouds the fused and segmented
+//  ...}], "removed": {"atypical", "intersecting", "gone"}, "stage_ms": {...}, "counts": {...}}.
+//  With include_clouds the fused and segmented
 // clouds are stored too (a map that can be reloaded and fused into). With a history, its keyframes
 // too ("keyframe_history"): a map that still follows the SLAM's corrections once reloaded.
 std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,

@@ -31,6 +31,7 @@ struct StageTimes {
   double lccp_ms = 0.0;
   double manhattan_ms = 0.0;
   double fusion_ms = 0.0;
+  double existence_ms = 0.0;  // every object's existence vote from the keyframe's depth
   double refinement_ms = 0.0;
   double total_ms = 0.0;
 };
@@ -43,6 +44,8 @@ struct KeyframeReport {
   int inserted = 0;
   int fused = 0;
   bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
+  // Objects this keyframe's votes showed gone (existence evidence), as they were; removed.
+  std::vector<MapObject> removed;
   std::vector<std::string>
       warnings;  // per-detection problems (empty mask, no depth, unknown class ...)
   StageTimes times;
@@ -103,6 +106,7 @@ class ObjectMapper {
     int objects_before = 0;
     int objects_after = 0;
     int objects_kept_unmoved = 0;  // objects without recorded views (e.g. from an older map file)
+    int objects_gone = 0;          // shown gone by the existence evidence while fused again
     double time_ms = 0.0;
   };
 
@@ -213,6 +217,13 @@ class ObjectMapper {
                                                bool defer_rebox, StageTimes* times);
   // Evidence fusion, once per keyframe: the objects that changed boxed, in parallel.
   void reboxPending(StageTimes* times);
+  // Existence evidence, once per keyframe after its fusion: every object votes with the keyframe's
+  // depth (detected_ids: fused or inserted in it); the gone are removed (into *removed if given).
+  void updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
+                       std::vector<MapObject>* removed);
+  bool existenceActive() const {
+    return config_.database.existence.enable && config_.database.fusion == "evidence";
+  }
   // Sec. 3.5 on the database; the views of merged duplicates follow them into the history.
   RefinementReport refineDatabase();
 
@@ -222,6 +233,10 @@ class ObjectMapper {
   void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
                       std::vector<SingleView>* views);
   void rebuildFromHistory(CorrectionReport* report);
+  // One history record fused again (its views at its keyframe's current pose); the rebuilt object
+  // of each view appended to rebuilt_ids.
+  void replayRecord(const KeyframeRecord& record, std::vector<int>* rebuilt_ids,
+                    CorrectionReport* report);
   ObjectObservation replayView(const KeyframeRecord& record, const RecordedView& view) const;
   // The ids of the rebuilt objects: each takes the id most of its views had before (the better
   // supported objects choose first), else a new one; objects of the old map that no view made are

@@ -118,6 +118,7 @@ class KeyframeWorker {
   mutable std::mutex mapper_mutex_;
   std::unique_ptr<ObjectMapper> mapper_;
   int removed_atypical_ = 0;
+  int removed_gone_ = 0;  // by the existence evidence, for the saved map's summary
   int removed_intersecting_ = 0;
 
   // What the services read (snapshot_mutex_, innermost but for the statistics).

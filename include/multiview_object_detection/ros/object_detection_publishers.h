@@ -12,8 +12,8 @@
 #include <set>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/types/detection.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/detection.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 
@@ -32,6 +32,9 @@ class ObjectDetectionPublishers {
   // object cloud, all in world_frame. Safe from any thread.
   void publishMap(const std::vector<MapObject>& objects, const ros::Time& stamp);
   void publishKeyframePath(const nav_msgs::Path& path);
+  // The objects the existence evidence removed, as they were last (~removed_objects), so that a
+  // task planner learns of them; their markers go with the next publishMap.
+  void publishRemoved(const std::vector<MapObject>& objects, const ros::Time& stamp);
   // Drawn only while someone subscribes.
   void publishDetectionImage(const cv::Mat& color_bgr, const std::vector<Detection2D>& detections,
                              const std_msgs::Header& header);
@@ -48,6 +51,7 @@ class ObjectDetectionPublishers {
   SharedStatistics* stats_;
 
   ros::Publisher objects_pub_;
+  ros::Publisher removed_objects_pub_;
   ros::Publisher markers_pub_;
   ros::Publisher object_cloud_pub_;
   ros::Publisher keyframes_pub_;

@@ -43,6 +43,9 @@ BoxEstimator::Config getBoxEstimatorConfigFromRosParam(const ros::NodeHandle& nh
 AmodalCompletion::Config getAmodalCompletionConfigFromRosParam(
     const ros::NodeHandle& nh_amodal, const AmodalCompletion::Config& start,
     ParamErrors* errors);  // (database/amodal)
+ExistenceModel::Config getExistenceModelConfigFromRosParam(
+    const ros::NodeHandle& nh_existence, const ExistenceModel::Config& start,
+    ParamErrors* errors);  // (database/existence)
 ObjectDatabase::Config getObjectDatabaseConfigFromRosParam(const ros::NodeHandle& nh_database,
                                                            const ObjectDatabase::Config& start,
                                                            ParamErrors* errors);  // (database)

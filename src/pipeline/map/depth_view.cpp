@@ -83,8 +83,9 @@ DepthView::Visibility DepthView::visibility(const Eigen::Vector3f& p_W, double m
   const float measured = depth_m.ptr<float>(static_cast<int>(v))[static_cast<int>(u)];
   if (!(measured > 0.f) || !std::isfinite(measured)) return Visibility::kNotInView;
   const double z = p_D.z();
-  const double beyond_m = margin_m + truncation_m + truncation_per_m2 * z * z;
-  return measured - z > beyond_m ? Visibility::kSeenFree : Visibility::kNotSeenFree;
+  const double truncation = truncation_m + truncation_per_m2 * z * z;
+  if (measured - z > margin_m + truncation) return Visibility::kSeenFree;
+  return measured - z < -truncation ? Visibility::kHidden : Visibility::kOnSurface;
 }
 
 std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntrinsics& K_depth,

@@ -31,6 +31,8 @@ Status ObjectDatabase::Config::isValid() const {
   }
   const Status amodal_status = amodal.isValid();
   if (!amodal_status) return amodal_status;
+  const Status existence_status = existence.isValid();
+  if (!existence_status) return Status::Error("existence." + existence_status.message());
   if (fusion != "paper" && fusion != "evidence") {
     return Status::Error("fusion must be paper or evidence (got '" + fusion + "')");
   }
@@ -48,6 +50,8 @@ std::string ObjectDatabase::Config::print() const {
       << "surface_band_m: " << surface_band_m << "\n";
   std::istringstream amodal_lines(amodal.print());
   for (std::string line; std::getline(amodal_lines, line);) out << "amodal." << line << "\n";
+  std::istringstream existence_lines(existence.print());
+  for (std::string line; std::getline(existence_lines, line);) out << "existence." << line << "\n";
   return out.str();
 }
 
@@ -571,6 +575,11 @@ bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcess
   into.last_keyframe = std::max(into.last_keyframe, from.last_keyframe);
   into.first_seen_s = std::min(into.first_seen_s, from.first_seen_s);
   into.last_seen_s = std::max(into.last_seen_s, from.last_seen_s);
+  // One object seen as two: the votes of both, its odds the better of the two.
+  into.existence.log_odds = std::max(into.existence.log_odds, from.existence.log_odds);
+  into.existence.detected += from.existence.detected;
+  into.existence.missed += from.existence.missed;
+  into.existence.seen_through += from.existence.seen_through;
   remove(from_id);
   rebox(&into, process, nullptr);
   return true;
@@ -632,6 +641,24 @@ int ObjectDatabase::takeNextId() {
   int id = 0;
   while (objects_.count(id) != 0) ++id;
   return id;
+}
+
+std::vector<int> ObjectDatabase::updateExistence(const DepthView* view,
+                                                 const std::vector<int>& detected_ids) {
+  std::vector<int> gone;
+  if (!config_.existence.enable || config_.fusion != "evidence") return gone;
+  const ExistenceModel model(config_.existence);
+  for (auto& entry : objects_) {
+    MapObject& object = entry.second;
+    const bool detected =
+        std::find(detected_ids.begin(), detected_ids.end(), object.id) != detected_ids.end();
+    if (!detected && view == nullptr) continue;
+    const ExistenceModel::Vote vote =
+        detected ? ExistenceModel::Vote::kDetected
+                 : model.vote(object.segment_W, object.seenBox(), *view, false);
+    if (model.apply(vote, &object.existence)) gone.push_back(object.id);
+  }
+  return gone;
 }
 
 }  // namespace mvod

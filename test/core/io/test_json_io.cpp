@@ -456,6 +456,50 @@ TEST_F(JsonIoErrorTest, ValuesThatWouldNotSurviveTheNextSaveAreRefused) {
   expectError(doc.dump(), "objects[0].id");
 }
 
+// Existence evidence (0.10.0) round-trips; maps saved before it load with none (log-odds 0, no
+// votes); out-of-range values are refused.
+TEST(JsonIoTest, ExistenceRoundTripsIsOptionalAndValidated) {
+  std::vector<MapObject> objects = {makeObject(3, "tv", 1.2, 20)};
+  objects[0].existence.log_odds = -0.7;
+  objects[0].existence.detected = 5;
+  objects[0].existence.missed = 2;
+  objects[0].existence.seen_through = 1;
+  MapSummary summary = makeSummary();
+  summary.removed_gone = 4;
+  summary.stage_ms_median.existence_ms = 0.5;
+  const std::string text = objectsToJson(objects, summary, false);
+  std::vector<MapObject> loaded;
+  MapSummary loaded_summary;
+  ASSERT_TRUE(objectsFromJson(text, &loaded, &loaded_summary).ok());
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_DOUBLE_EQ(loaded[0].existence.log_odds, -0.7);
+  EXPECT_EQ(loaded[0].existence.detected, 5u);
+  EXPECT_EQ(loaded[0].existence.missed, 2u);
+  EXPECT_EQ(loaded[0].existence.seen_through, 1u);
+  EXPECT_EQ(loaded_summary.removed_gone, 4);
+  EXPECT_DOUBLE_EQ(loaded_summary.stage_ms_median.existence_ms, 0.5);
+
+  nlohmann::json doc = nlohmann::json::parse(text);
+  doc["objects"][0].erase("existence");
+  doc["removed"].erase("gone");
+  doc["stage_ms"].erase("existence");
+  ASSERT_TRUE(objectsFromJson(doc.dump(), &loaded, &loaded_summary).ok());
+  EXPECT_EQ(loaded[0].existence.log_odds, 0.0);
+  EXPECT_EQ(loaded[0].existence.detected + loaded[0].existence.missed, 0u);
+  EXPECT_EQ(loaded_summary.removed_gone, 0);
+
+  for (const auto& bad : {std::make_pair("log_odds", nlohmann::json(1e9)),
+                          std::make_pair("missed", nlohmann::json(-1)),
+                          std::make_pair("seen_through", nlohmann::json("two"))}) {
+    doc = nlohmann::json::parse(text);
+    doc["objects"][0]["existence"][bad.first] = bad.second;
+    const Status refused = objectsFromJson(doc.dump(), &loaded, nullptr);
+    ASSERT_FALSE(refused.ok()) << bad.first;
+    EXPECT_NE(refused.message().find(std::string("existence.") + bad.first), std::string::npos)
+        << refused.message();
+  }
+}
+
 TEST(JsonIoTest, WhatTheMapHoldsRoundTrips) {
   // Class names are detector strings: bytes that are not UTF-8 must not make the map unsavable.
   std::vector<MapObject> objects = {makeObject(1, "chair", 0.1, 4)};

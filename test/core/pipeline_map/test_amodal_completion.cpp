@@ -94,12 +94,15 @@ TEST(DepthViewTest, VisibilitySaysWhetherTheViewSawThroughAPoint) {
   using V = DepthView::Visibility;
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.05f, 0.f, 1.0f), 0.05), V::kSeenFree);
   // Within the margin plus the truncation in front of the surface: not seen through.
-  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 1.94f), 0.05), V::kNotSeenFree);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 1.94f), 0.05), V::kOnSurface);
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 1.92f), 0.05), V::kSeenFree);
-  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 2.5f), 0.05), V::kNotSeenFree);  // hidden
-  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.f, 0.f, 1.f), 0.05), V::kNotInView);      // no depth
-  EXPECT_EQ(view.visibility(Eigen::Vector3f(1.f, 0.f, 1.f), 0.05), V::kNotInView);      // outside
-  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, -1.f), 0.05), V::kNotInView);    // behind
+  // On the surface within the truncation either side; beyond it behind the surface: hidden.
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 2.01f), 0.05), V::kOnSurface);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 2.03f), 0.05), V::kHidden);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 2.5f), 0.05), V::kHidden);
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.f, 0.f, 1.f), 0.05), V::kNotInView);    // no depth
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(1.f, 0.f, 1.f), 0.05), V::kNotInView);    // outside
+  EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, -1.f), 0.05), V::kNotInView);  // behind
   view.depth_m.at<float>(50, 60) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 5.f), 0.05), V::kNotInView);  // NaN
 }

@@ -14,6 +14,9 @@
 namespace mvod {
 namespace test {
 
+// Keyframes per lap of the scenario tests: 30 degrees apart.
+constexpr int kFramesPerLap = 12;
+
 // The default room at 320 x 240 with light Kinect-like noise; frames_per_lap frames per lap.
 inline SyntheticSceneConfig walkConfig(int frames_per_lap) {
   SyntheticSceneConfig config;

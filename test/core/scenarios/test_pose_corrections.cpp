@@ -14,17 +14,16 @@
 namespace mvod {
 namespace {
 
-constexpr int kFramesPerLap = 12;
 constexpr int kLaps = 2;
 
 class PoseCorrectionTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    scene_ = new SyntheticScene(SyntheticScene::makeDefault(test::walkConfig(kFramesPerLap)));
-    for (int k = 0; k < kFramesPerLap * kLaps; ++k) {
+    scene_ = new SyntheticScene(SyntheticScene::makeDefault(test::walkConfig(test::kFramesPerLap)));
+    for (int k = 0; k < test::kFramesPerLap * kLaps; ++k) {
       RgbdFrame frame;
       std::vector<Detection2D> detections;
-      test::renderKeyframe(*scene_, k % kFramesPerLap, k, &frame, &detections);
+      test::renderKeyframe(*scene_, k % test::kFramesPerLap, k, &frame, &detections);
       frames_.push_back(frame);
       detections_.push_back(detections);
     }
@@ -47,8 +46,8 @@ class PoseCorrectionTest : public ::testing::Test {
   // Keyframe k as the SLAM gave it: the first lap drifts, the second is right.
   RgbdFrame drifted(int k) const {
     RgbdFrame frame = frames_[k];
-    if (k < kFramesPerLap) {
-      const double share = static_cast<double>(k) / (kFramesPerLap - 1);
+    if (k < test::kFramesPerLap) {
+      const double share = static_cast<double>(k) / (test::kFramesPerLap - 1);
       frame.T_W_D = drift_.at(share, frames_[0].T_W_D.translation()) * frame.T_W_D;
     }
     return frame;
@@ -109,11 +108,11 @@ TEST_F(PoseCorrectionTest, CorrectionAtTheLoopGivesTheMapOfTheRightPoses) {
   const std::vector<MapObject> truth = run(false);
   ObjectMapper::CorrectionReport report;
   const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
-    if (k != kFramesPerLap) return;
-    ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), &report).ok());
+    if (k != test::kFramesPerLap) return;
+    ASSERT_TRUE(mapper->correctPoses(truths(0, test::kFramesPerLap - 1), &report).ok());
   });
   EXPECT_FALSE(report.ignored);
-  EXPECT_EQ(report.keyframes_moved, kFramesPerLap - 1);  // keyframe 0 did not drift
+  EXPECT_EQ(report.keyframes_moved, test::kFramesPerLap - 1);  // keyframe 0 did not drift
   EXPECT_EQ(report.unmatched, 0);
   EXPECT_GT(report.views_replayed, 0);
   const test::MapDifference d = test::compareMaps(truth, corrected);
@@ -131,8 +130,8 @@ TEST_F(PoseCorrectionTest, CorrectionAtTheLoopGivesTheMapOfTheRightPoses) {
 TEST_F(PoseCorrectionTest, CorrectionAfterTheLastKeyframe) {
   const std::vector<MapObject> truth = run(false);
   const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
-    if (k == kFramesPerLap * kLaps) {
-      ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), nullptr).ok());
+    if (k == test::kFramesPerLap * kLaps) {
+      ASSERT_TRUE(mapper->correctPoses(truths(0, test::kFramesPerLap - 1), nullptr).ok());
     }
   });
   const test::MapDifference d = test::compareMaps(truth, corrected);
@@ -146,13 +145,15 @@ TEST_F(PoseCorrectionTest, PartialThenSecondCorrection) {
   const std::vector<MapObject> truth = run(false);
   std::vector<MapObject> after_first;
   const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
-    if (k == kFramesPerLap) {
+    if (k == test::kFramesPerLap) {
       // Only the lap's second half first; the rest keeps its drifted pose.
-      ASSERT_TRUE(mapper->correctPoses(truths(kFramesPerLap / 2, kFramesPerLap - 1), nullptr).ok());
+      ASSERT_TRUE(
+          mapper->correctPoses(truths(test::kFramesPerLap / 2, test::kFramesPerLap - 1), nullptr)
+              .ok());
       after_first = test::objectsOf(*mapper);
     }
-    if (k == kFramesPerLap * kLaps) {
-      ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap / 2 - 1), nullptr).ok());
+    if (k == test::kFramesPerLap * kLaps) {
+      ASSERT_TRUE(mapper->correctPoses(truths(0, test::kFramesPerLap / 2 - 1), nullptr).ok());
     }
   });
   EXPECT_FALSE(after_first.empty());
@@ -167,10 +168,10 @@ TEST_F(PoseCorrectionTest, IdsAreKeptAndNeverReused) {
   int next_id_before = 0;
   std::vector<int> ids_before;
   const std::vector<MapObject> corrected = run(true, [&](int k, ObjectMapper* mapper) {
-    if (k != kFramesPerLap * kLaps) return;
+    if (k != test::kFramesPerLap * kLaps) return;
     next_id_before = mapper->database().nextId();
     for (const auto& entry : mapper->database().objects()) ids_before.push_back(entry.first);
-    ASSERT_TRUE(mapper->correctPoses(truths(0, kFramesPerLap - 1), nullptr).ok());
+    ASSERT_TRUE(mapper->correctPoses(truths(0, test::kFramesPerLap - 1), nullptr).ok());
     EXPECT_GE(mapper->database().nextId(), next_id_before);
   });
   // Every object keeps an id it had (the duplicates the drift made merge into one of theirs).

@@ -35,11 +35,13 @@ struct DepthView {
   cv::Mat highest_3x3_m;
   void prepareNeighbourhoods();
 
-  enum class Visibility { kNotInView, kSeenFree, kNotSeenFree };
-  // Whether the view saw through p_W: its pixel's depth lies more than margin_m plus the
-  // truncation at p_W's depth beyond it (kSeenFree), or not (kNotSeenFree: in front of or at the
-  // measured surface, or hidden behind it). kNotInView: outside the image, behind the camera, or
-  // no valid depth at the pixel.
+  // What the view saw at p_W, the one visibility model of amodal completion's free space and of the
+  // objects' existence evidence: kNotInView outside the image, behind the camera, or without valid
+  // depth at its pixel; kSeenFree when the pixel's depth lies more than margin_m plus the
+  // truncation at p_W's depth beyond it (the view saw through it); kHidden when the measured
+  // surface lies more than the truncation in front of it (something nearer hides it); kOnSurface
+  // otherwise (the depth lies on it).
+  enum class Visibility { kNotInView, kSeenFree, kOnSurface, kHidden };
   Visibility visibility(const Eigen::Vector3f& p_W, double margin_m) const;
 };
 

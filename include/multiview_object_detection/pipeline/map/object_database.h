@@ -15,6 +15,7 @@
 #include "multiview_object_detection/pipeline/map/amodal_completion.h"
 #include "multiview_object_detection/pipeline/map/depth_view.h"
 #include "multiview_object_detection/pipeline/map/evidence_map.h"
+#include "multiview_object_detection/pipeline/map/existence.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
@@ -84,6 +85,8 @@ struct MapObject {
   int last_keyframe = 0;
   double first_seen_s = 0.0;
   double last_seen_s = 0.0;
+  // Whether it is still there: the keyframes' votes (existence.h).
+  ExistenceEvidence existence;
 };
 
 // Re-runs filter + LCCP + box on a fused world-frame cloud (Eq. 7). Returns false when nothing
@@ -134,6 +137,9 @@ class ObjectDatabase {
     // Evidence fusion: boxes of classes with a known depth (ClassPrior::amodal_depth_m) extended
     // into the side the views never saw through (a chair under a table, only its backrest seen).
     AmodalCompletion::Config amodal;
+    // Evidence fusion: whether objects are still there, from every keyframe's depth; the gone are
+    // removed (ObjectMapper).
+    ExistenceModel::Config existence;
     Status isValid() const;
     std::string print() const;
   };
@@ -173,6 +179,11 @@ class ObjectDatabase {
   // object is independent: the same result for any thread count). A processor that returns false
   // leaves that object's previous segment and box. Returns how many objects were re-boxed.
   int reboxPending(const FusedCloudProcessor& process, int threads);
+  // One keyframe's existence votes (evidence fusion with existence enabled): detected_ids were
+  // fused or inserted in this keyframe; every other object is tested against the keyframe's depth
+  // (view may be null: only the detections vote). Returns the ids of the objects that are gone
+  // (not removed here).
+  std::vector<int> updateExistence(const DepthView* view, const std::vector<int>& detected_ids);
   // Objects waiting for reboxPending().
   const std::vector<int>& pendingRebox() const { return pending_rebox_; }
   // Evidence fusion: one object mapped twice (the refinement's duplicates) becomes one. The votes,

@@ -1,0 +1,84 @@
+// Existence evidence: whether an object is still there. A robot maps a home for days; chairs are
+// moved, a box is carried out, the detector now and then calls a cabinet a chair. Every keyframe
+// whose view could have seen an object votes on it, from its depth at a sample of the object's
+// voxels (DepthView::visibility, the model amodal completion uses):
+//   - a detection of the keyframe fused into it: for;
+//   - the depth lies on it, mostly in view, but no detection fused into it: weakly against (a
+//   missed
+//     detection, which a weak detector makes often);
+//   - the depth lies clearly beyond most of it: strongly against (its place was seen through);
+//   - out of the image, beyond the depth range, hidden behind a nearer surface, at depth holes,
+//     or too little of it in view: nothing.
+// The votes add up as clamped log-odds; an object whose log-odds reach remove_below is gone.
+// Several keyframes must agree: from the clamp, one view with a bad pose never removes an object.
+// Not part of the paper.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "multiview_object_detection/pipeline/map/depth_view.h"
+#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
+
+namespace mvod {
+
+// What the keyframes said of one object so far.
+struct ExistenceEvidence {
+  double log_odds = 0.0;
+  std::uint32_t detected = 0;      // keyframes with a detection fused into it
+  std::uint32_t missed = 0;        // keyframes that saw it on their depth but did not detect it
+  std::uint32_t seen_through = 0;  // keyframes that saw through it
+  double probability() const;
+};
+
+class ExistenceModel {
+ public:
+  struct Config {
+    // Off: objects stay once mapped (the paper's database).
+    bool enable = true;
+    double detected_log_odds = 0.85;
+    double missed_log_odds = -0.3;
+    double seen_through_log_odds = -1.0;
+    double min_log_odds = -2.0;
+    double max_log_odds = 2.0;
+    // Gone at or below this: from max_log_odds, three keyframes that see through the object.
+    double remove_below = -1.0;
+    // Voxels of the object each keyframe tests (a stride over its voxels), and how many of them a
+    // keyframe must see (on its surface or through it) to vote at all.
+    int sample_voxels = 400;
+    int min_voxels_in_view = 20;
+    // ... and which share of the sample.
+    double min_in_view_share = 0.5;
+    // Seen through: this share of the voxels in view lies in front of the measured depth by more
+    // than free_margin_m (plus the view's truncation at their depth).
+    double seen_through_share = 0.5;
+    double free_margin_m = 0.1;
+    // Voxels farther from the camera than this do not vote (depth noise grows with the square of
+    // the range).
+    double max_depth_m = 4.5;
+    Status isValid() const;
+    std::string print() const;
+  };
+
+  enum class Vote { kNone, kDetected, kMissed, kSeenThrough };
+
+  ExistenceModel() = default;
+  explicit ExistenceModel(const Config& config) : config_(config) {}
+  const Config& config() const { return config_; }
+
+  // One keyframe's vote on an object with these voxels (world frame; a stride of them is tested)
+  // and box; detected: a detection of this keyframe was fused into it.
+  Vote vote(const PointCloud& voxels_W, const OrientedBox& box, const DepthView& view,
+            bool detected) const;
+  // Adds a vote to the evidence (clamped); true when the object is gone.
+  bool apply(Vote vote, ExistenceEvidence* evidence) const;
+
+ private:
+  // False when no corner of the box projects into the view's image in front of the camera.
+  static bool boxMayBeInView(const OrientedBox& box, const DepthView& view);
+
+  Config config_;
+};
+
+}  // namespace mvod
