@@ -208,6 +208,7 @@ ExistenceModel::Config getExistenceModelConfigFromRosParam(const ros::NodeHandle
   p.read("enable", &c.enable);
   p.read("detected_log_odds", &c.detected_log_odds);
   p.read("missed_log_odds", &c.missed_log_odds);
+  p.read("missed_floor_log_odds", &c.missed_floor_log_odds);
   p.read("seen_through_log_odds", &c.seen_through_log_odds);
   p.read("min_log_odds", &c.min_log_odds);
   p.read("max_log_odds", &c.max_log_odds);
@@ -216,6 +217,9 @@ ExistenceModel::Config getExistenceModelConfigFromRosParam(const ros::NodeHandle
   p.read("min_voxels_in_view", &c.min_voxels_in_view);
   p.read("min_in_view_share", &c.min_in_view_share);
   p.read("seen_through_share", &c.seen_through_share);
+  p.read("min_detected_share", &c.min_detected_share);
+  p.read("min_votes_for_share", &c.min_votes_for_share);
+  p.read("fade_max_detected", &c.fade_max_detected);
   p.read("free_margin_m", &c.free_margin_m);
   p.read("max_depth_m", &c.max_depth_m);
   return c;

@@ -649,6 +649,14 @@ class KeyframeLoop {
       }
     }
     for (const std::string& warning : keyframe.warnings) report("warning: " + warning, false);
+    for (const mvod::MapObject& object : keyframe.removed) {
+      const mvod::ExistenceEvidence& e = object.existence;
+      report(name + ": #" + std::to_string(object.id) + " " + object.class_name +
+                 " gone (existence: detected in " + std::to_string(e.detected) + ", missed in " +
+                 std::to_string(e.missed) + ", seen through in " + std::to_string(e.seen_through) +
+                 " keyframes)",
+             false);
+    }
   }
 
   // A line on stderr (not with --quiet unless it is an error), below the progress line.

@@ -221,8 +221,10 @@ class ObjectMapper {
   // depth (detected_ids: fused or inserted in it); the gone are removed (into *removed if given).
   void updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
                        std::vector<MapObject>* removed);
+  // Not in the single-frame baseline (disable_fusion): its objects are single detections.
   bool existenceActive() const {
-    return config_.database.existence.enable && config_.database.fusion == "evidence";
+    return config_.database.existence.enable && config_.database.fusion == "evidence" &&
+           !config_.database.disable_fusion;
   }
   // Sec. 3.5 on the database; the views of merged duplicates follow them into the history.
   RefinementReport refineDatabase();

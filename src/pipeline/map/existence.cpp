@@ -27,6 +27,19 @@ Status ExistenceModel::Config::isValid() const {
   if (!(finite(remove_below) && remove_below > min_log_odds && remove_below < max_log_odds)) {
     return Status::Error("remove_below must lie between min_log_odds and max_log_odds");
   }
+  if (!(finite(missed_floor_log_odds) && missed_floor_log_odds >= min_log_odds &&
+        missed_floor_log_odds <= max_log_odds)) {
+    return Status::Error("missed_floor_log_odds must lie between min_log_odds and max_log_odds");
+  }
+  if (!(finite(min_detected_share) && min_detected_share >= 0.0 && min_detected_share <= 1.0)) {
+    return Status::Error("min_detected_share must be in [0, 1]");
+  }
+  if (min_votes_for_share < 1 || min_votes_for_share > 100000) {
+    return Status::Error("min_votes_for_share must be in [1, 100000]");
+  }
+  if (fade_max_detected < 0 || fade_max_detected > 100000) {
+    return Status::Error("fade_max_detected must be in [0, 100000]");
+  }
   if (sample_voxels < 1 || sample_voxels > 100000) {
     return Status::Error("sample_voxels must be in [1, 100000] (got " +
                          std::to_string(sample_voxels) + ")");
@@ -53,10 +66,14 @@ std::string ExistenceModel::Config::print() const {
   out << "enable: " << (enable ? "true" : "false") << "\n"
       << "detected_log_odds: " << detected_log_odds << "\n"
       << "missed_log_odds: " << missed_log_odds << "\n"
+      << "missed_floor_log_odds: " << missed_floor_log_odds << "\n"
       << "seen_through_log_odds: " << seen_through_log_odds << "\n"
       << "min_log_odds: " << min_log_odds << "\n"
       << "max_log_odds: " << max_log_odds << "\n"
       << "remove_below: " << remove_below << "\n"
+      << "min_detected_share: " << min_detected_share << "\n"
+      << "min_votes_for_share: " << min_votes_for_share << "\n"
+      << "fade_max_detected: " << fade_max_detected << "\n"
       << "sample_voxels: " << sample_voxels << "\n"
       << "min_voxels_in_view: " << min_voxels_in_view << "\n"
       << "min_in_view_share: " << min_in_view_share << "\n"
@@ -134,9 +151,17 @@ bool ExistenceModel::apply(Vote vote, ExistenceEvidence* evidence) const {
     case Vote::kNone:
       break;
   }
-  evidence->log_odds =
-      std::clamp(evidence->log_odds + change, config_.min_log_odds, config_.max_log_odds);
-  return config_.enable && evidence->log_odds <= config_.remove_below;
+  double log_odds = evidence->log_odds + change;
+  if (vote == Vote::kMissed) {
+    log_odds = std::max(log_odds, std::min(evidence->log_odds, config_.missed_floor_log_odds));
+  }
+  evidence->log_odds = std::clamp(log_odds, config_.min_log_odds, config_.max_log_odds);
+  if (!config_.enable) return false;
+  if (evidence->log_odds <= config_.remove_below) return true;
+  const std::uint32_t votes = evidence->detected + evidence->missed;
+  return evidence->detected <= static_cast<std::uint32_t>(config_.fade_max_detected) &&
+         votes >= static_cast<std::uint32_t>(config_.min_votes_for_share) &&
+         evidence->detected < config_.min_detected_share * votes;
 }
 
 }  // namespace mvod

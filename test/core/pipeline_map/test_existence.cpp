@@ -90,18 +90,28 @@ TEST(ExistenceModelTest, SeveralViewsMustAgreeBeforeAnObjectGoes) {
   EXPECT_FALSE(model.apply(Vote::kSeenThrough, &evidence));
   EXPECT_TRUE(model.apply(Vote::kSeenThrough, &evidence));
   EXPECT_EQ(evidence.seen_through, 3u);
-  // A detection in 1 of 8 views: seven misses take it away.
+  // A detection in 1 of 8 views: gone at the eighth, not before (too few views to judge).
   ExistenceEvidence once;
   EXPECT_FALSE(model.apply(Vote::kDetected, &once));
-  bool gone = false;
-  for (int i = 0; i < 7; ++i) gone = model.apply(Vote::kMissed, &once) || gone;
-  EXPECT_TRUE(gone);
+  for (int i = 0; i < 6; ++i) EXPECT_FALSE(model.apply(Vote::kMissed, &once)) << i;
+  EXPECT_TRUE(model.apply(Vote::kMissed, &once));
   EXPECT_EQ(once.missed, 7u);
-  // Detected in every other view: it stays.
-  ExistenceEvidence half;
-  for (int i = 0; i < 20; ++i) {
+  EXPECT_GT(once.log_odds, model.config().remove_below);  // the share removed it, not the log-odds
+  // Detected in every other view, or in a quarter of them (a weak detector on a real chair): it
+  // stays. So does one detected twice and then missed for 25 keyframes.
+  ExistenceEvidence half, quarter;
+  for (int i = 0; i < 40; ++i) {
     EXPECT_FALSE(model.apply(i % 2 ? Vote::kMissed : Vote::kDetected, &half)) << i;
+    EXPECT_FALSE(model.apply(i % 4 ? Vote::kMissed : Vote::kDetected, &quarter)) << i;
   }
+  ExistenceEvidence twice;
+  model.apply(Vote::kDetected, &twice);
+  model.apply(Vote::kDetected, &twice);
+  for (int i = 0; i < 100; ++i) EXPECT_FALSE(model.apply(Vote::kMissed, &twice)) << i;
+  // Misses alone stop at missed_floor_log_odds; from there two views that see through it remove it.
+  EXPECT_DOUBLE_EQ(twice.log_odds, model.config().missed_floor_log_odds);
+  EXPECT_FALSE(model.apply(Vote::kSeenThrough, &twice));
+  EXPECT_TRUE(model.apply(Vote::kSeenThrough, &twice));
   // Switched off, the evidence is still gathered but nothing goes.
   ExistenceModel::Config off;
   off.enable = false;
@@ -123,6 +133,12 @@ TEST(ExistenceModelTest, ConfigRefusesValuesOutOfRange) {
   EXPECT_FALSE(c.isValid().ok());
   c = ExistenceModel::Config();
   c.min_voxels_in_view = c.sample_voxels + 1;
+  EXPECT_FALSE(c.isValid().ok());
+  c = ExistenceModel::Config();
+  c.min_detected_share = 1.5;
+  EXPECT_FALSE(c.isValid().ok());
+  c = ExistenceModel::Config();
+  c.min_votes_for_share = 0;
   EXPECT_FALSE(c.isValid().ok());
 }
 

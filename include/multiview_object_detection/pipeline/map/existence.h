@@ -38,12 +38,25 @@ class ExistenceModel {
     // Off: objects stay once mapped (the paper's database).
     bool enable = true;
     double detected_log_odds = 0.85;
-    double missed_log_odds = -0.3;
+    // Weak: a box detector such as FastestDet finds a real chair in a quarter of the views that
+    // show it (the redkitchen's chairs: 5 of 21).
+    double missed_log_odds = -0.1;
+    // Misses lower the log-odds to no less than this: alone they never remove an object (from
+    // here, two keyframes that see through it do).
+    double missed_floor_log_odds = 1.0;
     double seen_through_log_odds = -1.0;
     double min_log_odds = -2.0;
     double max_log_odds = 2.0;
-    // Gone at or below this: from max_log_odds, three keyframes that see through the object.
+    // Gone at or below this: from max_log_odds, three keyframes that see through the object; from
+    // missed_floor_log_odds, two.
     double remove_below = -1.0;
+    // Detections that do not repeat: an object detected in at most fade_max_detected keyframes is
+    // gone once at least min_votes_for_share keyframes showed it on their depth (detected or
+    // missed) and fewer than min_detected_share of them detected it. Objects detected more often
+    // go only by the log-odds (a weak detector finds a real chair in few of its views).
+    double min_detected_share = 0.15;
+    int min_votes_for_share = 8;
+    int fade_max_detected = 1;
     // Voxels of the object each keyframe tests (a stride over its voxels), and how many of them a
     // keyframe must see (on its surface or through it) to vote at all.
     int sample_voxels = 400;
