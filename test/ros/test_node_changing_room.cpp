@@ -29,10 +29,6 @@ constexpr int kFramesPerLap = 12;
 constexpr int kChair = 1;  // objects() of the default room: 0 table, 1-4 chairs, 5 couch, 6 tv
 constexpr int kCouch = 5;
 
-Eigen::Vector3d centerOf(const Object& object) {
-  return Eigen::Vector3d(object.pose.position.x, object.pose.position.y, object.pose.position.z);
-}
-
 std::string describe(const ObjectArray& objects) {
   std::string text;
   char line[200];
@@ -59,12 +55,6 @@ int near(const ObjectArray& map, const std::string& class_name, const Eigen::Vec
     }
   }
   return count;
-}
-
-ObjectArray getObjects(const std::string& node) {
-  GetObjects srv;
-  EXPECT_TRUE(ros::service::call(node + "/get_objects", srv));
-  return srv.response.objects;
 }
 
 class NodeChangingRoomTest : public ::testing::Test {
@@ -226,16 +216,7 @@ TEST_F(NodeChangingRoomTest, RemovedObjectsAreAnnouncedDeletedFromRvizAndCounted
 TEST_F(NodeChangingRoomTest, ASavedMapKeepsItsExistenceInASecondNode) {
   const ObjectArray first = getObjects(kNode);
   ASSERT_FALSE(first.objects.empty());
-  const std::string path = "/tmp/mvod_rostest_changing_" + std::to_string(::getpid()) + ".json";
-  MapFile save;
-  save.request.path = path;
-  ASSERT_TRUE(ros::service::call(std::string(kNode) + "/save_map", save));
-  ASSERT_TRUE(save.response.success) << save.response.message;
-  MapFile load;
-  load.request.path = path;
-  ASSERT_TRUE(ros::service::call(std::string(kSecondNode) + "/load_map", load));
-  ASSERT_TRUE(load.response.success) << load.response.message;
-  std::remove(path.c_str());
+  ASSERT_EQ(copyMap(kNode, kSecondNode), "");
   const ObjectArray loaded = getObjects(kSecondNode);
   ASSERT_EQ(loaded.objects.size(), first.objects.size());
   int with_evidence = 0;

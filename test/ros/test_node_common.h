@@ -12,10 +12,13 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <unistd.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <map>
@@ -26,7 +29,9 @@
 #include <utility>
 #include <vector>
 
+#include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/InstanceDetections.h"
+#include "multiview_object_detection/MapFile.h"
 #include "multiview_object_detection/ObjectArray.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/simulation/synthetic_scene.h"
@@ -427,6 +432,33 @@ inline int runRosTests(int argc, char** argv, const char* node_name) {
   spinner.stop();
   ros::shutdown();
   return result;
+}
+
+// An object's box centre.
+inline Eigen::Vector3d centerOf(const multiview_object_detection::Object& object) {
+  return Eigen::Vector3d(object.pose.position.x, object.pose.position.y, object.pose.position.z);
+}
+
+// ~get_objects of `node`, all objects.
+inline multiview_object_detection::ObjectArray getObjects(const std::string& node) {
+  multiview_object_detection::GetObjects srv;
+  EXPECT_TRUE(ros::service::call(node + "/get_objects", srv));
+  return srv.response.objects;
+}
+
+// `from`'s map saved to a temporary file and loaded into `to`; the failure's reason, or "".
+inline std::string copyMap(const std::string& from, const std::string& to) {
+  const std::string path = "/tmp/mvod_rostest_map_" + std::to_string(::getpid()) + "_" +
+                           std::to_string(std::rand()) + ".json";
+  multiview_object_detection::MapFile save, load;
+  save.request.path = path;
+  load.request.path = path;
+  if (!ros::service::call(from + "/save_map", save)) return from + "/save_map not called";
+  if (!save.response.success) return save.response.message;
+  const bool called = ros::service::call(to + "/load_map", load);
+  std::remove(path.c_str());
+  if (!called) return to + "/load_map not called";
+  return load.response.success ? std::string() : load.response.message;
 }
 
 }  // namespace mvod_test

@@ -28,10 +28,6 @@ constexpr char kNode[] = "/object_detection";
 constexpr char kSecondNode[] = "/object_detection_2";
 constexpr int kFramesPerLap = 12;
 
-Eigen::Vector3d centerOf(const Object& object) {
-  return Eigen::Vector3d(object.pose.position.x, object.pose.position.y, object.pose.position.z);
-}
-
 std::string describe(const ObjectArray& objects) {
   std::string text;
   char line[200];
@@ -53,12 +49,6 @@ Eigen::Isometry3d driftAt(int i, const Eigen::Vector3d& pivot) {
   drift.linear() = Eigen::AngleAxisd(4.0 * share * M_PI / 180.0, Eigen::Vector3d::UnitZ()).matrix();
   drift.translation() = pivot - drift.linear() * pivot + Eigen::Vector3d(0.0, 0.36 * share, 0.0);
   return drift;
-}
-
-ObjectArray getObjects(const std::string& node) {
-  GetObjects srv;
-  EXPECT_TRUE(ros::service::call(node + "/get_objects", srv));
-  return srv.response.objects;
 }
 
 // Over the true objects the detector sees (class, box centre): the worst distance to the nearest
@@ -220,16 +210,7 @@ TEST_F(NodeCorrectionsTest, CorrectedPosesRemoveTheDriftsDuplicates) {
 TEST_F(NodeCorrectionsTest, ASavedMapTakesAFurtherCorrectionInASecondNode) {
   const ObjectArray first = getObjects(kNode);
   ASSERT_FALSE(first.objects.empty());
-  const std::string path = "/tmp/mvod_rostest_corrections_" + std::to_string(::getpid()) + ".json";
-  MapFile save;
-  save.request.path = path;
-  ASSERT_TRUE(ros::service::call(std::string(kNode) + "/save_map", save));
-  ASSERT_TRUE(save.response.success) << save.response.message;
-  MapFile load;
-  load.request.path = path;
-  ASSERT_TRUE(ros::service::call(std::string(kSecondNode) + "/load_map", load));
-  ASSERT_TRUE(load.response.success) << load.response.message;
-  std::remove(path.c_str());
+  ASSERT_EQ(copyMap(kNode, kSecondNode), "");
   ASSERT_EQ(getObjects(kSecondNode).objects.size(), first.objects.size());
 
   // The whole first lap 0.5 m further along x: what only that lap saw moves with it.

@@ -32,10 +32,6 @@ constexpr int kRelabelledObject = 2;
 constexpr double kCupPriorVolumeM3 = 0.09 * 0.09 * 0.10;  // config/class_priors.yaml
 constexpr double kVolumeMaxRatio = 8.0;  // Γ_Vmax, prior_filter/volume_max_ratio default
 
-Eigen::Vector3d centerOf(const Object& object) {
-  return Eigen::Vector3d(object.pose.position.x, object.pose.position.y, object.pose.position.z);
-}
-
 double volumeOf(const Object& object) { return object.size.x * object.size.y * object.size.z; }
 
 bool isAtypicalCup(const Object& object) {
