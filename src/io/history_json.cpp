@@ -17,7 +17,6 @@ namespace {
 
 using json_fields::fieldError;
 using json_fields::json;
-using json_fields::kMaxMapCoordinateM;
 
 // Larger depth images than any depth camera gives are refused before decoding.
 constexpr int64_t kMaxDepthPixels = int64_t{4096} * 4096;
@@ -131,7 +130,7 @@ Status readIsometry(const json& parent, const std::string& path, const char* key
       pose(r, c) = row[c].get<double>();
     }
   }
-  if (!isValidPose(pose, 1e-3) || pose.translation().cwiseAbs().maxCoeff() > kMaxMapCoordinateM) {
+  if (!isValidPose(pose, 1e-3) || pose.translation().cwiseAbs().maxCoeff() > kMapCoordinateLimitM) {
     return fieldError(where, "not a rigid transform within the map's range");
   }
   *T = pose;
@@ -169,7 +168,7 @@ Status readTriples(const json& parent, const std::string& path, const char* key,
   std::memcpy(out->data(), bytes.data(), bytes.size());
   for (const Eigen::Vector3f& v : *out) {
     const bool ok = normals ? (!v.allFinite() ? v.hasNaN() : v.norm() <= 1.01f)
-                            : v.allFinite() && v.cwiseAbs().maxCoeff() <= kMaxMapCoordinateM;
+                            : v.allFinite() && v.cwiseAbs().maxCoeff() <= kMapCoordinateLimitM;
     if (!ok) {
       return fieldError(path + key, normals ? "normals must be unit vectors (or NaN)"
                                             : "points must be finite, within the map's range");

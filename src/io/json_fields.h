@@ -10,13 +10,12 @@
 #include <string>
 
 #include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/pipeline/types/map_limits.h"
 
 namespace mvod {
 namespace json_fields {
 
 using nlohmann::json;
-
-constexpr double kMaxMapCoordinateM = 1e5;
 
 // Clouds are stored at 1 mm: finer than any sensor here and it keeps map files small.
 inline double roundToMillimetre(float value) {
@@ -83,11 +82,11 @@ inline Status readVector3(const json& value, const std::string& path, Eigen::Vec
     if (!value[i].is_number()) return fieldError(path, "expected numbers");
     v[i] = value[i].get<double>();
     if (!std::isfinite(v[i])) return fieldError(path, "not finite");
-    // Every vector of a map is a position, size or direction in metres: beyond this it is not
-    // a room, and it would not survive float storage and the next save.
-    if (std::abs(v[i]) > kMaxMapCoordinateM) {
+    // Every vector of a map is a position, size or direction in metres, within the map's reach
+    // (map_limits.h): what the inputs were allowed to build.
+    if (std::abs(v[i]) > kMapCoordinateLimitM) {
       std::ostringstream text;
-      text << "beyond +-" << kMaxMapCoordinateM << " m (" << v[i] << ")";
+      text << "beyond +-" << kMapCoordinateLimitM << " m (" << v[i] << ")";
       return fieldError(path, text.str());
     }
   }

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/types/map_limits.h"
 
 namespace mvod {
 namespace {
@@ -90,6 +91,10 @@ Status ObjectMapper::correctPoses(const std::vector<PoseCorrection>& corrections
                            std::to_string(corrections[i].stamp_s) +
                            ") is not a finite rigid transform; no correction applied");
     }
+    const Status in_map =
+        checkCameraInMap(corrections[i].T_W_C, "correction " + std::to_string(i) + " (stamp " +
+                                                   std::to_string(corrections[i].stamp_s) + ")");
+    if (!in_map) return Status::Error(in_map.message() + "; no correction applied");
   }
   report.objects_before = static_cast<int>(database_.size());
   if (!config_.corrections.enable || config_.database.fusion != "evidence") {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/types/map_limits.h"
 #include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
@@ -14,10 +15,8 @@
 namespace mvod {
 
 Status ObjectDatabase::Config::isValid() const {
-  if (!(std::isfinite(fusion_voxel_size_m) && fusion_voxel_size_m > 0.0)) {
-    return Status::Error("fusion_voxel_size_m must be a finite value > 0 (got " +
-                         std::to_string(fusion_voxel_size_m) + ")");
-  }
+  const Status voxel = checkMapVoxelSize(fusion_voxel_size_m, "fusion_voxel_size_m");
+  if (!voxel) return voxel;
   if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
     return Status::Error("min_overlap_to_fuse must be in [0, 1]");
   }

@@ -7,6 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/types/map_limits.h"
+
 namespace mvod {
 namespace {
 
@@ -54,8 +56,10 @@ Status ObjectCloudExtractor::Config::isValid() const {
     return Status::Error("min_valid_depth_m must be a finite value >= 0 (got " +
                          std::to_string(min_valid_depth_m) + ")");
   }
-  if (!(std::isfinite(max_valid_depth_m) && max_valid_depth_m > min_valid_depth_m)) {
-    return Status::Error("max_valid_depth_m must be finite and > min_valid_depth_m (got " +
+  if (!(std::isfinite(max_valid_depth_m) && max_valid_depth_m > min_valid_depth_m &&
+        max_valid_depth_m <= kMaxSensorRangeM)) {
+    return Status::Error("max_valid_depth_m must be > min_valid_depth_m and at most " +
+                         std::to_string(static_cast<int>(kMaxSensorRangeM)) + " m (got " +
                          std::to_string(max_valid_depth_m) + ")");
   }
   if (mask_erosion_px < 0 || mask_erosion_px > 100) {

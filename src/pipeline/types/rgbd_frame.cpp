@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "multiview_object_detection/pipeline/types/map_limits.h"
+
 namespace mvod {
 namespace {
 
@@ -77,7 +79,7 @@ Status RgbdFrame::validate() const {
   if (!isValidPose(T_W_D)) {
     return Status::Error(label + ": T_W_D (depth camera to world) is not a finite rigid transform");
   }
-  return Status::Ok();
+  return checkCameraInMap(T_W_D, label + ": the camera");
 }
 
 }  // namespace mvod
