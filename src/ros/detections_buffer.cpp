@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/input_guard.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
@@ -21,7 +22,12 @@ constexpr double kTimeJumpBackS = 1.0;
 }  // namespace
 
 void DetectionsBuffer::subscribe(ros::NodeHandle nh) {
-  sub_ = nh.subscribe("detections", 30, &DetectionsBuffer::detectionsCallback, this);
+  using Msg = multiview_object_detection::InstanceDetections;
+  sub_ = nh.subscribe<Msg>("detections", 30,
+                           guardedCallback<Msg>(nh.resolveName("detections"), stats_,
+                                                [this](const boost::shared_ptr<const Msg>& msg) {
+                                                  detectionsCallback(msg);
+                                                }));
 }
 
 void DetectionsBuffer::unsubscribe() { sub_.shutdown(); }

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <utility>
 
+#include "multiview_object_detection/ros/input_guard.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
@@ -51,15 +52,25 @@ KeyframeBuffer::KeyframeBuffer(const ObjectDetectionRosConfig& config, const Rgb
 
 void KeyframeBuffer::start(ros::NodeHandle nh) {
   if (config_.pose_source == "topic") {
-    pose_sub_ = nh.subscribe("pose", 100, &KeyframeBuffer::poseCallback, this);
+    pose_sub_ = nh.subscribe<geometry_msgs::PoseStamped>(
+        "pose", 100,
+        guardedCallback<geometry_msgs::PoseStamped>(
+            nh.resolveName("pose"), stats_,
+            [this](const geometry_msgs::PoseStampedConstPtr& msg) { poseCallback(msg); }));
   }
   if (config_.keyframes.mode == KeyframeSelector::Mode::kExternal) {
-    keyframe_sub_ = nh.subscribe("keyframe", 100, &KeyframeBuffer::keyframeCallback, this);
+    keyframe_sub_ = nh.subscribe<geometry_msgs::PoseStamped>(
+        "keyframe", 100,
+        guardedCallback<geometry_msgs::PoseStamped>(
+            nh.resolveName("keyframe"), stats_,
+            [this](const geometry_msgs::PoseStampedConstPtr& msg) { keyframeCallback(msg); }));
   }
   // Frames waiting for a pose are retried when a pose arrives and on this timer (TF, timeouts).
   pending_timer_ = nh.createWallTimer(ros::WallDuration(0.02), [this](const ros::WallTimerEvent&) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    resolvePendingFrames();
+    runGuarded("the pose wait timer", stats_, [this] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      resolvePendingFrames();
+    });
   });
 }
 

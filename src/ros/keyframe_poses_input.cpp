@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/input_guard.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
@@ -21,7 +22,11 @@ KeyframePosesInput::KeyframePosesInput(const std::string& world_frame,
       on_corrections_(std::move(on_corrections)) {}
 
 void KeyframePosesInput::subscribe(ros::NodeHandle& nh) {
-  sub_ = nh.subscribe("keyframe_poses", 2, &KeyframePosesInput::callback, this);
+  sub_ = nh.subscribe<nav_msgs::Path>(
+      "keyframe_poses", 2,
+      guardedCallback<nav_msgs::Path>(
+          nh.resolveName("keyframe_poses"), stats_,
+          [this](const nav_msgs::PathConstPtr& msg) { callback(msg); }));
 }
 
 std::vector<PoseCorrection> KeyframePosesInput::convert(const nav_msgs::Path& path,
@@ -40,6 +45,11 @@ std::vector<PoseCorrection> KeyframePosesInput::convert(const nav_msgs::Path& pa
         pose.header.frame_id.empty() ? path.header.frame_id : pose.header.frame_id;
     const std::string what =
         "pose " + std::to_string(i) + " (stamp " + std::to_string(pose.header.stamp.toSec()) + ")";
+    const Status stamp = checkInputStamp(pose.header.stamp, ros::Time::now(), what);
+    if (!stamp) {
+      fail(stamp.message());
+      continue;
+    }
     Eigen::Isometry3d T_F_C;
     const Status valid = poseFromMsg(pose.pose, &T_F_C);
     if (!valid) {

@@ -136,6 +136,10 @@ void KeyframeWorker::workerLoop() {
       } catch (const std::exception& e) {
         errorThrottled(std::string("keyframe pose correction failed with an exception: ") +
                        e.what());
+        stats_->update([](ObjectDetectionStatistics& stats) { ++stats.callback_exceptions; });
+      } catch (...) {
+        errorThrottled("keyframe pose correction failed with an unknown exception");
+        stats_->update([](ObjectDetectionStatistics& stats) { ++stats.callback_exceptions; });
       }
     }
     if (!have_job) continue;
@@ -145,7 +149,17 @@ void KeyframeWorker::workerLoop() {
       // Nothing may take the node down; a bug in a stage costs one keyframe.
       errorThrottled("keyframe " + describeInput(topics_.color, job.msgs.color->header) +
                      ": processing failed with an exception: " + e.what());
-      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_failed; });
+      stats_->update([](ObjectDetectionStatistics& stats) {
+        ++stats.keyframes_failed;
+        ++stats.callback_exceptions;
+      });
+    } catch (...) {
+      errorThrottled("keyframe " + describeInput(topics_.color, job.msgs.color->header) +
+                     ": processing failed with an unknown exception");
+      stats_->update([](ObjectDetectionStatistics& stats) {
+        ++stats.keyframes_failed;
+        ++stats.callback_exceptions;
+      });
     }
   }
 }

@@ -100,14 +100,24 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
   if (stats.keyframes_dropped > dropped_at_last_diagnostics_) {
     status.level = diagnostic_msgs::DiagnosticStatus::WARN;
     status.message = "keyframes dropped: processing is slower than the keyframe rate";
+  } else if (stats.callback_exceptions > exceptions_at_last_diagnostics_) {
+    status.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    status.message = "a callback failed with an exception (input dropped; see the log)";
+  } else if (stats.stamps_refused > refused_at_last_diagnostics_) {
+    status.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    status.message = "input refused for its stamp (past 2038 or far ahead of the clock)";
   } else if (stats.waiting_for_gravity) {
     status.level = diagnostic_msgs::DiagnosticStatus::WARN;
     status.message = "waiting for gravity";
   }
   dropped_at_last_diagnostics_ = stats.keyframes_dropped;
+  exceptions_at_last_diagnostics_ = stats.callback_exceptions;
+  refused_at_last_diagnostics_ = stats.stamps_refused;
   status.values = {
       keyValue("frames received", stats.frames_received),
       keyValue("frames rejected", stats.frames_rejected),
+      keyValue("stamps refused", stats.stamps_refused),
+      keyValue("callback exceptions", stats.callback_exceptions),
       keyValue("pose failures", stats.pose_failures),
       keyValue("time jumps back", stats.time_jumps),
       keyValue("detections capped", stats.detections_capped),

@@ -93,11 +93,11 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   buffer_ = std::make_unique<KeyframeBuffer>(
       config, input_->topics(), *tf_buffer_, publishers_.get(), &stats_, shut_down_,
       [this](KeyframeJob job) { worker_->enqueue(std::move(job)); });
-  keyframe_poses_ = std::make_unique<KeyframePosesInput>(
-      config.world_frame, *tf_buffer_, &stats_, shut_down_,
-      [this](std::vector<PoseCorrection> corrections) {
-        worker_->enqueueCorrections(std::move(corrections));
-      });
+  keyframe_poses_ =
+      std::make_unique<KeyframePosesInput>(config.world_frame, *tf_buffer_, &stats_, shut_down_,
+                                           [this](std::vector<PoseCorrection> corrections) {
+                                             worker_->enqueueCorrections(std::move(corrections));
+                                           });
   if (detections_) {
     buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
   }
@@ -117,7 +117,8 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
                                                boost::placeholders::_1, boost::placeholders::_2));
 
   worker_->start();
-  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh_);
+  tf_input_ = std::make_unique<TfInput>(tf_buffer_.get(), &stats_);
+  tf_input_->start(nh_);
   input_->subscribe([this](PendingFrame frame) { buffer_->addFrame(std::move(frame)); });
   if (detections_) detections_->subscribe(nh_);
   keyframe_poses_->subscribe(nh_);

@@ -27,6 +27,12 @@ void RgbdInput::subscribe(FrameCallback callback) {
   color_sub_.subscribe(*it_, topics_.color, queue_size, hints);
   depth_sub_.subscribe(*it_, topics_.depth, queue_size, hints);
   color_info_sub_.subscribe(nh_, topics_.color_info, queue_size);
+  color_stamps_ = std::make_unique<StampFilter<Image>>(topics_.color, stats_);
+  depth_stamps_ = std::make_unique<StampFilter<Image>>(topics_.depth, stats_);
+  color_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.color_info, stats_);
+  color_stamps_->connectInput(color_sub_);
+  depth_stamps_->connectInput(depth_sub_);
+  color_info_stamps_->connectInput(color_info_sub_);
   using boost::placeholders::_1;
   using boost::placeholders::_2;
   using boost::placeholders::_3;
@@ -36,23 +42,27 @@ void RgbdInput::subscribe(FrameCallback callback) {
         boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, sensor_msgs::CameraInfoConstPtr());
     if (config_.exact_sync) {
       exact_sync3_ = std::make_unique<message_filters::Synchronizer<ExactPolicy3>>(
-          ExactPolicy3(queue_size), color_sub_, depth_sub_, color_info_sub_);
+          ExactPolicy3(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_);
       exact_sync3_->registerCallback(callback);
     } else {
       approx_sync3_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy3>>(
-          ApproxPolicy3(queue_size), color_sub_, depth_sub_, color_info_sub_);
+          ApproxPolicy3(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_);
       approx_sync3_->registerCallback(callback);
     }
   } else {
     depth_info_sub_.subscribe(nh_, topics_.depth_info, queue_size);
+    depth_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.depth_info, stats_);
+    depth_info_stamps_->connectInput(depth_info_sub_);
     const auto callback = boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, _4);
     if (config_.exact_sync) {
       exact_sync4_ = std::make_unique<message_filters::Synchronizer<ExactPolicy4>>(
-          ExactPolicy4(queue_size), color_sub_, depth_sub_, color_info_sub_, depth_info_sub_);
+          ExactPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
+          *depth_info_stamps_);
       exact_sync4_->registerCallback(callback);
     } else {
       approx_sync4_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy4>>(
-          ApproxPolicy4(queue_size), color_sub_, depth_sub_, color_info_sub_, depth_info_sub_);
+          ApproxPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
+          *depth_info_stamps_);
       approx_sync4_->registerCallback(callback);
     }
   }

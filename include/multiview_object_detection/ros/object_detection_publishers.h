@@ -63,6 +63,8 @@ class ObjectDetectionPublishers {
 
   ros::WallTimer diagnostics_timer_;
   int dropped_at_last_diagnostics_ = 0;  // the timer's thread only
+  int exceptions_at_last_diagnostics_ = 0;
+  int refused_at_last_diagnostics_ = 0;
 };
 
 }  // namespace mvod

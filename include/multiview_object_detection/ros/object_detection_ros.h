@@ -15,7 +15,6 @@
 #include <multiview_object_detection/ObjectDetectionConfig.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <atomic>
 #include <memory>
@@ -26,6 +25,7 @@
 #include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
+#include "multiview_object_detection/ros/tf_input.h"
 
 namespace mvod {
 
@@ -88,7 +88,7 @@ class ObjectDetectionRos {
   SharedStatistics stats_;
   std::unique_ptr<RuntimeConfig> config_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<TfInput> tf_input_;
   std::unique_ptr<ObjectDetectionPublishers> publishers_;
   std::unique_ptr<DetectionsBuffer> detections_;  // detector "topic" only
   std::unique_ptr<KeyframeWorker> worker_;

@@ -10,10 +10,12 @@ namespace mvod {
 // Counters reported on /diagnostics (and read by tests).
 struct ObjectDetectionStatistics {
   int frames_received = 0;
-  int frames_rejected = 0;    // bad encoding, size, camera_info, out-of-order stamp
-  int pose_failures = 0;      // no TF / pose in time, or an invalid pose
-  int time_jumps = 0;         // input stamps jumped back by more than 1 s (buffers cleared)
-  int detections_capped = 0;  // detections beyond max_detections_per_frame, dropped
+  int frames_rejected = 0;      // bad encoding, size, camera_info, out-of-order stamp
+  int pose_failures = 0;        // no TF / pose in time, or an invalid pose
+  int time_jumps = 0;           // input stamps jumped back by more than 1 s (buffers cleared)
+  int detections_capped = 0;    // detections beyond max_detections_per_frame, dropped
+  int stamps_refused = 0;       // any input stamped past 2038 or far ahead of the clock
+  int callback_exceptions = 0;  // exceptions caught in callbacks and the worker (inputs dropped)
   int keyframes_selected = 0;
   int keyframes_dropped = 0;    // the processing queue was full
   int keyframes_processed = 0;  // went through ObjectMapper::processKeyframe

@@ -21,6 +21,7 @@
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/pending_frames.h"
+#include "multiview_object_detection/ros/stamp_filter.h"
 
 namespace mvod {
 
@@ -73,6 +74,11 @@ class RgbdInput {
   image_transport::SubscriberFilter depth_sub_;
   message_filters::Subscriber<CameraInfo> color_info_sub_;
   message_filters::Subscriber<CameraInfo> depth_info_sub_;
+  // Between the subscribers and the synchroniser: stamps it cannot hold are refused.
+  std::unique_ptr<StampFilter<Image>> color_stamps_;
+  std::unique_ptr<StampFilter<Image>> depth_stamps_;
+  std::unique_ptr<StampFilter<CameraInfo>> color_info_stamps_;
+  std::unique_ptr<StampFilter<CameraInfo>> depth_info_stamps_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy3>> approx_sync3_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy3>> exact_sync3_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy4>> approx_sync4_;

@@ -1,0 +1,72 @@
+// What stands between untrusted messages and the node: stamps that ROS 1 time arithmetic cannot
+// hold are refused before any of it runs, and no exception of a callback ends the process.
+#pragma once
+
+#include <ros/time.h>
+
+#include <boost/function.hpp>
+#include <boost/shared_ptr.hpp>
+#include <cstdint>
+#include <exception>
+#include <string>
+
+#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+#include "multiview_object_detection/ros/throttled_log.h"
+
+namespace mvod {
+
+// ros::Time holds unsigned 32-bit seconds and ros::Duration signed 32-bit seconds: the difference
+// of two stamps throws once they are more than 2^31 - 1 s apart, and stamp + duration once the sum
+// passes 2^32 - 1. Stamps below this (2038-01-18, one day short of 2^31 s) keep every difference
+// and every offset the node takes (at most hours) representable.
+constexpr std::uint32_t kMaxInputStampSec = 2147483647u - 86400u;
+// A stamp this far ahead of the node's clock (ros::Time::now(), wall or sim time) is a broken
+// clock, not a frame: accepted, it would make every later frame look like a jump back in time.
+constexpr double kMaxStampAheadOfClockS = 3600.0;
+
+// Ok, or why `stamp` is refused; `what` names the input (topic as remapped, or TF frames). `now` is
+// the node's clock; zero (sim time before the first /clock) skips the clock check.
+Status checkInputStamp(const ros::Time& stamp, const ros::Time& now, const std::string& what);
+
+// Runs `body`, a callback's work. An exception it throws is logged (throttled, naming `what`),
+// counted on /diagnostics ("callback exceptions"), and the node goes on.
+template <typename Body>
+void runGuarded(const std::string& what, SharedStatistics* stats, Body&& body) noexcept {
+  std::string error;
+  try {
+    body();
+    return;
+  } catch (const std::exception& e) {
+    error = e.what();
+  } catch (...) {
+    error = "an exception that is not a std::exception";
+  }
+  errorThrottled(what + ": failed with an exception, input dropped, the node goes on: " + error);
+  if (stats != nullptr) {
+    stats->update([](ObjectDetectionStatistics& s) { ++s.callback_exceptions; });
+  }
+}
+
+// A roscpp callback for a message with a header: a stamp checkInputStamp refuses is logged
+// (throttled, naming `topic`) and counted; the rest goes to `handler`, run guarded.
+template <class Msg, class Handler>
+boost::function<void(const boost::shared_ptr<const Msg>&)> guardedCallback(const std::string& topic,
+                                                                           SharedStatistics* stats,
+                                                                           Handler handler) {
+  return [topic, stats, handler](const boost::shared_ptr<const Msg>& msg) {
+    runGuarded("input '" + topic + "'", stats, [&] {
+      const Status stamp =
+          checkInputStamp(msg->header.stamp, ros::Time::now(), "message on '" + topic + "'");
+      if (!stamp) {
+        errorThrottled("input refused: " + stamp.message());
+        if (stats != nullptr)
+          stats->update([](ObjectDetectionStatistics& s) { ++s.stamps_refused; });
+        return;
+      }
+      handler(msg);
+    });
+  };
+}
+
+}  // namespace mvod
