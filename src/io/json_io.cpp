@@ -1,12 +1,14 @@
 #include "multiview_object_detection/io/json_io.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -539,21 +541,43 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
 
 namespace {
 
-// Temporaries of `path` that a killed save left behind: "<name>.tmp.XXXXXX" beside it.
-void removeOrphanTemporaries(const std::string& dir, const std::string& name) {
-  const std::string prefix = name + ".tmp.";
+// A save's temporary beside `name`: ".<name>.save-<pid>.XXXXXX". The dot keeps it out of listings;
+// the process id says whose it is, so a save removes only what a dead process left behind, never
+// another saver's file in progress or a user's file.
+std::string temporaryPrefix(const std::string& name) { return "." + name + ".save-"; }
+
+bool processAlive(long pid) {
+  if (pid <= 0 || pid > INT32_MAX) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+}  // namespace
+
+int removeOrphanTemporaries(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash);
+  const std::string prefix =
+      temporaryPrefix(slash == std::string::npos ? path : path.substr(slash + 1));
+  int removed = 0;
   std::error_code error;
   for (std::filesystem::directory_iterator it(dir, error), end; !error && it != end;
        it.increment(error)) {
     const std::string entry = it->path().filename().string();
-    if (entry.size() == prefix.size() + 6 && entry.compare(0, prefix.size(), prefix) == 0 &&
-        it->is_regular_file(error)) {
-      std::filesystem::remove(it->path(), error);
+    if (entry.compare(0, prefix.size(), prefix) != 0) continue;
+    // "<pid>.XXXXXX" after the prefix.
+    const std::string rest = entry.substr(prefix.size());
+    const size_t dot = rest.find('.');
+    if (dot == std::string::npos || dot == 0 || rest.size() != dot + 7 ||
+        rest.find_first_not_of("0123456789") != dot) {
+      continue;
     }
+    const long pid = std::strtol(rest.substr(0, dot).c_str(), nullptr, 10);
+    std::error_code file_error;
+    if (processAlive(pid) || !it->is_regular_file(file_error)) continue;
+    if (std::filesystem::remove(it->path(), file_error)) ++removed;
   }
+  return removed;
 }
-
-}  // namespace
 
 Status writeFileAtomic(const std::string& path, const std::string& content) {
   // The temporary lives in the target's folder so rename() stays on one filesystem (atomic).
@@ -566,8 +590,9 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
   if (replacing && !S_ISREG(existing.st_mode)) {
     return Status::Error("cannot write " + path + ": it exists and is not a regular file");
   }
-  removeOrphanTemporaries(dir, name);
-  std::string tmp_path = path + ".tmp.XXXXXX";
+  removeOrphanTemporaries(path);
+  std::string tmp_path = (dir == "/" ? "" : dir) + "/" + temporaryPrefix(name) +
+                         std::to_string(::getpid()) + ".XXXXXX";
   std::vector<char> tmp_name(tmp_path.begin(), tmp_path.end());
   tmp_name.push_back('\0');
   const int fd = ::mkstemp(tmp_name.data());

@@ -1,12 +1,15 @@
 // objects.json: round trip, validation of malformed documents, atomic writes.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/map_path.h"
@@ -390,23 +393,73 @@ TEST_F(AtomicWriteTest, MapFileRoundTrip) {
   expectSameObject(objects[0], loaded[0], true);
 }
 
-TEST_F(AtomicWriteTest, ReplacedFilesKeepTheirModeAndKilledSavesLeaveNoTemporaries) {
+// The id of a process that has ended (forked, exited and reaped).
+pid_t endedProcessId() {
+  const pid_t pid = ::fork();
+  if (pid == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return pid;
+}
+
+TEST_F(AtomicWriteTest, ReplacedFilesKeepTheirModeAndSavesRemoveOnlyTheirOwnDeadTemporaries) {
   const std::string path = (dir_ / "map.json").string();
   ASSERT_TRUE(writeFileAtomic(path, "first").ok());
   fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);  // 0600
-  // Temporaries of a save that was killed, and one of another file that is not ours to remove.
-  std::ofstream((dir_ / "map.json.tmp.AbC123").string()) << "orphan";
-  std::ofstream((dir_ / "map.json.tmp.XyZ789").string()) << "orphan";
-  std::ofstream((dir_ / "other.json.tmp.AbC123").string()) << "not ours";
+  // Temporaries of a save that was killed (its process has ended), one of a save in progress (this
+  // process), one of another map, and a user's files that merely look like temporaries.
+  const std::string dead = ".map.json.save-" + std::to_string(endedProcessId()) + ".AbC123";
+  const std::string live = ".map.json.save-" + std::to_string(::getpid()) + ".XyZ789";
+  std::ofstream((dir_ / dead).string()) << "orphan";
+  std::ofstream((dir_ / live).string()) << "in progress";
+  std::ofstream((dir_ / ".other.json.save-1.AbC123").string()) << "not ours";
+  std::ofstream((dir_ / "map.json.tmp.ABCDEF").string()) << "the user's";
+  std::ofstream((dir_ / ".map.json.save-notapid.ABCDEF").string()) << "the user's";
   ASSERT_TRUE(writeFileAtomic(path, "second").ok());
   EXPECT_EQ(fs::status(path).permissions() & fs::perms::all,
             fs::perms::owner_read | fs::perms::owner_write);
-  EXPECT_FALSE(fs::exists(dir_ / "map.json.tmp.AbC123"));
-  EXPECT_FALSE(fs::exists(dir_ / "map.json.tmp.XyZ789"));
-  EXPECT_TRUE(fs::exists(dir_ / "other.json.tmp.AbC123"));
+  EXPECT_FALSE(fs::exists(dir_ / dead));
+  EXPECT_TRUE(fs::exists(dir_ / live));
+  EXPECT_TRUE(fs::exists(dir_ / ".other.json.save-1.AbC123"));
+  EXPECT_TRUE(fs::exists(dir_ / "map.json.tmp.ABCDEF"));
+  EXPECT_TRUE(fs::exists(dir_ / ".map.json.save-notapid.ABCDEF"));
   // A directory is not replaced.
   fs::create_directories(dir_ / "folder.json");
   EXPECT_FALSE(writeFileAtomic((dir_ / "folder.json").string(), "x").ok());
+}
+
+TEST_F(AtomicWriteTest, ConcurrentSaversToOnePathAllSucceedAndTheFileIsAlwaysWhole) {
+  const std::string path = (dir_ / "map.json").string();
+  const std::string a(200000, 'a');
+  const std::string b(100000, 'b');
+  ASSERT_TRUE(writeFileAtomic(path, a).ok());
+  constexpr int kSaves = 40;
+  // Another process (as a second node would) and another thread of this one, against this thread.
+  const pid_t child = ::fork();
+  if (child == 0) {
+    int failed = 0;
+    for (int i = 0; i < kSaves; ++i) failed += writeFileAtomic(path, b).ok() ? 0 : 1;
+    ::_exit(failed == 0 ? 0 : 1);
+  }
+  std::atomic<int> failed{0};
+  std::atomic<int> torn{0};
+  std::thread other([&] {
+    for (int i = 0; i < kSaves; ++i) failed += writeFileAtomic(path, b).ok() ? 0 : 1;
+  });
+  for (int i = 0; i < kSaves; ++i) {
+    failed += writeFileAtomic(path, a).ok() ? 0 : 1;
+    std::string content;
+    if (!readFile(path, &content).ok() || (content != a && content != b)) ++torn;
+  }
+  other.join();
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the other process's saves failed";
+  EXPECT_EQ(failed.load(), 0);
+  EXPECT_EQ(torn.load(), 0);
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir_)) files += entry.is_regular_file() ? 1 : 0;
+  EXPECT_EQ(files, 1) << "temporaries were left behind";
 }
 
 TEST_F(AtomicWriteTest, ReadRefusesFifosDevicesDirectoriesAndHugeFilesAtOnce) {
