@@ -12,7 +12,9 @@ volatile std::sig_atomic_t g_sigint = 0;
 int main(int argc, char** argv) {
   // Own SIGINT handling: the final refinement is published while ROS is still up.
   ros::init(argc, argv, "object_detection", ros::init_options::NoSigintHandler);
+  // SIGTERM (roslaunch's second try, systemd, docker stop) too: the map is refined and autosaved.
   std::signal(SIGINT, [](int) { g_sigint = 1; });
+  std::signal(SIGTERM, [](int) { g_sigint = 1; });
   ros::NodeHandle nh;
   ros::NodeHandle nh_private("~");
   mvod::ObjectDetectionRos node(nh, nh_private);

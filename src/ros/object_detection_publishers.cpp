@@ -100,6 +100,9 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
   if (stats.keyframes_dropped > dropped_at_last_diagnostics_) {
     status.level = diagnostic_msgs::DiagnosticStatus::WARN;
     status.message = "keyframes dropped: processing is slower than the keyframe rate";
+  } else if (stats.autosave_failures > autosave_failures_at_last_diagnostics_) {
+    status.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    status.message = "autosave failed (the previous autosave is kept; see the log)";
   } else if (stats.callback_exceptions > exceptions_at_last_diagnostics_) {
     status.level = diagnostic_msgs::DiagnosticStatus::WARN;
     status.message = "a callback failed with an exception (input dropped; see the log)";
@@ -113,11 +116,16 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
   dropped_at_last_diagnostics_ = stats.keyframes_dropped;
   exceptions_at_last_diagnostics_ = stats.callback_exceptions;
   refused_at_last_diagnostics_ = stats.stamps_refused;
+  autosave_failures_at_last_diagnostics_ = stats.autosave_failures;
   status.values = {
       keyValue("frames received", stats.frames_received),
       keyValue("frames rejected", stats.frames_rejected),
       keyValue("stamps refused", stats.stamps_refused),
       keyValue("callback exceptions", stats.callback_exceptions),
+      keyValue("autosaves", stats.autosaves),
+      keyValue("autosave failures", stats.autosave_failures),
+      keyValue("autosave ms", stats.autosave_ms),
+      keyValue("autosave bytes", stats.autosave_bytes),
       keyValue("pose failures", stats.pose_failures),
       keyValue("time jumps back", stats.time_jumps),
       keyValue("detections capped", stats.detections_capped),

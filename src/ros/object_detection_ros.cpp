@@ -1,8 +1,15 @@
 #include "multiview_object_detection/ros/object_detection_ros.h"
 
+#include <sys/stat.h>
+
 #include <boost/bind/bind.hpp>
+#include <cerrno>
+#include <cstdio>
+#include <ctime>
+#include <deque>
 #include <utility>
 
+#include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/detections_buffer.h"
 #include "multiview_object_detection/ros/keyframe_buffer.h"
@@ -101,10 +108,21 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   if (detections_) {
     buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
   }
-  services_ = std::make_unique<ObjectDetectionServices>(
-      nh_private_, config.world_frame,
-      MapPathPolicy{config.map_directory, config.allow_any_map_path}, worker_.get(), buffer_.get(),
-      publishers_.get(), &stats_);
+  const MapPathPolicy map_paths{config.map_directory, config.allow_any_map_path};
+  services_ = std::make_unique<ObjectDetectionServices>(nh_private_, config.world_frame, map_paths,
+                                                        worker_.get(), buffer_.get(),
+                                                        publishers_.get(), &stats_);
+  if (config.autosave_period_s > 0.0) {
+    std::string autosave_path;
+    const Status resolved = resolveMapPath(config.autosave_path, map_paths, true, &autosave_path);
+    if (!resolved) {
+      fail("autosave_path: " + resolved.message() + " (autosave_period_s 0 turns autosave off)");
+      return;
+    }
+    autosaver_ = std::make_unique<MapAutosaver>(autosave_path, config.autosave_period_s,
+                                                worker_.get(), &stats_);
+  }
+  if (!config.load_map_on_start.empty()) loadMapOnStart(config, map_paths);
 
   // Dynamic reconfigure starts from the values in effect, not from the .cfg defaults.
   reconfigure_server_ = std::make_unique<ReconfigureServer>(reconfigure_mutex_, nh_private_);
@@ -117,6 +135,10 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
                                                boost::placeholders::_1, boost::placeholders::_2));
 
   worker_->start();
+  if (autosaver_) {
+    autosaver_->start();
+    ROS_INFO("autosave: every %.0f s to %s", config.autosave_period_s, autosaver_->path().c_str());
+  }
   tf_input_ = std::make_unique<TfInput>(tf_buffer_.get(), &stats_);
   tf_input_->start(nh_);
   input_->subscribe([this](PendingFrame frame) { buffer_->addFrame(std::move(frame)); });
@@ -124,6 +146,39 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   keyframe_poses_->subscribe(nh_);
   buffer_->start(nh_);
   publishers_->startDiagnostics();
+}
+
+void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolicy& paths) {
+  std::string path;
+  Status status = resolveMapPath(config.load_map_on_start, paths, false, &path);
+  if (!status) {
+    ROS_ERROR("load_map_on_start: %s; starting with an empty map", status.message().c_str());
+    return;
+  }
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0 && errno == ENOENT) {
+    ROS_INFO("load_map_on_start: no map at %s yet (a first run): starting with an empty map",
+             path.c_str());
+    return;
+  }
+  std::string text;
+  std::vector<MapObject> objects;
+  MapSummary summary;
+  std::deque<KeyframeRecord> history;
+  status = readFile(path, &text);
+  if (status) status = objectsFromJson(text, &objects, &summary, &history);
+  if (status) status = worker_->replaceMap(objects, summary, std::move(history));
+  if (status) {
+    ROS_INFO("load_map_on_start: resumed %zu objects from %s", objects.size(), path.c_str());
+    publishers_->publishMap(worker_->objects(), ros::Time::now());
+    return;
+  }
+  // Kept for a person to look at, and out of the autosave's way.
+  const std::string aside = path + ".unreadable-" + std::to_string(std::time(nullptr));
+  const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
+  ROS_ERROR("load_map_on_start: cannot load %s: %s; %s; starting with an empty map", path.c_str(),
+            status.message().c_str(),
+            moved ? ("the file is kept as " + aside).c_str() : "the file could not be moved aside");
 }
 
 void ObjectDetectionRos::reconfigureCallback(multiview_object_detection::ObjectDetectionConfig& rc,
@@ -147,6 +202,7 @@ void ObjectDetectionRos::shutdown() {
   // Sec. 3.5 on the final map.
   worker_->refine("shutdown");
   if (ros::ok()) publishers_->publishMap(worker_->objects(), ros::Time::now());
+  if (autosaver_) autosaver_->stop();  // the final map, refined
   services_->stop();
   ROS_INFO("object detection stopped: %d keyframes processed, %zu objects in the map",
            statistics().keyframes_processed, objects().size());

@@ -49,6 +49,14 @@ Status ObjectDetectionRosConfig::isValid() const {
   if (gravity_source == "tf" && gravity_frame.empty()) {
     return Status::Error("gravity_frame must not be empty with gravity_source tf");
   }
+  if (!(std::isfinite(autosave_period_s) &&
+        (autosave_period_s == 0.0 || (autosave_period_s >= 1.0 && autosave_period_s <= 86400.0)))) {
+    return Status::Error("autosave_period_s must be 0 (off) or in [1, 86400] s (got " +
+                         std::to_string(autosave_period_s) + ")");
+  }
+  if (autosave_period_s > 0.0 && autosave_path.empty()) {
+    return Status::Error("autosave_path must not be empty while autosave_period_s > 0");
+  }
   Status status = keyframes.isValid();
   if (!status) return status;
   if (detector != "fastestdet" && detector != "maskrcnn" && detector != "topic") {

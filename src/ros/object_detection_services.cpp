@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/ros/map_autosaver.h"
 
 namespace mvod {
 
@@ -62,15 +63,12 @@ bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Reque
     ROS_ERROR("%s", response.message.c_str());
     return true;
   }
-  std::vector<MapObject> objects;
-  MapSummary summary;
-  std::deque<KeyframeRecord> history;
-  worker_->mapSnapshot(&objects, &summary, &history);
-  summary.frames = stats_->get().frames_received;
-  const Status written = writeFileAtomic(path, objectsToJson(objects, summary, true, &history));
+  const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
+  const Status written = writeMapFile(path, *map, stats_->get().frames_received);
   response.success = written.ok();
-  response.message = written ? "saved " + std::to_string(objects.size()) + " objects to " + path
-                             : "save_map: " + written.message();
+  response.message = written
+                         ? "saved " + std::to_string(map->objects.size()) + " objects to " + path
+                         : "save_map: " + written.message();
   if (written) {
     ROS_INFO("%s", response.message.c_str());
   } else {

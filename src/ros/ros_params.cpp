@@ -353,6 +353,15 @@ SegmenterOptions getSegmenterOptionsFromRosParam(const ros::NodeHandle& nh_priva
   return c;
 }
 
+std::string defaultAutosaveName(const std::string& node_namespace) {
+  std::string name = node_namespace;
+  while (!name.empty() && name.front() == '/') name.erase(name.begin());
+  for (char& c : name) {
+    if (c == '/') c = '.';
+  }
+  return (name.empty() ? std::string("object_detection") : name) + ".autosave.json";
+}
+
 ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHandle& nh_private,
                                                               ParamErrors* errors) {
   const ParamReader p(nh_private, errors);
@@ -376,6 +385,10 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("max_detections_per_frame", &cfg.max_detections_per_frame);
   p.read("map_directory", &cfg.map_directory);
   p.read("allow_any_map_path", &cfg.allow_any_map_path);
+  p.read("autosave_period_s", &cfg.autosave_period_s);
+  p.read("autosave_path", &cfg.autosave_path);
+  if (cfg.autosave_path.empty()) cfg.autosave_path = defaultAutosaveName(nh_private.getNamespace());
+  p.read("load_map_on_start", &cfg.load_map_on_start);
   if (cfg.map_directory.empty()) cfg.map_directory = defaultMapDirectory();
   p.read("processing_queue_size", &cfg.processing_queue_size);
   p.read("refine_every_n_keyframes", &cfg.refine_every_n_keyframes);

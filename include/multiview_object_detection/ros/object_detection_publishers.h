@@ -65,6 +65,7 @@ class ObjectDetectionPublishers {
   int dropped_at_last_diagnostics_ = 0;  // the timer's thread only
   int exceptions_at_last_diagnostics_ = 0;
   int refused_at_last_diagnostics_ = 0;
+  int autosave_failures_at_last_diagnostics_ = 0;
 };
 
 }  // namespace mvod

@@ -22,7 +22,9 @@
 #include <vector>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/io/map_path.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/ros/map_autosaver.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/tf_input.h"
@@ -74,6 +76,9 @@ class ObjectDetectionRos {
 
   void start(std::unique_ptr<InstanceSegmenter> segmenter);
   void fail(const std::string& message);
+  // load_map_on_start: the map file into the worker (a missing one is a first run, an unreadable
+  // one is moved aside; neither stops the node).
+  void loadMapOnStart(const Config& config, const MapPathPolicy& paths);
   void reconfigureCallback(multiview_object_detection::ObjectDetectionConfig& rc, uint32_t level);
 
   ros::NodeHandle nh_;
@@ -96,6 +101,7 @@ class ObjectDetectionRos {
   std::unique_ptr<KeyframePosesInput> keyframe_poses_;
   std::unique_ptr<RgbdInput> input_;
   std::unique_ptr<ObjectDetectionServices> services_;
+  std::unique_ptr<MapAutosaver> autosaver_;  // autosave_period_s > 0 only
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<ReconfigureServer> reconfigure_server_;
 };

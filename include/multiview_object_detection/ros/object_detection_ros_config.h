@@ -6,8 +6,8 @@
 #include <string>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
-#include "multiview_object_detection/pipeline/stages/keyframe_selector.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/pipeline/stages/keyframe_selector.h"
 
 namespace mvod {
 
@@ -52,6 +52,15 @@ struct ObjectDetectionRosConfig {
   // (~/.ros/...); ros_params fills it in.
   std::string map_directory;
   bool allow_any_map_path = false;
+  // Autosave: the map (as ~save_map writes it) to autosave_path (resolved like ~save_map's paths)
+  // every autosave_period_s when it changed, and at shutdown. 0 = off. An empty path is the
+  // node's name: "<node>.autosave.json" (ros_params fills it in), so two nodes never share one.
+  double autosave_period_s = 60.0;
+  std::string autosave_path;
+  // A map file loaded at start (resolved like ~load_map's paths), e.g. autosave.json to resume
+  // after a crash or a restart. Empty = start empty; a missing file: start empty (first run); an
+  // unreadable one is moved aside (<path>.unreadable-<unix time>) and the node starts empty.
+  std::string load_map_on_start;
 
   int processing_queue_size = 2;      // keyframes waiting for the worker; the oldest is dropped
   int refine_every_n_keyframes = 10;  // 0 = only on ~refine and at shutdown

@@ -35,6 +35,11 @@ struct ObjectDetectionStatistics {
   int keyframes_corrected = 0;
   int keyframe_poses_unmatched = 0;
   double correction_ms = 0.0;
+  // Autosave: saves written and failed; the last one's time and size.
+  int autosaves = 0;
+  int autosave_failures = 0;
+  double autosave_ms = 0.0;
+  double autosave_bytes = 0.0;
   double detection_ms = 0.0;  // last keyframe
   StageTimes stage_times;     // last keyframe
   // From a keyframe's images arriving to its objects being published (queueing, pose wait,

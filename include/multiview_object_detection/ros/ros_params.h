@@ -72,6 +72,10 @@ KeyframeSelector::Config getKeyframeSelectorConfigFromRosParam(const ros::NodeHa
                                                                ParamErrors* errors);
 SegmenterOptions getSegmenterOptionsFromRosParam(const ros::NodeHandle& nh_private,
                                                  ParamErrors* errors);
+// The default autosave file of the node in `node_namespace` ("/robot1/object_detection" ->
+// "robot1.object_detection.autosave.json").
+std::string defaultAutosaveName(const std::string& node_namespace);
+
 ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHandle& nh_private,
                                                               ParamErrors* errors = nullptr);
 

@@ -1,0 +1,55 @@
+// Autosave: the map written to one file in the background, so that a crash, an OOM kill or a power
+// cut loses at most one period of mapping. Every autosave_period_s the saver takes the worker's
+// current snapshot (a shared pointer: the worker is never held up by the save) and, if the map
+// changed since the last save, writes it atomically (writeFileAtomic: the file is always a whole
+// map, old or new). stop() saves once more (shutdown, SIGINT, SIGTERM).
+#pragma once
+
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "multiview_object_detection/pipeline/types/common.h"
+#include "multiview_object_detection/ros/keyframe_worker.h"
+#include "multiview_object_detection/ros/object_detection_statistics.h"
+
+namespace mvod {
+
+// Writes `map` to `path` as ~save_map does (with clouds and the keyframe history); `bytes` (may be
+// null): the file's size.
+Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& map,
+                    int frames_received, size_t* bytes = nullptr);
+
+class MapAutosaver {
+ public:
+  // `path`: resolved, absolute; `period_s` > 0.
+  MapAutosaver(std::string path, double period_s, const KeyframeWorker* worker,
+               SharedStatistics* stats);
+  ~MapAutosaver();
+  MapAutosaver(const MapAutosaver&) = delete;
+  MapAutosaver& operator=(const MapAutosaver&) = delete;
+
+  const std::string& path() const { return path_; }
+  // Removes what an earlier, killed process's save left beside the file, then starts the thread.
+  void start();
+  // Joins the thread, then saves the map if it changed since the last save. Idempotent.
+  void stop();
+
+ private:
+  void loop();
+  void saveIfChanged();
+
+  const std::string path_;
+  const double period_s_;
+  const KeyframeWorker* worker_;
+  SharedStatistics* stats_;
+  std::shared_ptr<const KeyframeWorker::MapSnapshot> last_saved_;  // the saver's thread only
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace mvod

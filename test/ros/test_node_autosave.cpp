@@ -1,0 +1,159 @@
+// rostest (node_autosave.test): a crash loses at most one autosave period. The test starts
+// object_detection_node itself, feeds it synthetic frames, kills it with SIGKILL at a random
+// moment, checks the autosave file (whole, loadable, no older than a period and a save, no
+// temporaries after the restart), starts the node again with load_map_on_start and checks that it
+// resumed that map; at the end SIGINT, and the final save holds the whole map.
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <random>
+
+#include "multiview_object_detection/io/json_io.h"
+#include "test_node_common.h"
+
+namespace mvod_test {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kNode[] = "/autosave_node";
+constexpr char kAutosaveName[] = "autosave_node.autosave.json";
+constexpr double kPeriodS = 1.0;
+
+std::string nodeBinary() {
+  // Beside this test's binary in the devel space.
+  return (fs::read_symlink("/proc/self/exe").parent_path() / "object_detection_node").string();
+}
+
+// The node process, started with the inputs remapped to the test's topics.
+pid_t startNode(const std::string& map_directory) {
+  const std::vector<std::string> args = {nodeBinary(),
+                                         std::string("__name:=") + (kNode + 1),
+                                         std::string("rgb/image_raw:=") + kRgbTopic,
+                                         std::string("depth_registered/image_raw:=") + kDepthTopic,
+                                         std::string("rgb/camera_info:=") + kInfoTopic,
+                                         std::string("pose:=") + kPoseTopic,
+                                         std::string("detections:=") + kDetectionsTopic,
+                                         "_map_directory:=" + map_directory,
+                                         "__log:=" + map_directory + "/../node.log"};
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// The objects of a map file; false if it does not load.
+bool loadMapFile(const std::string& path, std::vector<mvod::MapObject>* objects,
+                 std::string* error) {
+  std::string text;
+  mvod::MapSummary summary;
+  std::deque<mvod::KeyframeRecord> history;
+  mvod::Status status = mvod::readFile(path, &text);
+  if (status) status = mvod::objectsFromJson(text, objects, &summary, &history);
+  if (!status) *error = status.message();
+  return status.ok();
+}
+
+std::vector<std::string> temporariesIn(const std::string& directory) {
+  std::vector<std::string> found;
+  for (const auto& entry : fs::directory_iterator(directory)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find(".save-") != std::string::npos) found.push_back(name);
+  }
+  return found;
+}
+
+TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
+  ros::NodeHandle nh;
+  int cycles = 5;
+  ros::param::get("~kill_cycles", cycles);
+  const fs::path root = fs::temp_directory_path() / ("mvod_autosave_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  const std::string directory = (root / "maps").string();
+  fs::create_directories(directory);
+  const std::string autosave = directory + "/" + kAutosaveName;
+
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, kNode);
+  std::mt19937 rng(20261127u);
+  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
+  int frame = 0;
+  size_t objects_before_kill = 0;
+  for (int cycle = 0; cycle <= cycles; ++cycle) {
+    SCOPED_TRACE("cycle " + std::to_string(cycle));
+    const pid_t pid = startNode(directory);
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/get_objects", 30000))
+        << "the node did not start";
+    ASSERT_TRUE(
+        outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
+    // Resumed: the map the killed node last autosaved.
+    const multiview_object_detection::ObjectArray resumed = getObjects(kNode);
+    if (cycle > 0) {
+      EXPECT_EQ(resumed.objects.size(), objects_before_kill) << "not resumed from the autosave";
+      // The restart removed what the kill may have left mid-save.
+      EXPECT_TRUE(outputs.waitFor([&] { return temporariesIn(directory).empty(); }, 5.0));
+    }
+    if (cycle == cycles) {
+      // The last one ends with SIGINT: refined, and saved once more.
+      for (int i = 0; i < 4; ++i) {
+        const ros::Time stamp(static_cast<double>(++second));
+        inputs.publish(stream.make(frame++ % stream.options().num_frames, stamp), true, true);
+        outputs.waitForObjectsAt(stamp, 20.0);
+      }
+      const size_t live = getObjects(kNode).objects.size();
+      ::kill(pid, SIGINT);
+      int status = 0;
+      ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+      EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+      std::vector<mvod::MapObject> saved;
+      std::string error;
+      ASSERT_TRUE(loadMapFile(autosave, &saved, &error)) << error;
+      EXPECT_LE(saved.size(), live) << "the final save has more objects than the node had";
+      EXPECT_GT(saved.size(), 0u);
+      EXPECT_TRUE(temporariesIn(directory).empty());
+      break;
+    }
+    // Frames for a random 1.5 - 4 s, then SIGKILL at a random moment of a save, a keyframe or
+    // neither.
+    const double run_s = std::uniform_real_distribution<double>(1.5, 4.0)(rng);
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(run_s);
+    while (ros::WallTime::now() < end) {
+      const ros::Time stamp(static_cast<double>(++second));
+      inputs.publish(stream.make(frame++ % stream.options().num_frames, stamp), true, true);
+      ros::WallDuration(0.25).sleep();
+    }
+    const ros::WallTime killed_at = ros::WallTime::now();
+    ASSERT_EQ(::kill(pid, SIGKILL), 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    // Whole and loadable, and written within a period (plus a save's time) of the kill.
+    std::vector<mvod::MapObject> saved;
+    std::string error;
+    ASSERT_TRUE(fs::exists(autosave)) << "no autosave after " << run_s << " s";
+    ASSERT_TRUE(loadMapFile(autosave, &saved, &error)) << error;
+    struct stat info {};
+    ASSERT_EQ(::stat(autosave.c_str(), &info), 0);
+    const double age_s = killed_at.toSec() - (static_cast<double>(info.st_mtim.tv_sec) +
+                                              1e-9 * static_cast<double>(info.st_mtim.tv_nsec));
+    EXPECT_LT(age_s, kPeriodS + 1.5) << "the autosave is older than a period";
+    objects_before_kill = saved.size();
+    std::printf("[ INFO     ] cycle %d: killed after %.1f s, autosave of %zu objects, %.2f s old\n",
+                cycle, run_s, saved.size(), age_s);
+  }
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace mvod_test
+
+int main(int argc, char** argv) { return mvod_test::runRosTests(argc, argv, "test_node_autosave"); }
