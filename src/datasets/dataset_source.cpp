@@ -4,11 +4,33 @@
 #include <filesystem>
 #include <memory>
 #include <system_error>
+#include <utility>
 
 #include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
+#include "multiview_object_detection/pipeline/types/intrinsics_check.h"
 
 namespace mvod {
+namespace {
+
+// A loaded frame's intrinsics against its images, the check the node makes of camera_info: a K
+// that is not the camera's (another camera's file, a typo) misplaces every object or blows up the
+// cloud. depth_file / color_file name where each K came from.
+Status checkFrameIntrinsics(const RgbdFrame& frame, const std::string& depth_file,
+                            const std::string& color_file) {
+  Status status = checkIntrinsicsForImage(frame.K_depth, frame.depth.cols, frame.depth.rows);
+  if (!status) {
+    return Status::Error(depth_file + ": " + status.message() + " (depth of " + frame.name + ")");
+  }
+  if (frame.registered) return Status::Ok();
+  status = checkIntrinsicsForImage(frame.K_color, frame.color_bgr.cols, frame.color_bgr.rows);
+  if (!status) {
+    return Status::Error(color_file + ": " + status.message() + " (colour of " + frame.name + ")");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
 
 std::string nameFirstFrames(const std::vector<int>& indices, size_t max_named,
                             const std::function<std::string(int)>& name) {
@@ -57,7 +79,17 @@ Status openDatasetSource(const std::string& directory, const std::string& format
     if (!status) return status;
     opened.indices = dataset->frameIndices();
     opened.frame_name = [](int index) { return SevenScenesDataset::frameName(index); };
-    opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    const std::string depth_file = (dir / "camera-intrinsics.txt").string();
+    const std::string color_file = (dir / "color-intrinsics.txt").string();
+    opened.load = [dataset, depth_file, color_file](int index, RgbdFrame* frame) {
+      RgbdFrame loaded;
+      const Status status = dataset->load(index, &loaded);
+      if (!status) return status;
+      const Status intrinsics = checkFrameIntrinsics(loaded, depth_file, color_file);
+      if (!intrinsics) return intrinsics;
+      *frame = std::move(loaded);
+      return Status::Ok();
+    };
     opened.check = [](int) { return Status::Ok(); };
     opened.warnings = dataset->warnings();
     opened.has_gravity = dataset->hasGravity();
@@ -87,7 +119,18 @@ Status openDatasetSource(const std::string& directory, const std::string& format
     if (!status) return status;
     opened.indices = dataset->frameIndices();
     opened.frame_name = [](int index) { return SceneNNDataset::frameName(index); };
-    opened.load = [dataset](int index, RgbdFrame* frame) { return dataset->load(index, frame); };
+    const std::string intrinsics_file = dataset->intrinsicsPath().empty()
+                                            ? "SceneNN default intrinsics (no asus.ini)"
+                                            : dataset->intrinsicsPath();
+    opened.load = [dataset, intrinsics_file](int index, RgbdFrame* frame) {
+      RgbdFrame loaded;
+      const Status status = dataset->load(index, &loaded);
+      if (!status) return status;
+      const Status intrinsics = checkFrameIntrinsics(loaded, intrinsics_file, intrinsics_file);
+      if (!intrinsics) return intrinsics;
+      *frame = std::move(loaded);
+      return Status::Ok();
+    };
     opened.check = [dataset](int index) { return dataset->checkFrame(index); };
     opened.warnings = dataset->warnings();
     opened.has_timestamps = dataset->hasTimestamps();

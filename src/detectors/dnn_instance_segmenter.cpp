@@ -14,6 +14,8 @@ namespace mvod {
 namespace {
 
 constexpr int kFastestDetInputPx = 352;
+// The blank image of Mask R-CNN's forward pass at load time (the graph resizes it internally).
+constexpr int kMaskRcnnProbePx = 64;
 
 float sigmoid(float x) { return 1.f / (1.f + std::exp(-x)); }
 
@@ -67,6 +69,39 @@ std::string missingModelHelp(const std::string& what) {
          "--model-dir option or $MVOD_MODEL_DIR); scripts/download_models.sh fetches them and "
          "checks "
          "their sha256 (see README, 'Detector models').";
+}
+
+// The Mask R-CNN outputs decodeMaskRcnn reads.
+std::vector<std::string> maskRcnnOutputs() { return {"detection_out_final", "detection_masks"}; }
+
+// The number of classes the network scores, from a forward pass on a blank image (the ONNX and
+// TensorFlow importers know the output shapes only after one): FastestDet's output has 5 + classes
+// channels, Mask R-CNN's detection_masks one mask per class.
+Status networkClassCount(DnnInstanceSegmenter::Model model, cv::dnn::Net* net, int* classes) {
+  try {
+    if (model == DnnInstanceSegmenter::Model::kFastestDet) {
+      const cv::Mat blank(kFastestDetInputPx, kFastestDetInputPx, CV_8UC3, cv::Scalar::all(0));
+      net->setInput(
+          cv::dnn::blobFromImage(blank, 1.0 / 255.0, blank.size(), cv::Scalar(), false, false));
+      const cv::Mat output = net->forward();
+      if (output.dims != 4 || output.size[1] < 6) {
+        return Status::Error("its output is not a [1, 5 + classes, H, W] blob");
+      }
+      *classes = output.size[1] - 5;
+    } else {
+      const cv::Mat blank(kMaskRcnnProbePx, kMaskRcnnProbePx, CV_8UC3, cv::Scalar::all(0));
+      net->setInput(cv::dnn::blobFromImage(blank, 1.0, blank.size(), cv::Scalar(), true, false));
+      std::vector<cv::Mat> outputs;
+      net->forward(outputs, maskRcnnOutputs());
+      if (outputs.size() != 2 || outputs[1].dims != 4) {
+        return Status::Error("its detection_masks output is not an [N, classes, h, w] blob");
+      }
+      *classes = outputs[1].size[1];
+    }
+  } catch (const cv::Exception& e) {
+    return Status::Error(std::string("a forward pass on a blank image failed: ") + e.what());
+  }
+  return Status::Ok();
 }
 
 }  // namespace
@@ -263,6 +298,23 @@ Status DnnInstanceSegmenter::create(Model model, const DnnModelOptions& options,
     result->network_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
     result->network_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
   }
+  // The label file must name every class the network scores, no more: a file of another model
+  // would fail every keyframe (too few names) or misname every detection.
+  int classes = 0;
+  const Status counted = networkClassCount(model, &result->network_->net, &classes);
+  if (!counted) {
+    return Status::Error(model_name + " model '" + options.model_path + "': " + counted.message());
+  }
+  if (static_cast<int>(result->labels_.size()) != classes) {
+    const std::string label_source =
+        labels_read ? "label file '" + options.labels_path + "'"
+                    : "the built-in COCO names (label file '" + options.labels_path + "' not read)";
+    return Status::Error(label_source + " has " + std::to_string(result->labels_.size()) +
+                         " names but the " + model_name + " model '" + options.model_path +
+                         "' outputs " + std::to_string(classes) +
+                         " classes: give the label file of this model (one name per class, in "
+                         "output order)");
+  }
   *segmenter = std::move(result);
   return Status::Ok();
 }
@@ -290,7 +342,7 @@ Status DnnInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string&
       net.setInput(cv::dnn::blobFromImage(image_bgr, 1.0, cv::Size(image_bgr.cols, image_bgr.rows),
                                           cv::Scalar(), true, false));
       std::vector<cv::Mat> outputs;
-      net.forward(outputs, std::vector<std::string>{"detection_out_final", "detection_masks"});
+      net.forward(outputs, maskRcnnOutputs());
       const Status status = decodeMaskRcnn(outputs[0], outputs[1], image_bgr.size(), labels_,
                                            options_.decode, &decoded);
       if (!status) return Status::Error(frame_name + ": " + status.message());

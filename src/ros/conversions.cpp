@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/pipeline/types/intrinsics_check.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
@@ -233,6 +234,20 @@ Status intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& msg, const std::s
   return Status::Ok();
 }
 
+namespace {
+
+// The intrinsics a camera_info gave, against the image it came with (checkIntrinsicsForImage: the
+// check of the offline tools' intrinsics files too).
+Status checkCameraInfoForImage(const CameraIntrinsics& K, const sensor_msgs::Image& image,
+                               const sensor_msgs::CameraInfo& info, const std::string& topic) {
+  const Status status =
+      checkIntrinsicsForImage(K, static_cast<int>(image.width), static_cast<int>(image.height));
+  if (status) return status;
+  return Status::Error(describeInput(topic, info.header) + ": " + status.message());
+}
+
+}  // namespace
+
 Status checkRgbdMessages(const RgbdMessages& msgs, const RgbdTopics& topics) {
   if (!msgs.color || !msgs.depth || !msgs.color_info) {
     return Status::Error("incomplete RGB-D input (colour, depth or camera_info missing)");
@@ -263,6 +278,9 @@ Status checkRgbdMessages(const RgbdMessages& msgs, const RgbdTopics& topics) {
                          sizeText(msgs.color_info->width, msgs.color_info->height) + " but " +
                          color_what + " is " + sizeText(color.width, color.height));
   }
+  if (!(status = checkCameraInfoForImage(K_color, color, *msgs.color_info, topics.color_info))) {
+    return status;
+  }
   if (!msgs.depth_info) {
     if (color.width != depth.width || color.height != depth.height) {
       return Status::Error("mismatched image sizes: " + color_what + " is " +
@@ -283,7 +301,7 @@ Status checkRgbdMessages(const RgbdMessages& msgs, const RgbdTopics& topics) {
                          sizeText(msgs.depth_info->width, msgs.depth_info->height) + " but " +
                          depth_what + " is " + sizeText(depth.width, depth.height));
   }
-  return Status::Ok();
+  return checkCameraInfoForImage(K_depth, depth, *msgs.depth_info, topics.depth_info);
 }
 
 Status rgbdFrameFromMsgs(const RgbdMessages& msgs, const RgbdTopics& topics,

@@ -12,7 +12,10 @@
 // --time-offset (default 1 s: rosbag rejects time 0, and tf reads stamp 0 as "latest").
 // Where colour and depth come from two cameras (7-Scenes with color-intrinsics.txt) the depth is
 // registered to the colour camera (registerDepthToColor), as a driver's depth_registered topic is.
-// Exit status: 0 done, 1 bad or missing data (the partial bag is removed), 2 bad usage.
+// The bag is written to a temporary name beside OUT.bag and renamed to it only when complete: a
+// failure (bad data, a full disk) leaves no bag that looks complete.
+// Exit status: 0 done, 1 bad or missing data or the bag could not be written (nothing is left at
+// OUT.bag), 2 bad usage.
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -47,6 +50,12 @@ namespace fs = std::filesystem;
 
 constexpr int kExitData = 1;
 constexpr int kExitUsage = 2;
+// --rate-hz: what a camera records at; a rate near 0 puts stamps past what ros::Time holds.
+constexpr double kMinRateHz = 0.01;
+constexpr double kMaxRateHz = 1000.0;
+// Stamps stay below 2^31 s (2038-01-19): ros::Time holds 32 bits of seconds, and tools that read
+// them as signed numbers only 31.
+constexpr double kMaxStampS = 2147483648.0;
 
 const char kUsage[] =
     "Usage: dataset_to_bag --dataset DIR --output OUT.bag [options]\n"
@@ -59,8 +68,9 @@ const char kUsage[] =
     "  --world-frame FRAME            parent frame of the pose and TF [map]\n"
     "  --pose-topic TOPIC             [/orb_slam2_rgbd/pose]\n"
     "  --rate-hz HZ                   frame rate where the dataset has no time stamps (7-Scenes,\n"
-    "                                 SceneNN without timestamp.txt) [30]\n"
-    "  --time-offset S                added to every stamp (> 0: rosbag rejects time 0) [1]\n"
+    "                                 SceneNN without timestamp.txt), 0.01 to 1000 [30]\n"
+    "  --time-offset S                added to every stamp (> 0: rosbag rejects time 0; every\n"
+    "                                 stamp must stay below 2^31 s) [1]\n"
     "  --first N, --last N            only frames whose number is in [N, M] (inclusive; 7-Scenes\n"
     "                                 frame-NNNNNN, SceneNN imageNNNNN) [all]\n"
     "  --detector NAME                also record 2D detections of every frame as\n"
@@ -202,10 +212,11 @@ void addOptions(CLI::App* app, Options* options) {
   cli::addText(app, "--detections-topic", &options->detections_topic,
                "--detections-topic must not be empty");
   addNumber(
-      app, "--rate-hz", &options->rate_hz, [](double v) { return v > 0.0; }, "a number > 0");
+      app, "--rate-hz", &options->rate_hz,
+      [](double v) { return v >= kMinRateHz && v <= kMaxRateHz; }, "a rate in [0.01, 1000] Hz");
   addNumber(
-      app, "--time-offset", &options->time_offset_s, [](double v) { return v >= 0.0; },
-      "a number >= 0");
+      app, "--time-offset", &options->time_offset_s,
+      [](double v) { return v >= 0.0 && v < kMaxStampS; }, "a number in [0, 2^31) s");
   addFrameNumber(app, "--first", &options->first);
   addFrameNumber(app, "--last", &options->last);
   cli::addFlag(app, "--lz4", &options->lz4);
@@ -329,7 +340,7 @@ int createSegmenter(const Options& options, std::unique_ptr<InstanceSegmenter>* 
 }
 
 // A frame's stamp in the bag: the dataset's time (or index / --rate-hz) + --time-offset; it must be
-// > 0 and must not go back in time.
+// > 0, below 2^31 s and must not go back in time.
 Status frameStamp(const Options& options, const DatasetSource& source, const RgbdFrame& frame,
                   double previous_stamp_s, double* stamp_s) {
   const double dataset_stamp_s =
@@ -340,6 +351,11 @@ Status frameStamp(const Options& options, const DatasetSource& source, const Rgb
   if (!(*stamp_s > 0.0)) {
     return Status::Error(frame.name + ": time stamp " + std::to_string(*stamp_s) +
                          " s is not > 0 (rosbag needs positive times): use --time-offset");
+  }
+  if (!(*stamp_s < kMaxStampS)) {
+    return Status::Error(frame.name + ": time stamp " + std::to_string(*stamp_s) +
+                         " s is not below 2^31 s (what ros::Time and the tools reading the bag " +
+                         "hold): check the dataset's time stamps, --rate-hz and --time-offset");
   }
   if (*stamp_s < previous_stamp_s) {
     return Status::Error(frame.name + ": time stamp " + std::to_string(*stamp_s) +
@@ -367,8 +383,30 @@ Status colorCameraDepth(const RgbdFrame& frame, cv::Mat* depth_mm, CameraIntrins
   return Status::Ok();
 }
 
-// The bag being written: per frame TF, pose, camera infos, images (and detections). A failure
-// removes the partial bag.
+// --output: a new file or a regular file to replace, in a folder that exists. Anything else (a
+// device such as /dev/full, a folder) is refused: the bag goes to a temporary file renamed over it.
+Status checkOutputPath(const std::string& output_path, fs::path* target) {
+  std::error_code error;
+  fs::path path(output_path);
+  const fs::file_status status = fs::status(path, error);
+  if (fs::exists(status)) {
+    if (!fs::is_regular_file(status)) {
+      return Status::Error(output_path + ": not a regular file (write the bag to a file)");
+    }
+    path = fs::canonical(path, error);  // through a link: beside the file it names
+    if (error) return Status::Error(output_path + ": " + error.message());
+  }
+  const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  if (!fs::is_directory(folder, error)) {
+    return Status::Error(output_path + ": folder " + folder.string() + " does not exist");
+  }
+  *target = path;
+  return Status::Ok();
+}
+
+// The bag being written: per frame TF, pose, camera infos, images (and detections). It is written
+// to a temporary name beside the target and renamed to the target by close(); a failure, or
+// leaving before close(), removes it.
 class BagWriter {
  public:
   BagWriter(const Options& options, const DatasetSource& source, InstanceSegmenter* segmenter)
@@ -377,15 +415,21 @@ class BagWriter {
         segmenter_(segmenter),
         ns_("/" + options.camera),
         optical_frame_(options.camera + "_rgb_optical_frame") {}
+  ~BagWriter() { discard(); }
 
   int open() {
-    try {
-      bag_.open(options_.output_path, rosbag::bagmode::Write);
-      if (options_.lz4) bag_.setCompression(rosbag::compression::LZ4);
-    } catch (const std::exception& e) {
-      std::cerr << "dataset_to_bag: " << options_.output_path
-                << ": cannot write the bag: " << e.what() << "\n";
+    const Status target = checkOutputPath(options_.output_path, &target_path_);
+    if (!target) {
+      std::cerr << "dataset_to_bag: " << target.message() << "\n";
       return kExitData;
+    }
+    temp_path_ = target_path_.string() + ".partial-" + std::to_string(::getpid());
+    bag_ = std::make_unique<rosbag::Bag>();
+    try {
+      bag_->open(temp_path_.string(), rosbag::bagmode::Write);
+      if (options_.lz4) bag_->setCompression(rosbag::compression::LZ4);
+    } catch (const std::exception& e) {
+      return fail(temp_path_.string() + ": cannot write the bag: " + e.what());
     }
     return kContinue;
   }
@@ -410,19 +454,26 @@ class BagWriter {
     try {
       writeCamera(frame, depth_mm, K_color, header);
     } catch (const std::exception& e) {
-      return fail(options_.output_path + ": cannot write: " + e.what());
+      return fail(temp_path_.string() + ": cannot write: " + e.what());
     }
     return segmenter_ == nullptr ? kContinue : writeDetections(frame, index, header);
   }
 
+  // Completes the bag and renames it to the target.
   int close() {
     try {
-      bag_.close();
+      bag_->close();
     } catch (const std::exception& e) {
-      std::cerr << "dataset_to_bag: " << options_.output_path << ": cannot close: " << e.what()
-                << "\n";
-      return kExitData;
+      return fail(temp_path_.string() + ": cannot complete the bag: " + e.what());
     }
+    bag_.reset();
+    std::error_code error;
+    fs::rename(temp_path_, target_path_, error);
+    if (error) {
+      return fail("cannot rename " + temp_path_.string() + " to " + target_path_.string() + ": " +
+                  error.message());
+    }
+    temp_path_.clear();
     return kContinue;
   }
 
@@ -441,14 +492,15 @@ class BagWriter {
     transform.transform = transformToMsg(T_W_C);
     tf2_msgs::TFMessage tf;
     tf.transforms.push_back(transform);
-    bag_.write("/tf", header.stamp, tf);
-    bag_.write(options_.pose_topic, header.stamp, pose);
-    bag_.write(ns_ + "/rgb/camera_info", header.stamp, cameraInfoMsg(K_color, header));
-    bag_.write(ns_ + "/depth_registered/camera_info", header.stamp, cameraInfoMsg(K_color, header));
-    bag_.write(ns_ + "/rgb/image_raw", header.stamp, *colorImageToMsg(frame.color_bgr, header));
-    bag_.write(ns_ + "/depth_registered/image_raw", header.stamp,
-               *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
-                    .toImageMsg());
+    bag_->write("/tf", header.stamp, tf);
+    bag_->write(options_.pose_topic, header.stamp, pose);
+    bag_->write(ns_ + "/rgb/camera_info", header.stamp, cameraInfoMsg(K_color, header));
+    bag_->write(ns_ + "/depth_registered/camera_info", header.stamp,
+                cameraInfoMsg(K_color, header));
+    bag_->write(ns_ + "/rgb/image_raw", header.stamp, *colorImageToMsg(frame.color_bgr, header));
+    bag_->write(ns_ + "/depth_registered/image_raw", header.stamp,
+                *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
+                     .toImageMsg());
   }
 
   int writeDetections(const RgbdFrame& frame, int index, const std_msgs::Header& header) {
@@ -465,24 +517,41 @@ class BagWriter {
       }
     }
     try {
-      bag_.write(options_.detections_topic, header.stamp,
-                 detectionsToMsg(detections, frame.color_bgr.size(), header));
+      bag_->write(options_.detections_topic, header.stamp,
+                  detectionsToMsg(detections, frame.color_bgr.size(), header));
     } catch (const std::exception& e) {
-      return fail(options_.output_path + ": cannot write: " + e.what());
+      return fail(temp_path_.string() + ": cannot write: " + e.what());
     }
     return kContinue;
   }
 
   int fail(const std::string& message) {
     if (!options_.quiet) std::cerr << "\n";
-    std::cerr << "dataset_to_bag: " << message << "\n";
-    try {
-      bag_.close();
-    } catch (const std::exception&) {
-    }
-    std::error_code error;
-    fs::remove(options_.output_path, error);  // no half-written bag that looks complete
+    std::cerr << "dataset_to_bag: " << message << " (no bag written to " << options_.output_path
+              << ")\n";
+    discard();
     return kExitData;
+  }
+
+  // Closes and removes the temporary bag, if there is one: no half-written bag is left.
+  void discard() {
+    if (bag_) {
+      try {
+        bag_->close();
+        bag_.reset();
+      } catch (const std::exception&) {
+        // A Bag whose close() threw (a full disk) throws again from its destructor, which would
+        // end the process in std::terminate: it is left unfreed, reachable from here (not a leak
+        // to LeakSanitizer); the process exits right after.
+        [[maybe_unused]] static rosbag::Bag* volatile abandoned = nullptr;  // volatile: kept
+        abandoned = bag_.release();
+      }
+    }
+    if (!temp_path_.empty()) {
+      std::error_code error;
+      fs::remove(temp_path_, error);
+      temp_path_.clear();
+    }
   }
 
   const Options& options_;
@@ -490,7 +559,9 @@ class BagWriter {
   InstanceSegmenter* segmenter_;
   const std::string ns_;
   const std::string optical_frame_;
-  rosbag::Bag bag_;
+  fs::path target_path_;  // --output (through a link: the file it names)
+  fs::path temp_path_;    // the bag being written beside it; empty once renamed or removed
+  std::unique_ptr<rosbag::Bag> bag_;
   double previous_stamp_s_ = -1.0;
 };
 
@@ -528,5 +599,13 @@ int main(int argc, char** argv) {
   mvod::Options options;
   const int parsed = mvod::parseOptions(argc, argv, &options);
   if (parsed >= 0) return parsed;
-  return mvod::convert(options);
+  try {
+    return mvod::convert(options);
+  } catch (const std::exception& e) {
+    // What a phase did not foresee still ends with a message and an exit status, not an abort;
+    // the temporary bag is removed on the way out (BagWriter's destructor).
+    std::cerr << "\ndataset_to_bag: " << e.what() << " (no bag written to " << options.output_path
+              << ")\n";
+    return mvod::kExitData;
+  }
 }

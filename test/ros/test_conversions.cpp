@@ -201,6 +201,54 @@ TEST(RosConversionsTest, CameraInfoAllZeroKIsRejected) {
   EXPECT_EQ(K.height, 480);
 }
 
+// A camera_info no RGB-D camera has is refused before any pixel is copied, the message naming its
+// topic: fx = fy = 30 px on 640x480 (169 degrees across) made one keyframe take 40 s and 6.7 GB.
+TEST(RosConversionsTest, CameraInfoNoRgbdCameraHasIsRejectedNamingTheTopic) {
+  const cv::Size size(640, 480);
+  RgbdMessages msgs;
+  msgs.color = imageMsg(cv::Mat(size, CV_8UC3, cv::Scalar(1, 2, 3)), enc::BGR8, 7.25);
+  msgs.depth = imageMsg(cv::Mat(size, CV_16UC1, cv::Scalar(1500)), enc::TYPE_16UC1, 7.25);
+  msgs.color_info = cameraInfo(525, 525, 319.5, 239.5, size.width, size.height);
+  const RgbdTopics topics;
+  ASSERT_TRUE(checkRgbdMessages(msgs, topics).ok());
+
+  auto expectRefused = [&](const std::vector<std::string>& fragments) {
+    const Status checked = checkRgbdMessages(msgs, topics);
+    ASSERT_FALSE(checked.ok());
+    for (const std::string& fragment : fragments) {
+      EXPECT_TRUE(contains(checked.message(), fragment))
+          << "'" << fragment << "' not in: " << checked.message();
+    }
+    RgbdFrame frame;
+    EXPECT_FALSE(rgbdFrameFromMsgs(msgs, topics, Eigen::Isometry3d::Identity(),
+                                   Eigen::Isometry3d::Identity(), &frame)
+                     .ok());
+  };
+  // Far too wide, too narrow, too wide only up and down.
+  msgs.color_info = cameraInfo(30, 30, 319.5, 239.5, size.width, size.height);
+  expectRefused({"rgb/camera_info", "field of view", "169"});
+  msgs.color_info = cameraInfo(3000, 3000, 319.5, 239.5, size.width, size.height);
+  expectRefused({"rgb/camera_info", "field of view"});
+  msgs.color_info = cameraInfo(525, 10, 319.5, 239.5, size.width, size.height);
+  expectRefused({"rgb/camera_info", "field of view"});
+  // The principal point outside the image.
+  msgs.color_info = cameraInfo(525, 525, 700, 239.5, size.width, size.height);
+  expectRefused({"rgb/camera_info", "principal point"});
+  // A camera_info for another size; one that gives no size has its K checked against the image.
+  msgs.color_info = cameraInfo(262.5, 262.5, 159.5, 119.5, 320, 240);
+  expectRefused({"rgb/camera_info", "320x240", "640x480"});
+  msgs.color_info = cameraInfo(5250, 5250, 319.5, 239.5, 0, 0);
+  expectRefused({"rgb/camera_info", "field of view"});
+
+  // Unregistered depth: its own camera_info is checked against the depth image.
+  msgs.color_info = cameraInfo(525, 525, 319.5, 239.5, size.width, size.height);
+  msgs.depth = imageMsg(cv::Mat(240, 320, CV_16UC1, cv::Scalar(1500)), enc::TYPE_16UC1, 7.25);
+  msgs.depth_info = cameraInfo(262.5, 262.5, 159.5, 119.5, 320, 240);
+  ASSERT_TRUE(checkRgbdMessages(msgs, topics).ok());
+  msgs.depth_info = cameraInfo(15, 15, 159.5, 119.5, 320, 240);
+  expectRefused({"depth/camera_info", "field of view"});
+}
+
 TEST(RosConversionsTest, RgbdFrameRegisteredAndUnregistered) {
   const cv::Size size(8, 6);
   RgbdMessages msgs;

@@ -1,7 +1,8 @@
 // dataset_to_bag end to end, no roscore: the tool runs on 3-frame synthetic folders (7-Scenes
 // layout, registered and two-camera; SceneNN layout) and the bag is read back with rosbag::View:
 // topics, counts, encodings, frames, stamps, poses and pixels against the dataset readers; bad
-// usage exits 2, bad data exits 1 and leaves no bag.
+// usage exits 2, bad data exits 1 and leaves no bag; so do a full disk, a device as the output and
+// stamps past 2^31 s, with a message rather than an abort.
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
@@ -20,6 +21,8 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/datasets/scenenn_dataset.h"
@@ -41,10 +44,12 @@ struct ToolResult {
   std::string stderr_text;
 };
 
-ToolResult runDatasetToBag(const std::string& args, const fs::path& work_dir) {
+// shell_prefix: shell commands run before the tool (limits for it).
+ToolResult runDatasetToBag(const std::string& args, const fs::path& work_dir,
+                           const std::string& shell_prefix = "") {
   const fs::path log = work_dir / "stderr.txt";
-  const std::string command =
-      std::string(MVOD_DATASET_TO_BAG_BIN) + " " + args + " 2> '" + log.string() + "' > /dev/null";
+  const std::string command = shell_prefix + std::string(MVOD_DATASET_TO_BAG_BIN) + " " + args +
+                              " 2> '" + log.string() + "' > /dev/null";
   const int status = std::system(command.c_str());
   ToolResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -431,6 +436,89 @@ TEST_F(DatasetToBagTest, BadUsageAndBadData) {
   // Frames before it still convert.
   EXPECT_EQ(runDatasetToBag(io + " --last 1", dir_).exit_code, 0);
   EXPECT_EQ(readBag(bag_path).color.size(), 2u);
+}
+
+// Files the tool left in `dir` besides the dataset and its own log (a temporary bag).
+std::vector<std::string> leftovers(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name != "data" && name != "stderr.txt") names.push_back(name);
+  }
+  return names;
+}
+
+TEST_F(DatasetToBagTest, RatesAndStampsOutsideWhatRosTimeHoldsAreRefused) {
+  const fs::path data = dir_ / "data";
+  ASSERT_TRUE(scene_->writeSevenScenes(data.string(), "").ok());
+  const fs::path bag_path = dir_ / "out.bag";
+  const std::string io = " --dataset " + data.string() + " --output " + bag_path.string();
+
+  // 1e-300 Hz put frame 1 at 1e300 s: ros::Time threw and the tool aborted.
+  for (const std::string rate : {"1e-300", "0.001", "5000", "inf", "nan"}) {
+    const ToolResult run = runDatasetToBag(io + " --rate-hz " + rate, dir_);
+    EXPECT_EQ(run.exit_code, 2) << rate << ": " << run.stderr_text;
+    EXPECT_NE(run.stderr_text.find("--rate-hz"), std::string::npos) << run.stderr_text;
+  }
+  EXPECT_EQ(runDatasetToBag(io + " --time-offset 1e300", dir_).exit_code, 2);
+  EXPECT_TRUE(leftovers(dir_).empty());
+
+  // An offset that takes frame 1 past 2^31 s: exit 1 naming the frame, nothing left behind.
+  ToolResult run = runDatasetToBag(io + " --time-offset 2147483647.99", dir_);
+  EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("frame-000001"), std::string::npos) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("2^31"), std::string::npos) << run.stderr_text;
+  EXPECT_TRUE(leftovers(dir_).empty());
+
+  // The slowest rate allowed converts: frames 100 s apart.
+  run = runDatasetToBag(io + " --rate-hz 0.01 --quiet", dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  const BagContents bag = readBag(bag_path);
+  ASSERT_EQ(bag.color.size(), 3u);
+  EXPECT_NEAR(bag.color[2].header.stamp.toSec(), 201.0, 1e-6);
+  EXPECT_EQ(leftovers(dir_), std::vector<std::string>{"out.bag"});
+}
+
+TEST_F(DatasetToBagTest, WriteErrorsExitWithAMessageAndLeaveNoBag) {
+  const fs::path data = dir_ / "data";
+  ASSERT_TRUE(scene_->writeSevenScenes(data.string(), "").ok());
+  const fs::path bag_path = dir_ / "out.bag";
+  const std::string io = " --dataset " + data.string() + " --output " + bag_path.string();
+
+  // A full disk: files may not grow past 32 KB (SIGXFSZ ignored, so writes fail with EFBIG).
+  // rosbag's BagIOException went uncaught: the tool aborted.
+  ToolResult run = runDatasetToBag(io, dir_, "trap '' XFSZ; ulimit -f 64; ");
+  EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("cannot"), std::string::npos) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("no bag written"), std::string::npos) << run.stderr_text;
+  EXPECT_TRUE(leftovers(dir_).empty());  // neither out.bag nor the temporary bag
+
+  // A device as the output (a link to /dev/full, so a tool that removed its output on failure
+  // would remove the link, not the device): refused before anything is written.
+  const fs::path device_link = dir_ / "full.bag";
+  fs::create_symlink("/dev/full", device_link);
+  run = runDatasetToBag(" --dataset " + data.string() + " --output " + device_link.string(), dir_);
+  EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("not a regular file"), std::string::npos) << run.stderr_text;
+  EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  EXPECT_TRUE(fs::is_symlink(device_link));
+  fs::remove(device_link);
+
+  // A folder that does not exist, and a folder as the output.
+  run = runDatasetToBag(
+      " --dataset " + data.string() + " --output " + (dir_ / "nowhere" / "out.bag").string(), dir_);
+  EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("does not exist"), std::string::npos) << run.stderr_text;
+  run = runDatasetToBag(" --dataset " + data.string() + " --output " + data.string(), dir_);
+  EXPECT_EQ(run.exit_code, 1) << run.stderr_text;
+  EXPECT_NE(run.stderr_text.find("not a regular file"), std::string::npos) << run.stderr_text;
+  EXPECT_TRUE(leftovers(dir_).empty());
+
+  // A complete bag replaces an old file only once it is complete.
+  std::ofstream(bag_path) << "an old file";
+  ASSERT_EQ(runDatasetToBag(io + " --quiet", dir_).exit_code, 0);
+  EXPECT_EQ(readBag(bag_path).color.size(), 3u);
+  EXPECT_EQ(leftovers(dir_), std::vector<std::string>{"out.bag"});
 }
 
 }  // namespace

@@ -142,6 +142,20 @@ TEST_F(NodeBadInputTest, InvalidCameraInfoIsReported) {
   EXPECT_TRUE(answers(kPoseNode));
 }
 
+// fx = fy = 15 px on 320x240: 169 degrees across, no RGB-D camera's (it made one keyframe take 40 s
+// and 6.7 GB); refused with a report naming the camera_info topic, not mapped.
+TEST_F(NodeBadInputTest, CameraInfoWithAFieldOfViewNoRgbdCameraHasIsReported) {
+  const ros::Time stamp = stampAt(3) + ros::Duration(0.5);
+  FrameMsgs frame = stream_->make(0, stamp);
+  for (const int i : {0, 4}) frame.info.K[i] = 15.0;
+  frame.info.P[0] = frame.info.P[5] = 15.0;
+  const ros::Time since = ros::Time::now();
+  inputs_->publish(frame, true, true, true);
+  EXPECT_TRUE(reported(*pose_node_, {"camera_info", "field of view"}, {}, since));
+  EXPECT_FALSE(pose_node_->hasObjectsAt(stamp));
+  EXPECT_TRUE(answers(kPoseNode));
+}
+
 TEST_F(NodeBadInputTest, FrameWithoutPoseIsReported) {
   const ros::Time stamp = stampAt(4);
   const FrameMsgs frame = stream_->make(0, stamp);

@@ -14,10 +14,12 @@ struct DatasetSource {
   std::string format;  // "7scenes" or "scenenn"
   std::string directory;
   std::vector<int> indices;  // frame numbers, ascending (7-Scenes: 0-based, SceneNN: 1-based)
-  std::function<std::string(int)> frame_name;   // "frame-000010" / "image00011"
-  std::function<Status(int, RgbdFrame*)> load;  // the message names the file
-  std::function<Status(int)> check;             // cheap per-frame checks (no image read)
-  bool has_timestamps = false;                  // SceneNN with timestamp.txt
+  std::function<std::string(int)> frame_name;  // "frame-000010" / "image00011"
+  // The message names the file. The intrinsics are checked against the images as the node checks
+  // camera_info (checkIntrinsicsForImage), the message naming the intrinsics file.
+  std::function<Status(int, RgbdFrame*)> load;
+  std::function<Status(int)> check;  // cheap per-frame checks (no image read)
+  bool has_timestamps = false;       // SceneNN with timestamp.txt
   // World gravity (pointing down) the dataset states: 7-Scenes' gravity-direction.txt, SceneNN's
   // y-up world (0, -1, 0). has_gravity false = unknown (estimate it).
   bool has_gravity = false;

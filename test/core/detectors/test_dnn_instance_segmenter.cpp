@@ -260,6 +260,46 @@ class FastestDetRealTest : public ::testing::Test {
   std::unique_ptr<InstanceSegmenter> segmenter_;
 };
 
+// A label file of another model (3 names, or 81) was accepted at start, then every keyframe
+// failed in decoding: now the load refuses it, naming the file and both counts.
+TEST_F(FastestDetRealTest, LabelFileOfAnotherClassCountIsRefusedAtLoad) {
+  const fs::path dir = fs::temp_directory_path() / ("mvod_labels_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  DnnModelOptions options;
+  options.model_path = (fs::path(models_) / "FastestDet.onnx").string();
+  std::unique_ptr<DnnInstanceSegmenter> segmenter;
+  const fs::path three = dir / "three.names";
+  std::ofstream(three) << "person\nchair\ntable\n";
+  options.labels_path = three.string();
+  Status status =
+      DnnInstanceSegmenter::create(DnnInstanceSegmenter::Model::kFastestDet, options, &segmenter);
+  EXPECT_FALSE(status.ok());
+  EXPECT_FALSE(segmenter);
+  for (const std::string& fragment :
+       {three.string(), std::string("3 names"), std::string("80 classes"), options.model_path}) {
+    EXPECT_NE(status.message().find(fragment), std::string::npos)
+        << "'" << fragment << "' not in: " << status.message();
+  }
+  const fs::path more = dir / "more.names";
+  {
+    std::ofstream out(more);
+    for (const std::string& name : cocoClassNames()) out << name << "\n";
+    out << "unicorn\n";
+  }
+  options.labels_path = more.string();
+  status =
+      DnnInstanceSegmenter::create(DnnInstanceSegmenter::Model::kFastestDet, options, &segmenter);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("81 names"), std::string::npos) << status.message();
+  // The model's own label file loads.
+  options.labels_path = (fs::path(models_) / "coco.names").string();
+  status =
+      DnnInstanceSegmenter::create(DnnInstanceSegmenter::Model::kFastestDet, options, &segmenter);
+  EXPECT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(segmenter->labels().size(), 80u);
+  fs::remove_all(dir);
+}
+
 TEST_F(FastestDetRealTest, FindsThePersonAndTheDog) {
   const std::vector<std::string> names = classesIn("sample_person.jpg");
   EXPECT_TRUE(has(names, "person")) << ::testing::PrintToString(names);

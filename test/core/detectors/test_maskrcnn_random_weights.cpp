@@ -155,6 +155,28 @@ TEST_F(MaskRcnnRandomWeightsTest, SegmenterDetectsAndDecodesMasks) {
   EXPECT_GT(masks_with_pixels, 0);
 }
 
+// The label count is checked against the masks' class count (90) at load, not at every keyframe.
+TEST_F(MaskRcnnRandomWeightsTest, LabelFileOfAnotherClassCountIsRefusedAtLoad) {
+  const fs::path dir = work_dir_ / "three_labels";
+  fs::create_directories(dir);
+  std::error_code error;
+  fs::create_symlink(work_dir_ / kWeights, dir / kWeights, error);
+  fs::create_symlink(fs::path(models_dir_) / kTextGraph, dir / kTextGraph, error);
+  std::ofstream(dir / kLabels) << "person\nbicycle\ncar\n";
+  SegmenterOptions options;
+  options.detector = "maskrcnn";
+  options.model_dir = dir.string();
+  std::unique_ptr<InstanceSegmenter> segmenter;
+  const Status created = createInstanceSegmenter(options, &segmenter);
+  ASSERT_FALSE(created.ok());
+  EXPECT_FALSE(segmenter);
+  for (const std::string& fragment :
+       {(dir / kLabels).string(), std::string("3 names"), std::string("90 classes")}) {
+    EXPECT_NE(created.message().find(fragment), std::string::npos)
+        << "'" << fragment << "' not in: " << created.message();
+  }
+}
+
 TEST_F(MaskRcnnRandomWeightsTest, RawForwardGivesDetectionAndMaskBlobs) {
   const fs::path shared(models_dir_);
   cv::dnn::Net net;

@@ -358,6 +358,57 @@ TEST_F(InputFilesDatasetTest, SceneNNMissingDepthIsAWarningNamingTheFile) {
   EXPECT_FALSE(source.warnings.empty());
 }
 
+// The tools' dataset source checks the intrinsics files against the images, as the node checks
+// camera_info (checkIntrinsicsForImage): the message names the file.
+TEST_F(InputFilesDatasetTest, IntrinsicsNoRgbdCameraHasAreRefusedByTheToolsSource) {
+  writeSevenScenes();
+  const fs::path intrinsics = dir_ / "camera-intrinsics.txt";
+  auto loadStatus = [&] {
+    DatasetSource source;
+    const Status opened = openDatasetSource(dir_.string(), "7scenes", &source);
+    EXPECT_TRUE(opened.ok()) << opened.message();
+    RgbdFrame frame;
+    return opened ? source.load(0, &frame) : opened;
+  };
+  // A 640x480 K (fx 585) on the 8x6 images: 0.8 degrees across.
+  Status status = loadStatus();
+  ASSERT_FALSE(status.ok());
+  expectContains(status.message(), {intrinsics.string(), "field of view", "frame-000000"});
+  writeText("camera-intrinsics.txt", "0.5 0 4\n0 0.5 3\n0 0 1\n");  // 166 degrees across
+  status = loadStatus();
+  ASSERT_FALSE(status.ok());
+  expectContains(status.message(), {intrinsics.string(), "field of view"});
+  writeText("camera-intrinsics.txt", "10 0 40\n0 10 3\n0 0 1\n");
+  status = loadStatus();
+  ASSERT_FALSE(status.ok());
+  expectContains(status.message(), {intrinsics.string(), "principal point"});
+  writeText("camera-intrinsics.txt", "10 0 4\n0 10 3\n0 0 1\n");  // 44 x 33 degrees
+  status = loadStatus();
+  EXPECT_TRUE(status.ok()) << status.message();
+}
+
+TEST_F(InputFilesDatasetTest, SceneNNIntrinsicsOfThirtyPixelsAreRefusedNamingTheFile) {
+  fs::create_directories(dir_ / "image");
+  fs::create_directories(dir_ / "depth");
+  ASSERT_TRUE(cv::imwrite((dir_ / "image" / "image00001.png").string(),
+                          cv::Mat(480, 640, CV_8UC3, cv::Scalar(1, 2, 3))));
+  ASSERT_TRUE(cv::imwrite((dir_ / "depth" / "depth00001.png").string(),
+                          cv::Mat(480, 640, CV_16UC1, cv::Scalar(1200))));
+  writeText("trajectory.log", "0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  // fx = fy = 30 px on 640x480 (169 degrees across) made one keyframe take 40 s and 6.7 GB.
+  writeText("asus.ini", "fx 30\nfy 30\ncx 320\ncy 240\n");
+  DatasetSource source;
+  ASSERT_TRUE(openDatasetSource(dir_.string(), "scenenn", &source).ok());
+  RgbdFrame frame;
+  Status status = source.load(1, &frame);
+  ASSERT_FALSE(status.ok());
+  expectContains(status.message(), {(dir_ / "asus.ini").string(), "field of view", "169"});
+  writeText("asus.ini", "fx 544.47329\nfy 544.47329\ncx 320\ncy 240\n");
+  ASSERT_TRUE(openDatasetSource(dir_.string(), "scenenn", &source).ok());
+  status = source.load(1, &frame);
+  EXPECT_TRUE(status.ok()) << status.message();
+}
+
 TEST_F(InputFilesDatasetTest, HugeGravityIsRefusedNotSilentlyEstimated) {
   writeSevenScenes();
   for (const char* gravity : {"0 0 1e308\n", "1e308 1e308 1e308\n", "0 -9.81e7 0\n"}) {

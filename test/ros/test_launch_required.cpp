@@ -1,0 +1,53 @@
+// object_detection.launch ends when its node exits: a node that cannot start (no model files) must
+// not leave a launch running with no detection. roslaunch runs here with its own master on a port
+// of its own; it must be gone well within kLaunchTimeoutS.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kLaunchTimeoutS = 60;
+
+TEST(LaunchRequiredTest, LaunchEndsWhenTheNodeCannotStart) {
+  if (std::system("command -v roslaunch > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "roslaunch not found";
+  }
+  const fs::path dir =
+      fs::temp_directory_path() / ("mvod_launch_required_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "models");  // empty: FastestDet.onnx is missing
+  const int port = 20000 + ::getpid() % 20000;
+  const fs::path log = dir / "roslaunch.log";
+  const std::string command =
+      "ROS_MASTER_URI=http://localhost:" + std::to_string(port) + " ROS_HOME='" + dir.string() +
+      "' timeout -k 5 " + std::to_string(kLaunchTimeoutS) + " roslaunch -p " +
+      std::to_string(port) + " multiview_object_detection object_detection.launch model_dir:='" +
+      (dir / "models").string() + "' output:=screen > '" + log.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  ASSERT_TRUE(WIFEXITED(status)) << text.str();
+  // timeout exits 124 (137 after -k) when roslaunch was still running.
+  EXPECT_NE(WEXITSTATUS(status), 124) << "roslaunch kept running:\n" << text.str();
+  EXPECT_NE(WEXITSTATUS(status), 137) << "roslaunch kept running:\n" << text.str();
+  EXPECT_NE(text.str().find("FastestDet.onnx"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("REQUIRED process"), std::string::npos) << text.str();
+  fs::remove_all(dir);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
