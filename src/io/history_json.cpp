@@ -82,8 +82,7 @@ json depthToJson(const cv::Mat& depth) {
   return out;
 }
 
-json viewToJson(const RecordedView& view) {
-  const RecordedCut& recorded = *view.cut;
+void encodeCut(const RecordedCut& recorded, EncodingCache::Cut* out) {
   std::vector<float> cut;
   cut.reserve(recorded.cut_W.size() * 3);
   for (const Eigen::Vector3f& p : recorded.cut_W) cut.insert(cut.end(), {p.x(), p.y(), p.z()});
@@ -91,6 +90,34 @@ json viewToJson(const RecordedView& view) {
   normals.reserve(recorded.normals_W.size() * 3);
   for (const Eigen::Vector3f& n : recorded.normals_W) {
     normals.insert(normals.end(), {n.x(), n.y(), n.z()});
+  }
+  out->cut_points = arrayToBase64(cut);
+  out->normals = arrayToBase64(normals);
+  out->outside = arrayToBase64(recorded.outside_keys);
+}
+
+json cachedDepth(const cv::Mat& depth, EncodingCache* cache) {
+  if (cache == nullptr || depth.empty()) return depthToJson(depth);
+  EncodingCache::Depth& entry = cache->depths[depth.data];
+  if (entry.depth.empty()) {
+    entry.depth = depth;
+    entry.encoded = depthToJson(depth);
+  }
+  entry.used = true;
+  return entry.encoded;
+}
+
+json viewToJson(const RecordedView& view, EncodingCache* cache) {
+  const RecordedCut& recorded = *view.cut;
+  EncodingCache::Cut local;
+  EncodingCache::Cut* encoded = &local;
+  if (cache != nullptr) {
+    encoded = &cache->cuts[view.cut.get()];
+    encoded->used = true;
+  }
+  if (!encoded->cut) {
+    encodeCut(recorded, encoded);
+    if (cache != nullptr) encoded->cut = view.cut;
   }
   json rotation = json::array();
   for (int r = 0; r < 3; ++r) {
@@ -106,9 +133,9 @@ json viewToJson(const RecordedView& view) {
               {"rotation", rotation},
               {"yaw", view.yaw_rad},
               {"voxel_size_m", recorded.voxel_size_m},
-              {"cut", arrayToBase64(cut)},
-              {"normals", arrayToBase64(normals)},
-              {"outside", arrayToBase64(recorded.outside_keys)}};
+              {"cut", encoded->cut_points},
+              {"normals", encoded->normals},
+              {"outside", encoded->outside}};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -319,11 +346,22 @@ Status readRecord(const json& value, const std::string& path, KeyframeRecord* re
 
 }  // namespace
 
-json historyToJson(const std::deque<KeyframeRecord>& records) {
+void EncodingCache::dropUnused() {
+  for (auto it = depths.begin(); it != depths.end();) {
+    it = it->second.used ? std::next(it) : depths.erase(it);
+  }
+  for (auto it = cuts.begin(); it != cuts.end();) {
+    it = it->second.used ? std::next(it) : cuts.erase(it);
+  }
+  for (auto& entry : depths) entry.second.used = false;
+  for (auto& entry : cuts) entry.second.used = false;
+}
+
+json historyToJson(const std::deque<KeyframeRecord>& records, EncodingCache* cache) {
   json out = json::array();
   for (const KeyframeRecord& record : records) {
     json views = json::array();
-    for (const RecordedView& view : record.views) views.push_back(viewToJson(view));
+    for (const RecordedView& view : record.views) views.push_back(viewToJson(view, cache));
     json entry{{"keyframe", record.keyframe},
                {"stamp", record.stamp_s},
                {"name", record.name},
@@ -332,11 +370,12 @@ json historyToJson(const std::deque<KeyframeRecord>& records) {
                {"T_C_D", isometryToJson(record.T_C_D)},
                {"K", json::array({record.K_depth.fx, record.K_depth.fy, record.K_depth.cx,
                                   record.K_depth.cy, record.K_depth.width, record.K_depth.height})},
-               {"depth", depthToJson(record.depth)},
+               {"depth", cachedDepth(record.depth, cache)},
                {"views", views}};
     if (record.has_floor) entry["floor_point"] = json_fields::vectorToJson(record.floor_point_D);
     out.push_back(std::move(entry));
   }
+  if (cache != nullptr) cache->dropUnused();
   return out;
 }
 

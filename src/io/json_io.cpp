@@ -335,8 +335,15 @@ std::vector<MapObject> databaseObjects(const ObjectDatabase& database) {
   return objects;
 }
 
+struct MapEncodingCache::Impl {
+  history_json::EncodingCache history;
+};
+MapEncodingCache::MapEncodingCache() : impl(std::make_unique<Impl>()) {}
+MapEncodingCache::~MapEncodingCache() = default;
+
 std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
-                          bool include_clouds, const std::deque<KeyframeRecord>* history) {
+                          bool include_clouds, const std::deque<KeyframeRecord>* history,
+                          MapEncodingCache* cache) {
   json doc;
   doc["frames"] = summary.frames;
   doc["keyframes"] = summary.keyframes;
@@ -435,7 +442,8 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
                    {"with_box", c.with_box},     {"inserted", c.inserted},
                    {"fused", c.fused},           {"before_refinement", c.before_refinement}};
   if (history != nullptr && !history->empty()) {
-    doc["keyframe_history"] = history_json::historyToJson(*history);
+    doc["keyframe_history"] =
+        history_json::historyToJson(*history, cache != nullptr ? &cache->impl->history : nullptr);
   }
   // With clouds the document is large: compact. Without, indented for people to read.
   // Names come from detectors: bytes that are not UTF-8 are replaced rather than failing the save.

@@ -2,6 +2,7 @@
 
 #include <ros/console.h>
 
+#include <algorithm>
 #include <chrono>
 #include <utility>
 
@@ -11,10 +12,10 @@
 namespace mvod {
 
 Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& map,
-                    int frames_received, size_t* bytes) {
+                    int frames_received, size_t* bytes, MapEncodingCache* cache) {
   MapSummary summary = map.summary;
   summary.frames = frames_received;
-  const std::string text = objectsToJson(map.objects, summary, true, &map.history);
+  const std::string text = objectsToJson(map.objects, summary, true, &map.history, cache);
   if (bytes != nullptr) *bytes = text.size();
   return writeFileAtomic(path, text);
 }
@@ -51,26 +52,38 @@ void MapAutosaver::stop() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
-  saveIfChanged();
+  saveIfChanged(true);
 }
 
 void MapAutosaver::loop() {
-  const auto period = std::chrono::duration<double>(period_s_);
+  // At a fixed rate (a save's own time does not push the next one back), so the file is never older
+  // than a period and one save; a save longer than the period is followed at once by the next.
+  const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(period_s_));
+  auto next = std::chrono::steady_clock::now() + period;
+  // A map loaded at start is encoded once now, in the background, so that its first save costs
+  // what the later ones do (only the keyframes recorded since).
+  if (last_saved_ && !last_saved_->history.empty()) {
+    objectsToJson(last_saved_->objects, last_saved_->summary, true, &last_saved_->history,
+                  &encodings_);
+  }
   std::unique_lock<std::mutex> lock(mutex_);
   while (!stop_) {
-    if (cv_.wait_for(lock, period, [this] { return stop_; })) break;
+    if (cv_.wait_until(lock, next, [this] { return stop_; })) break;
+    next = std::max(next + period, std::chrono::steady_clock::now());
     lock.unlock();
-    saveIfChanged();
+    saveIfChanged(false);
     lock.lock();
   }
 }
 
-void MapAutosaver::saveIfChanged() {
+void MapAutosaver::saveIfChanged(bool final) {
   const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
   if (!map || map == last_saved_) return;
   const auto start = std::chrono::steady_clock::now();
   size_t bytes = 0;
-  const Status written = writeMapFile(path_, *map, stats_->get().frames_received, &bytes);
+  const Status written =
+      writeMapFile(path_, *map, stats_->get().frames_received, &bytes, &encodings_);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!written) {
@@ -86,7 +99,14 @@ void MapAutosaver::saveIfChanged() {
     s.autosave_ms = ms;
     s.autosave_bytes = static_cast<double>(bytes);
   });
-  ROS_DEBUG("autosave: %d objects, %zu bytes to %s in %.1f ms", objects, bytes, path_.c_str(), ms);
+  if (final || !saved_once_) {
+    saved_once_ = true;
+    ROS_INFO("autosave%s: %d objects, %zu bytes to %s in %.1f ms",
+             final ? " at shutdown" : " (the first)", objects, bytes, path_.c_str(), ms);
+  } else {
+    ROS_DEBUG("autosave: %d objects, %zu bytes to %s in %.1f ms", objects, bytes, path_.c_str(),
+              ms);
+  }
 }
 
 }  // namespace mvod

@@ -114,7 +114,10 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
                                                         publishers_.get(), &stats_);
   if (config.autosave_period_s > 0.0) {
     std::string autosave_path;
-    const Status resolved = resolveMapPath(config.autosave_path, map_paths, true, &autosave_path);
+    const std::string name = config.autosave_path.empty()
+                                 ? defaultAutosaveName(nh_private_.getNamespace())
+                                 : config.autosave_path;
+    const Status resolved = resolveMapPath(name, map_paths, true, &autosave_path);
     if (!resolved) {
       fail("autosave_path: " + resolved.message() + " (autosave_period_s 0 turns autosave off)");
       return;

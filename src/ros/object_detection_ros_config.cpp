@@ -54,9 +54,6 @@ Status ObjectDetectionRosConfig::isValid() const {
     return Status::Error("autosave_period_s must be 0 (off) or in [1, 86400] s (got " +
                          std::to_string(autosave_period_s) + ")");
   }
-  if (autosave_period_s > 0.0 && autosave_path.empty()) {
-    return Status::Error("autosave_path must not be empty while autosave_period_s > 0");
-  }
   Status status = keyframes.isValid();
   if (!status) return status;
   if (detector != "fastestdet" && detector != "maskrcnn" && detector != "topic") {

@@ -15,6 +15,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
+#include "multiview_object_detection/ros/ros_params.h"
 
 namespace mvod {
 namespace {
@@ -699,6 +700,15 @@ TEST(RosConversionsTest, NodeConfigValidatesChoicesAndDerivesGravity) {
   config.gravity_source = "param";
   config.gravity_down_W = Eigen::Vector3d::Zero();
   EXPECT_FALSE(config.isValid().ok());
+
+  config = ObjectDetectionRosConfig();
+  config.autosave_period_s = 0.5;  // a save every half second is no longer a background task
+  EXPECT_TRUE(contains(config.isValid().message(), "autosave_period_s"));
+  config.autosave_period_s = 0.0;  // off
+  EXPECT_TRUE(config.isValid().ok());
+  EXPECT_EQ(defaultAutosaveName("/robot1/object_detection"),
+            "robot1.object_detection.autosave.json");
+  EXPECT_EQ(defaultAutosaveName("/"), "object_detection.autosave.json");
 
   config = ObjectDetectionRosConfig();
   config.pose_source = "gps";

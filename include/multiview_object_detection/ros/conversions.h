@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/types/common.h"
 #include "multiview_object_detection/pipeline/types/detection.h"
-#include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {

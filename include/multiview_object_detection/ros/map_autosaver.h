@@ -18,9 +18,10 @@
 namespace mvod {
 
 // Writes `map` to `path` as ~save_map does (with clouds and the keyframe history); `bytes` (may be
-// null): the file's size.
+// null): the file's size; `cache` (may be null): encodings reused from the last save of this map.
 Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& map,
-                    int frames_received, size_t* bytes = nullptr);
+                    int frames_received, size_t* bytes = nullptr,
+                    MapEncodingCache* cache = nullptr);
 
 class MapAutosaver {
  public:
@@ -39,13 +40,16 @@ class MapAutosaver {
 
  private:
   void loop();
-  void saveIfChanged();
+  // `final`: the save at stop(), logged at INFO with its size and time.
+  void saveIfChanged(bool final);
 
   const std::string path_;
   const double period_s_;
   const KeyframeWorker* worker_;
   SharedStatistics* stats_;
   std::shared_ptr<const KeyframeWorker::MapSnapshot> last_saved_;  // the saver's thread only
+  MapEncodingCache encodings_;                                     // the saver's thread only
+  bool saved_once_ = false;
   std::mutex mutex_;
   std::condition_variable cv_;
   bool stop_ = false;

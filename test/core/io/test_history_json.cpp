@@ -171,3 +171,32 @@ TEST(HistoryJson, MalformedHistoriesAreRefused) {
 
 }  // namespace
 }  // namespace mvod
+
+namespace mvod {
+namespace {
+
+// The autosave's encoding cache gives the same bytes as a save without it, however the history
+// changed since the last save: keyframes added, dropped, re-posed, their views relabelled.
+TEST(HistoryJson, SavesWithTheEncodingCacheEqualSavesWithout) {
+  std::deque<KeyframeRecord> history = {makeRecord(0, CV_16UC1), makeRecord(1, CV_32FC1)};
+  MapEncodingCache cache;
+  const auto save = [&](MapEncodingCache* with) {
+    return objectsToJson({}, MapSummary(), true, &history, with);
+  };
+  EXPECT_EQ(save(&cache), save(nullptr));
+  history.push_back(makeRecord(2, CV_16UC1));
+  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe added";
+  history.pop_front();
+  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe dropped";
+  history.front().T_W_D.translation().x() += 0.25;
+  if (!history.front().views.empty()) history.front().views.front().object_id += 7;
+  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe corrected, a view relabelled";
+  // A new keyframe whose depth reuses a freed address would be encoded afresh: the cache holds a
+  // reference to every image it has encoded, so a freed address cannot be reused while cached.
+  history.clear();
+  history.push_back(makeRecord(5, CV_16UC1));
+  EXPECT_EQ(save(&cache), save(nullptr)) << "the history replaced";
+}
+
+}  // namespace
+}  // namespace mvod
