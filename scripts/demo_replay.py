@@ -232,6 +232,8 @@ class Demo:
                    'map_directory:=' + os.path.abspath(a.output_dir)]
         if a.rviz_config:
             command.append('rviz_config:=' + a.rviz_config)
+        if a.paper_method:
+            command.append('paper_method:=true')
         if a.model_dir:
             command.append('model_dir:=' + a.model_dir)
         if a.gravity_estimate:
@@ -406,6 +408,7 @@ def main():
     parser.add_argument('--rate', type=float, default=1.0, help='rosbag play rate')
     parser.add_argument('--timeout', type=float, default=600, help='seconds for play + processing')
     parser.add_argument('--no-rviz', action='store_true', help='no rviz, no screenshot')
+    parser.add_argument('--paper-method', action='store_true', help='the node runs the paper\'s method')
     parser.add_argument('--rviz-config', default='')
     parser.add_argument('--rviz-wait', type=float, default=5.0, help='seconds rviz renders before the shot')
     args = parser.parse_args()
