@@ -2,6 +2,7 @@
 #include <ros/ros.h>
 
 #include <csignal>
+#include <cstdlib>
 
 #include "multiview_object_detection/ros/object_detection_ros.h"
 
@@ -13,8 +14,14 @@ int main(int argc, char** argv) {
   // Own SIGINT handling: the final refinement is published while ROS is still up.
   ros::init(argc, argv, "object_detection", ros::init_options::NoSigintHandler);
   // SIGTERM (roslaunch's second try, systemd, docker stop) too: the map is refined and autosaved.
-  std::signal(SIGINT, [](int) { g_sigint = 1; });
-  std::signal(SIGTERM, [](int) { g_sigint = 1; });
+  // A second signal while that runs (a long keyframe still in the worker) ends the process at once;
+  // the last autosave is then the map.
+  const auto on_signal = [](int) {
+    if (g_sigint) std::_Exit(128 + SIGINT);
+    g_sigint = 1;
+  };
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
   ros::NodeHandle nh;
   ros::NodeHandle nh_private("~");
   mvod::ObjectDetectionRos node(nh, nh_private);
