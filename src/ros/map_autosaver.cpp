@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <utility>
+#include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/ros/throttled_log.h"
@@ -18,6 +20,18 @@ Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& 
   const std::string text = objectsToJson(map.objects, summary, true, &map.history, cache);
   if (bytes != nullptr) *bytes = text.size();
   return writeFileAtomic(path, text);
+}
+
+Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects) {
+  std::string text;
+  std::vector<MapObject> loaded;
+  MapSummary summary;
+  std::deque<KeyframeRecord> history;
+  Status status = readFile(path, &text);
+  if (status) status = objectsFromJson(text, &loaded, &summary, &history);
+  if (status) status = worker->replaceMap(loaded, summary, std::move(history));
+  if (status && objects != nullptr) *objects = loaded.size();
+  return status;
 }
 
 MapAutosaver::MapAutosaver(std::string path, double period_s, const KeyframeWorker* worker,

@@ -164,15 +164,10 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
              path.c_str());
     return;
   }
-  std::string text;
-  std::vector<MapObject> objects;
-  MapSummary summary;
-  std::deque<KeyframeRecord> history;
-  status = readFile(path, &text);
-  if (status) status = objectsFromJson(text, &objects, &summary, &history);
-  if (status) status = worker_->replaceMap(objects, summary, std::move(history));
+  size_t objects = 0;
+  status = loadMapFile(path, worker_.get(), &objects);
   if (status) {
-    ROS_INFO("load_map_on_start: resumed %zu objects from %s", objects.size(), path.c_str());
+    ROS_INFO("load_map_on_start: resumed %zu objects from %s", objects, path.c_str());
     publishers_->publishMap(worker_->objects(), ros::Time::now());
     return;
   }

@@ -79,15 +79,10 @@ bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Reque
 
 bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Request& request,
                                       multiview_object_detection::MapFile::Response& response) {
-  std::string text;
-  std::vector<MapObject> loaded;
-  MapSummary summary;
-  std::deque<KeyframeRecord> history;
   std::string path;
+  size_t loaded = 0;
   Status status = resolveMapPath(request.path, map_paths_, false, &path);
-  if (status) status = readFile(path, &text);
-  if (status) status = objectsFromJson(text, &loaded, &summary, &history);
-  if (status) status = worker_->replaceMap(loaded, summary, std::move(history));
+  if (status) status = loadMapFile(path, worker_, &loaded);
   if (!status) {
     response.success = false;
     response.message = "load_map refused '" + request.path + "': " + status.message() +
@@ -97,7 +92,7 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
     return true;
   }
   response.success = true;
-  response.message = "loaded " + std::to_string(loaded.size()) + " objects from " + path;
+  response.message = "loaded " + std::to_string(loaded) + " objects from " + path;
   ROS_INFO("%s", response.message.c_str());
   publishers_->publishMap(worker_->objects(), ros::Time::now());
   return true;

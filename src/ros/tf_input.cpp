@@ -33,17 +33,11 @@ void TfInput::callback(const ros::MessageEvent<const tf2_msgs::TFMessage>& event
   const std::string topic = is_static ? "/tf_static" : "/tf";
   const std::string authority = event.getPublisherName();
   const tf2_msgs::TFMessage& msg = *event.getConstMessage();
-  const ros::Time now = ros::Time::now();
   for (const geometry_msgs::TransformStamped& transform : msg.transforms) {
     const std::string what = "transform '" + transform.header.frame_id + "' <- '" +
                              transform.child_frame_id + "' on " + topic + " from " + authority;
     // A static transform's stamp is not used for look-ups, but tf2 still does arithmetic on it.
-    const Status stamp = checkInputStamp(transform.header.stamp, now, what);
-    if (!stamp) {
-      errorThrottled("input refused: " + stamp.message());
-      stats_->update([](ObjectDetectionStatistics& s) { ++s.stamps_refused; });
-      continue;
-    }
+    if (!acceptInputStamp(transform.header.stamp, what, stats_)) continue;
     runGuarded(what, stats_, [&] { buffer_->setTransform(transform, authority, is_static); });
   }
 }

@@ -29,6 +29,9 @@ constexpr double kMaxStampAheadOfClockS = 3600.0;
 // the node's clock; zero (sim time before the first /clock) skips the clock check.
 Status checkInputStamp(const ros::Time& stamp, const ros::Time& now, const std::string& what);
 
+// True if `stamp` may go on; else the refusal is logged (throttled) and counted ("stamps refused").
+bool acceptInputStamp(const ros::Time& stamp, const std::string& what, SharedStatistics* stats);
+
 // Runs `body`, a callback's work. An exception it throws is logged (throttled, naming `what`),
 // counted on /diagnostics ("callback exceptions"), and the node goes on.
 template <typename Body>
@@ -56,14 +59,7 @@ boost::function<void(const boost::shared_ptr<const Msg>&)> guardedCallback(const
                                                                            Handler handler) {
   return [topic, stats, handler](const boost::shared_ptr<const Msg>& msg) {
     runGuarded("input '" + topic + "'", stats, [&] {
-      const Status stamp =
-          checkInputStamp(msg->header.stamp, ros::Time::now(), "message on '" + topic + "'");
-      if (!stamp) {
-        errorThrottled("input refused: " + stamp.message());
-        if (stats != nullptr)
-          stats->update([](ObjectDetectionStatistics& s) { ++s.stamps_refused; });
-        return;
-      }
+      if (!acceptInputStamp(msg->header.stamp, "message on '" + topic + "'", stats)) return;
       handler(msg);
     });
   };

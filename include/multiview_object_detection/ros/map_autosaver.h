@@ -23,6 +23,10 @@ Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& 
                     int frames_received, size_t* bytes = nullptr,
                     MapEncodingCache* cache = nullptr);
 
+// Reads the map file at `path` (resolved) into the worker, replacing its map (~load_map,
+// load_map_on_start); on any error the worker's map is kept. `objects` (may be null): how many.
+Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects = nullptr);
+
 class MapAutosaver {
  public:
   // `path`: resolved, absolute; `period_s` > 0.

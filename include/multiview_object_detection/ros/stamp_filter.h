@@ -33,11 +33,8 @@ class StampFilter : public message_filters::SimpleFilter<M> {
  private:
   void add(const EventType& event) {
     runGuarded("input '" + topic_ + "'", stats_, [&] {
-      const Status stamp = checkInputStamp(event.getMessage()->header.stamp, ros::Time::now(),
-                                           "message on '" + topic_ + "'");
-      if (!stamp) {
-        errorThrottled("input refused: " + stamp.message());
-        stats_->update([](ObjectDetectionStatistics& s) { ++s.stamps_refused; });
+      if (!acceptInputStamp(event.getMessage()->header.stamp, "message on '" + topic_ + "'",
+                            stats_)) {
         return;
       }
       this->signalMessage(event);

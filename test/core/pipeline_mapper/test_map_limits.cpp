@@ -41,15 +41,6 @@ std::unique_ptr<ObjectMapper> limitMapper() {
   return std::make_unique<ObjectMapper>(config, priors);
 }
 
-TEST(MapLimitsTest, TheLimitsFitTogether) {
-  // The camera's reach plus the sensor's range (twice: points, then boxes grown from them) stays
-  // within what a map file may hold.
-  EXPECT_LE(kCameraCoordinateLimitM + 2.0 * kMaxSensorRangeM, kMapCoordinateLimitM);
-  // Voxel keys of the smallest voxel hold the whole map, both signs.
-  EXPECT_LT(kMapCoordinateLimitM / kMinMapVoxelSizeM + 1.0,
-            static_cast<double>(kVoxelKeyCellsPerSide));
-}
-
 TEST(MapLimitsTest, CameraAtTheLimitIsAcceptedAndJustBeyondIsRefused) {
   const Eigen::Isometry3d at(Eigen::Translation3d(kCameraCoordinateLimitM, -kCameraCoordinateLimitM,
                                                   kCameraCoordinateLimitM));

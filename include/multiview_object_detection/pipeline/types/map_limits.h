@@ -28,6 +28,8 @@ constexpr std::int64_t kVoxelKeyCellsPerSide = std::int64_t{1} << 20;
 static_assert(kMapCoordinateLimitM / kMinMapVoxelSizeM + 1.0 < kVoxelKeyCellsPerSide,
               "voxel keys of the smallest voxel must cover the map");
 static_assert(kCameraCoordinateLimitM > 0.0, "the camera range must be positive");
+static_assert(kCameraCoordinateLimitM + 2.0 * kMaxSensorRangeM <= kMapCoordinateLimitM,
+              "what a camera sees, and boxes grown from it, must fit in the map");
 
 // Ok, or why the camera at T_W_C cannot be mapped (`what` names the pose): its translation is
 // beyond kCameraCoordinateLimitM.
