@@ -298,6 +298,10 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   const KeyframeClouds clouds = prepareKeyframe(frame, kept, label, &out.warnings);
   out.times.extraction_ms = msSince(t);
   std::vector<SingleView> views = runSingleViews(frame, kept, clouds);
+  if (cancelled()) {
+    --keyframes_;  // nothing of it is in the map
+    return Status::Error(label + ": cancelled");
+  }
   fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
   recordKeyframe(frame, keyframe, clouds.floor_layer_m, &views);
   out.times.total_ms = msSince(start);
@@ -448,6 +452,10 @@ std::vector<ObjectMapper::SingleView> ObjectMapper::runSingleViews(
   const std::vector<PointCloud>& clouds_D = clouds.clouds_D;
   std::vector<SingleView> views(kept.detections.size());
   const auto run_one = [&](size_t k) {
+    if (cancelled()) {
+      views[k].status = Status::Error("cancelled");
+      return;
+    }
     if (clouds_D[k].empty()) {
       views[k].status = Status::Error("no valid depth inside the mask");
       return;
@@ -646,11 +654,13 @@ Status ObjectMapper::runSingleView(const PointCloud& points_D, const Eigen::Isom
     filter_and_segment();
   }
   if (!segmented) return segmented;
+  if (cancelled()) return Status::Error("cancelled");
 
   PointCloud cut_D;
   const Status selected = selectCut(filtered_D, segmentation, context, gravity_frame,
                                     masks_beside ? &masks : nullptr, &cut_D, &stage);
   if (!selected) return selected;
+  if (cancelled()) return Status::Error("cancelled");
 
   // Eq. 1: into the world frame, then Eq. 3/4 on the segment.
   PointCloud points_W = transformCloud(filtered_D, T_W_D);

@@ -43,6 +43,7 @@ KeyframeWorker::KeyframeWorker(const ClassPriors& priors,
       mapper_(std::make_unique<ObjectMapper>(config->get().mapperConfig(), priors)),
       segmenter_(std::move(segmenter)),
       segmenter_injected_(segmenter_injected) {
+  mapper_->setCancelFlag(&cancel_);
   updateSnapshotLocked();  // no other thread yet
 }
 
@@ -98,6 +99,24 @@ void KeyframeWorker::clearQueue() {
   pending_corrections_.clear();
 }
 
+void KeyframeWorker::cancelCurrent() { cancel_ = true; }
+
+void KeyframeWorker::stopNow() {
+  shut_down_requested_ = true;
+  size_t dropped = 0;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    dropped = queue_.size();
+    queue_.clear();
+  }
+  if (dropped > 0) {
+    ROS_INFO("shutdown: %zu queued keyframe(s) dropped; the map is the last processed keyframe's",
+             dropped);
+  }
+  cancelCurrent();
+  stop();
+}
+
 void KeyframeWorker::enqueueCorrections(std::vector<PoseCorrection> corrections) {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -143,6 +162,8 @@ void KeyframeWorker::workerLoop() {
       }
     }
     if (!have_job) continue;
+    // A cancel meant for the keyframe before (a ~reset after it ended) is not this one's.
+    if (!shut_down_requested_) cancel_ = false;
     try {
       processKeyframe(job);
     } catch (const std::exception& e) {
@@ -357,6 +378,12 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     if (processed) updateSnapshotLocked();
   }
   if (!processed) {
+    if (cancel_.load()) {
+      ROS_INFO("%s: cancelled (%s); nothing of it is in the map", what.c_str(),
+               shut_down_requested_.load() ? "shutdown" : "~reset");
+      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.keyframes_cancelled; });
+      return;
+    }
     failed(what + " skipped: " + processed.message());
     return;
   }

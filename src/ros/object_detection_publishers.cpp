@@ -131,6 +131,7 @@ void ObjectDetectionPublishers::publishDiagnostics(const ros::WallTimerEvent& /*
       keyValue("detections capped", stats.detections_capped),
       keyValue("keyframes selected", stats.keyframes_selected),
       keyValue("keyframes dropped", stats.keyframes_dropped),
+      keyValue("keyframes cancelled", stats.keyframes_cancelled),
       keyValue("keyframes processed", stats.keyframes_processed),
       keyValue("keyframes failed", stats.keyframes_failed),
       keyValue("queue length", stats.queue_length),

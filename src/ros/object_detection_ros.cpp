@@ -189,12 +189,14 @@ void ObjectDetectionRos::reconfigureCallback(multiview_object_detection::ObjectD
 
 void ObjectDetectionRos::shutdown() {
   if (!ok_ || shut_down_.exchange(true)) return;
-  // No new input; the queued keyframes are still processed.
+  // No new input.
   buffer_->stop();
   publishers_->stopDiagnostics();
   input_->unsubscribe();
   keyframe_poses_->unsubscribe();
-  worker_->stop();
+  // Within a stage's time: the keyframe in progress is cancelled and the queue dropped (the map is
+  // that of the last finished keyframe, and the autosave's).
+  worker_->stopNow();
   if (detections_) detections_->unsubscribe();
 
   // Sec. 3.5 on the final map.

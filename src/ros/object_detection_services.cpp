@@ -101,6 +101,7 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
 bool ObjectDetectionServices::reset(std_srvs::Trigger::Request& /*request*/,
                                     std_srvs::Trigger::Response& response) {
   worker_->clearQueue();
+  worker_->cancelCurrent();  // resetMap() then waits a stage at most, not a whole keyframe
   const size_t removed = worker_->resetMap();
   buffer_->reset();
   publishers_->publishMap(worker_->objects(), ros::Time::now());

@@ -4,6 +4,7 @@
 // temporaries after the restart), starts the node again with load_map_on_start and checks that it
 // resumed that map; at the end SIGINT, and the final save holds the whole map.
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -33,18 +34,28 @@ std::string nodeBinary() {
 }
 
 // The node process, started with the inputs remapped to the test's topics.
-pid_t startNode(const std::string& map_directory) {
-  const std::vector<std::string> args = {nodeBinary(),
-                                         std::string("__name:=") + (kNode + 1),
-                                         std::string("rgb/image_raw:=") + kRgbTopic,
-                                         std::string("depth_registered/image_raw:=") + kDepthTopic,
-                                         std::string("rgb/camera_info:=") + kInfoTopic,
-                                         std::string("pose:=") + kPoseTopic,
-                                         std::string("detections:=") + kDetectionsTopic,
-                                         "_map_directory:=" + map_directory,
-                                         "__log:=" + map_directory + "/../node.log"};
+// `output` (optional): the file the node's stdout and stderr go to.
+pid_t startNode(const std::string& map_directory, const std::string& node = kNode,
+                const std::vector<std::string>& extra = {}, const std::string& output = "") {
+  std::vector<std::string> args = {nodeBinary(),
+                                   "__name:=" + node.substr(1),
+                                   std::string("rgb/image_raw:=") + kRgbTopic,
+                                   std::string("depth_registered/image_raw:=") + kDepthTopic,
+                                   std::string("rgb/camera_info:=") + kInfoTopic,
+                                   std::string("pose:=") + kPoseTopic,
+                                   std::string("detections:=") + kDetectionsTopic,
+                                   "_map_directory:=" + map_directory,
+                                   "__log:=" + map_directory + "/../node.log"};
+  args.insert(args.end(), extra.begin(), extra.end());
   const pid_t pid = ::fork();
   if (pid == 0) {
+    if (!output.empty()) {
+      const int fd = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (fd >= 0) {
+        ::dup2(fd, 1);
+        ::dup2(fd, 2);
+      }
+    }
     std::vector<char*> argv;
     for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
     argv.push_back(nullptr);
@@ -216,6 +227,48 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
         "longest save so far %.2f s\n",
         cycle, run_s, saved.size(), age_s, save_s);
   }
+  fs::remove_all(root);
+}
+
+TEST(NodeShutdownTest, SigintDoesNotWaitForTheQueuedKeyframes) {
+  // The paper's method (slow) with a long queue: SIGINT cancels the keyframe in progress and drops
+  // the queue instead of working it off first.
+  ros::NodeHandle nh;
+  const std::string node = "/sigint_node";
+  const fs::path root = fs::temp_directory_path() / ("mvod_sigint_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, node, true);
+  const pid_t pid =
+      startNode((root / "maps").string(), node,
+                {"_detector:=topic", "_pose_source:=topic", "_keyframe_mode:=every_n",
+                 "_keyframe_every_n:=1", "_paper_method:=true", "_processing_queue_size:=30",
+                 "_refine_every_n_keyframes:=0", "_autosave_period_s:=0"},
+                (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
+  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
+  for (int i = 0; i < 16; ++i) {
+    inputs.publish(stream.make(i % stream.options().num_frames, ros::Time(++second)), true, true);
+  }
+  EXPECT_TRUE(outputs.waitForObjectsCount(1, 60.0)) << "no keyframe processed\n"
+                                                    << outputs.allLogs();
+  const ros::WallTime signalled = ros::WallTime::now();
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const double exit_s = (ros::WallTime::now() - signalled).toSec();
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+  std::printf("[ INFO     ] SIGINT to exit: %.2f s\n", exit_s);
+  // The queue was dropped (or the keyframe in progress cancelled), not worked off.
+  std::string logs;
+  mvod::readFile((root / "node.out").string(), &logs);
+  EXPECT_TRUE(logs.find("dropped") != std::string::npos ||
+              logs.find("cancelled") != std::string::npos)
+      << logs;
   fs::remove_all(root);
 }
 

@@ -2,6 +2,7 @@
 // and the tests all drive it.
 #pragma once
 
+#include <atomic>
 #include <deque>
 #include <functional>
 #include <limits>
@@ -154,6 +155,12 @@ class ObjectMapper {
   GravityFrame gravity() const;
   bool hasGravity() const;
   int keyframesProcessed() const { return keyframes_; }
+
+  // A flag another thread may set to cancel the keyframe in progress (null: none). It is checked
+  // between detections and between the stages of each (a stage itself, e.g. LCCP, runs to its
+  // end); a cancelled processKeyframe() returns an error containing "cancelled" and leaves the map
+  // as it was. The caller clears the flag; it must outlive the mapper or be reset to null.
+  void setCancelFlag(const std::atomic<bool>* cancel) { cancel_ = cancel; }
   // Empties the database and the history and forgets the gravity estimate; ids keep counting
   // (never reused).
   void reset();
@@ -308,6 +315,8 @@ class ObjectMapper {
   KeyframeHistory history_;
   bool refined_ = false;  // refine() ran: a rebuilt map is refined again
   int keyframes_ = 0;
+  const std::atomic<bool>* cancel_ = nullptr;
+  bool cancelled() const { return cancel_ != nullptr && cancel_->load(std::memory_order_relaxed); }
 };
 
 }  // namespace mvod

@@ -6,6 +6,7 @@
 
 #include <tf2_ros/buffer.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <map>
@@ -60,6 +61,12 @@ class KeyframeWorker {
   // long path published often costs one map rebuild per keyframe at most.
   void enqueueCorrections(std::vector<PoseCorrection> corrections);
   void clearQueue();
+  // Cancels the keyframe in progress (~reset): it stops between its detections' stages, within
+  // about one stage's time, and nothing of it reaches the map.
+  void cancelCurrent();
+  // Shutdown without waiting for the work in hand: drops the queue, cancels the keyframe in
+  // progress, joins the thread.
+  void stopNow();
 
   // The map as of the last finished keyframe or map change: reading it never waits for a keyframe
   // being processed (~get_objects and ~save_map answer at once).
@@ -112,6 +119,9 @@ class KeyframeWorker {
   std::deque<KeyframeJob> queue_;
   std::map<double, PoseCorrection> pending_corrections_;  // by stamp, the latest pose
   bool stop_ = false;
+  // Set by cancelCurrent(): the keyframe in progress stops between its stages (ObjectMapper).
+  std::atomic<bool> cancel_{false};
+  std::atomic<bool> shut_down_requested_{false};
   std::thread thread_;
 
   // The map (mapper_mutex_): the worker and the services.

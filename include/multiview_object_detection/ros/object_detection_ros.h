@@ -62,8 +62,9 @@ class ObjectDetectionRos {
   // Why the node did not start (empty when ok()).
   const std::string& startupError() const { return startup_error_; }
 
-  // Finishes the queued keyframes, refines the map (Sec. 3.5), publishes it once more while ROS is
-  // up, and stops the worker. Idempotent; the destructor calls it.
+  // Stops the worker without waiting for the work in hand (the keyframe in progress is cancelled
+  // between its stages, the queue dropped), refines the map (Sec. 3.5), publishes it once more
+  // while ROS is up, and autosaves it. Idempotent; the destructor calls it.
   void shutdown();
 
   std::vector<MapObject> objects() const;

@@ -18,6 +18,7 @@ struct ObjectDetectionStatistics {
   int callback_exceptions = 0;  // exceptions caught in callbacks and the worker (inputs dropped)
   int keyframes_selected = 0;
   int keyframes_dropped = 0;    // the processing queue was full
+  int keyframes_cancelled = 0;  // by ~reset or shutdown while in progress
   int keyframes_processed = 0;  // went through ObjectMapper::processKeyframe
   int keyframes_failed = 0;     // conversion, detector or mapper error; no detections in time
   int queue_length = 0;

@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "box_scene.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
@@ -412,6 +415,48 @@ TEST_F(ObjectMapperTest, ConfigValidationNamesTheSection) {
   const std::string printed = ObjectMapper::Config().print();
   EXPECT_NE(printed.find("min_probability: 0.5"), std::string::npos);
   EXPECT_NE(printed.find("database.fusion_voxel_size_m: 0.01"), std::string::npos);
+}
+
+TEST_F(ObjectMapperTest, ACancelledKeyframeLeavesTheMapAsItWas) {
+  ObjectMapper mapper(config_, priors_);
+  std::atomic<bool> cancel{true};
+  mapper.setCancelFlag(&cancel);
+  KeyframeReport report;
+  Status status =
+      mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("cancelled"), std::string::npos) << status.message();
+  EXPECT_EQ(mapper.database().size(), 0u);
+  EXPECT_EQ(mapper.keyframesProcessed(), 0);
+  EXPECT_TRUE(mapper.history().empty());
+  // Cleared, the same keyframe maps as ever.
+  cancel = false;
+  status = mapper.processKeyframe(frame_, {detectionFromMask(mask_, "chair", 0.9f)}, &report);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(mapper.database().size(), 1u);
+  expectNearTruth(mapper.database().objects().begin()->second.box);
+  EXPECT_EQ(mapper.keyframesProcessed(), 1);
+}
+
+TEST_F(ObjectMapperTest, ACancelFromAnotherThreadStopsAKeyframeBetweenItsStages) {
+  // Many detections of the same chair on one thread: the cancel arrives while they run, and the
+  // keyframe ends at the next check with nothing mapped.
+  ObjectMapper::Config config = config_;
+  config.num_threads = 1;
+  ObjectMapper mapper(config, priors_);
+  std::atomic<bool> cancel{false};
+  mapper.setCancelFlag(&cancel);
+  std::vector<Detection2D> detections(40, detectionFromMask(mask_, "chair", 0.9f));
+  std::thread canceller([&cancel] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    cancel = true;
+  });
+  KeyframeReport report;
+  const Status status = mapper.processKeyframe(frame_, detections, &report);
+  canceller.join();
+  ASSERT_FALSE(status.ok()) << "40 detections took less than 30 ms: the cancel came too late";
+  EXPECT_NE(status.message().find("cancelled"), std::string::npos) << status.message();
+  EXPECT_EQ(mapper.database().size(), 0u);
 }
 
 }  // namespace
