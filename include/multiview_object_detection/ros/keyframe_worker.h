@@ -50,7 +50,7 @@ class KeyframeWorker {
   KeyframeWorker& operator=(const KeyframeWorker&) = delete;
 
   void start();
-  // Finishes the queued keyframes and joins the thread. Idempotent.
+  // Finishes the queued keyframes and joins the thread (stopNow() drops them). Idempotent.
   void stop();
 
   // Queues a keyframe (any thread, never blocks); the oldest is dropped when the queue is full.
