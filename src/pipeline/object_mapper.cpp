@@ -33,6 +33,8 @@ void appendSection(const std::string& section, const std::string& lines, std::os
 
 Status checkSection(const std::string& section, const Status& status) {
   if (status.ok()) return status;
+  // checkParameterRange's messages name the parameter as the YAML file does already.
+  if (status.message().rfind(section + "/", 0) == 0) return status;
   return Status::Error(section + "." + status.message());
 }
 

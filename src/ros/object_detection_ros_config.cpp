@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
+
 namespace mvod {
 
 ObjectMapper::Config ObjectDetectionRosConfig::mapperConfig() const {
@@ -25,35 +27,25 @@ SegmenterOptions ObjectDetectionRosConfig::segmenterOptions() const {
 
 Status ObjectDetectionRosConfig::isValid() const {
   if (world_frame.empty()) return Status::Error("world_frame must not be empty");
-  if (queue_size < 1) {
-    return Status::Error("queue_size must be >= 1 (got " + std::to_string(queue_size) + ")");
-  }
+  if (Status s = checkParameterRange("queue_size", queue_size); !s) return s;
   if (pose_source != "tf" && pose_source != "topic") {
     return Status::Error("pose_source '" + pose_source + "' is unknown (use tf or topic)");
   }
-  if (!(std::isfinite(tf_timeout_s) && tf_timeout_s >= 0.0 && tf_timeout_s <= 60.0)) {
-    return Status::Error("tf_timeout_s must be in [0, 60] (got " + std::to_string(tf_timeout_s) +
-                         ")");
-  }
-  if (!(std::isfinite(pose_max_time_diff_s) && pose_max_time_diff_s >= 0.0)) {
-    return Status::Error("pose_max_time_diff_s must be >= 0 (got " +
-                         std::to_string(pose_max_time_diff_s) + ")");
-  }
+  if (Status s = checkParameterRange("tf_timeout_s", tf_timeout_s); !s) return s;
+  if (Status s = checkParameterRange("pose_max_time_diff_s", pose_max_time_diff_s); !s) return s;
   if (gravity_source != "param" && gravity_source != "tf" && gravity_source != "estimate") {
     return Status::Error("gravity_source '" + gravity_source +
                          "' is unknown (use param, tf or estimate)");
   }
-  if (gravity_source == "param" && !(gravity_down_W.allFinite() && gravity_down_W.norm() > 1e-9)) {
+  if (gravity_source == "param" &&
+      !(gravity_down_W.allFinite() && std::isfinite(gravity_down_W.norm()) &&
+        gravity_down_W.norm() > 1e-9)) {
     return Status::Error("gravity_down must be a finite non-zero vector with gravity_source param");
   }
   if (gravity_source == "tf" && gravity_frame.empty()) {
     return Status::Error("gravity_frame must not be empty with gravity_source tf");
   }
-  if (!(std::isfinite(autosave_period_s) &&
-        (autosave_period_s == 0.0 || (autosave_period_s >= 1.0 && autosave_period_s <= 86400.0)))) {
-    return Status::Error("autosave_period_s must be 0 (off) or in [1, 86400] s (got " +
-                         std::to_string(autosave_period_s) + ")");
-  }
+  if (Status s = checkParameterRange("autosave_period_s", autosave_period_s); !s) return s;
   Status status = keyframes.isValid();
   if (!status) return status;
   if (detector != "fastestdet" && detector != "maskrcnn" && detector != "topic") {
@@ -65,22 +57,12 @@ Status ObjectDetectionRosConfig::isValid() const {
   } else if (!(segmenter.score_threshold >= 0.f && segmenter.score_threshold <= 1.f)) {
     return Status::Error("score_threshold must be in [0, 1]");
   }
-  if (!(std::isfinite(detections_max_age_s) && detections_max_age_s >= 0.0)) {
-    return Status::Error("detections_max_age_s must be >= 0 (got " +
-                         std::to_string(detections_max_age_s) + ")");
-  }
-  if (max_detections_per_frame < 1 || max_detections_per_frame > 10000) {
-    return Status::Error("max_detections_per_frame must be in [1, 10000] (got " +
-                         std::to_string(max_detections_per_frame) + ")");
-  }
-  if (processing_queue_size < 1) {
-    return Status::Error("processing_queue_size must be >= 1 (got " +
-                         std::to_string(processing_queue_size) + ")");
-  }
-  if (refine_every_n_keyframes < 0) {
-    return Status::Error("refine_every_n_keyframes must be >= 0 (got " +
-                         std::to_string(refine_every_n_keyframes) + ")");
-  }
+  if (Status s = checkParameterRange("detections_max_age_s", detections_max_age_s); !s) return s;
+  if (Status s = checkParameterRange("max_detections_per_frame", max_detections_per_frame); !s)
+    return s;
+  if (Status s = checkParameterRange("processing_queue_size", processing_queue_size); !s) return s;
+  if (Status s = checkParameterRange("refine_every_n_keyframes", refine_every_n_keyframes); !s)
+    return s;
   return mapperConfig().isValid();
 }
 

@@ -5,14 +5,18 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <set>
 
+#include "multiview_object_detection/ObjectDetectionConfig.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/ros_params.h"
@@ -728,6 +732,68 @@ TEST(RosConversionsTest, NodeConfigValidatesChoicesAndDerivesGravity) {
   config.keyframes.every_n = 0;
   EXPECT_FALSE(config.isValid().ok());
   EXPECT_TRUE(contains(config.print(), "keyframe_every_n: 0"));
+}
+
+// Issue 34's values, typed as a user might: each is refused naming the parameter (they were
+// accepted, or hung the worker).
+TEST(RosConversionsTest, ValuesThatWouldStallTheWorkerAreRefusedNamingTheParameter) {
+  const auto refused = [](const std::function<void(ObjectDetectionRosConfig*)>& set,
+                          const std::string& name) {
+    ObjectDetectionRosConfig config;
+    set(&config);
+    const Status status = config.isValid();
+    EXPECT_FALSE(status.ok()) << name;
+    EXPECT_TRUE(contains(status.message(), name)) << status.message();
+  };
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.gravity.ransac_iterations = 2000000000; },
+          "gravity/ransac_iterations");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.lccp.voxel_resolution_m = 1e-5; },
+          "lccp/voxel_resolution_m");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.lccp.seed_resolution_m = 1e-5; },
+          "lccp/seed_resolution_m");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.filter.voxel_leaf_size_m = 1e-9; },
+          "filter/voxel_leaf_size_m");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.database.fusion_voxel_size_m = 1e-6; },
+          "database/fusion_voxel_size_m");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.box.outline_cell_m = 1e-7; },
+          "box/outline_cell_m");
+  refused([](ObjectDetectionRosConfig* c) { c->mapper.filter.sor_mean_k = 100000000; },
+          "filter/sor_mean_k");
+  refused([](ObjectDetectionRosConfig* c) { c->gravity_down_W = Eigen::Vector3d(1e308, 1e308, 0); },
+          "gravity_down");
+  refused([](ObjectDetectionRosConfig* c) { c->detections_max_age_s = 1e300; },
+          "detections_max_age_s");
+  refused([](ObjectDetectionRosConfig* c) { c->queue_size = 2147483647; }, "queue_size");
+  refused([](ObjectDetectionRosConfig* c) { c->processing_queue_size = 2147483647; },
+          "processing_queue_size");
+  ObjectDetectionRosConfig off;
+  off.mapper.box.outline_cell_m = 0.0;  // 0 switches the outline normals off
+  EXPECT_TRUE(off.isValid().ok()) << off.isValid().message();
+}
+
+// dynamic_reconfigure's limits (cfg/ObjectDetection.cfg; names with '/' as '_') are the table's.
+TEST(RosConversionsTest, DynamicReconfigureLimitsAreTheTablesRanges) {
+  using multiview_object_detection::ObjectDetectionConfig;
+  const auto number = [](const boost::any& value) {
+    if (value.type() == typeid(int)) return static_cast<double>(boost::any_cast<int>(value));
+    if (value.type() == typeid(double)) return boost::any_cast<double>(value);
+    return std::nan("");
+  };
+  int compared = 0;
+  for (const ParameterRange& range : parameterRanges()) {
+    std::string name = range.name;
+    std::replace(name.begin(), name.end(), '/', '_');
+    for (const auto& description : ObjectDetectionConfig::__getParamDescriptions__()) {
+      if (description->name != name) continue;
+      boost::any min_value, max_value;
+      description->getValue(ObjectDetectionConfig::__getMin__(), min_value);
+      description->getValue(ObjectDetectionConfig::__getMax__(), max_value);
+      EXPECT_DOUBLE_EQ(number(min_value), range.min) << name;
+      EXPECT_DOUBLE_EQ(number(max_value), range.max) << name;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 3);  // keyframe_every_n, fusion voxel size, refine_every_n_keyframes
 }
 
 }  // namespace mvod

@@ -8,6 +8,7 @@
 
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
 #include "multiview_object_detection/pipeline/types/map_limits.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
@@ -15,8 +16,8 @@
 namespace mvod {
 
 Status ObjectDatabase::Config::isValid() const {
-  const Status voxel = checkMapVoxelSize(fusion_voxel_size_m, "fusion_voxel_size_m");
-  if (!voxel) return voxel;
+  if (Status s = checkParameterRange("database/fusion_voxel_size_m", fusion_voxel_size_m); !s)
+    return s;
   if (!(min_overlap_to_fuse >= 0.0 && min_overlap_to_fuse <= 1.0)) {
     return Status::Error("min_overlap_to_fuse must be in [0, 1]");
   }

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "multiview_object_detection/pipeline/stages/normal_estimation.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 
 namespace mvod {
 namespace {
@@ -204,10 +205,7 @@ Status BoxEstimator::Config::isValid() const {
     return Status::Error("box depth_step_per_m2 must be in [0, 0.1) (got " +
                          std::to_string(depth_step_per_m2) + ")");
   }
-  if (!(std::isfinite(outline_cell_m) && outline_cell_m >= 0.0)) {
-    return Status::Error("box outline_cell_m must be >= 0 (got " + std::to_string(outline_cell_m) +
-                         ")");
-  }
+  if (Status s = checkParameterRange("box/outline_cell_m", outline_cell_m); !s) return s;
   if (normal_estimation != "cells" && normal_estimation != "radius") {
     return Status::Error("box normal_estimation must be cells or radius (got '" +
                          normal_estimation + "')");

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 
 namespace mvod {
 namespace {
@@ -84,10 +85,7 @@ Status GravityEstimator::Config::isValid() const {
     return Status::Error("plane_distance_threshold_m must be a finite value > 0 (got " +
                          std::to_string(plane_distance_threshold_m) + ")");
   }
-  if (ransac_iterations < 1) {
-    return Status::Error("ransac_iterations must be >= 1 (got " +
-                         std::to_string(ransac_iterations) + ")");
-  }
+  if (Status s = checkParameterRange("gravity/ransac_iterations", ransac_iterations); !s) return s;
   if (!(std::isfinite(max_tilt_from_camera_up_deg) && max_tilt_from_camera_up_deg > 0.0 &&
         max_tilt_from_camera_up_deg < 90.0)) {
     return Status::Error("max_tilt_from_camera_up_deg must be in (0, 90) (got " +
@@ -98,10 +96,7 @@ Status GravityEstimator::Config::isValid() const {
     return Status::Error("min_plane_fraction must be in [0, 1] (got " +
                          std::to_string(min_plane_fraction) + ")");
   }
-  if (!(std::isfinite(voxel_size_m) && voxel_size_m > 0.0)) {
-    return Status::Error("voxel_size_m must be a finite value > 0 (got " +
-                         std::to_string(voxel_size_m) + ")");
-  }
+  if (Status s = checkParameterRange("gravity/voxel_size_m", voxel_size_m); !s) return s;
   return Status::Ok();
 }
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
+
 namespace mvod {
 namespace {
 
@@ -12,9 +14,7 @@ constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 }  // namespace
 
 Status KeyframeSelector::Config::isValid() const {
-  if (every_n < 1) {
-    return Status::Error("keyframe every_n must be >= 1 (got " + std::to_string(every_n) + ")");
-  }
+  if (Status s = checkParameterRange("keyframe_every_n", every_n); !s) return s;
   if (!(std::isfinite(min_translation_m) && min_translation_m >= 0.0)) {
     return Status::Error("keyframe min_translation_m must be >= 0 (got " +
                          std::to_string(min_translation_m) + ")");

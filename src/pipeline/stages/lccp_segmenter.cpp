@@ -13,6 +13,8 @@
 #include <set>
 #include <sstream>
 
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
+
 namespace mvod {
 namespace {
 
@@ -110,12 +112,10 @@ Status pclSupervoxels(const PointCloud& points, const std::vector<std::size_t>& 
 }  // namespace
 
 Status LccpSegmenter::Config::isValid() const {
-  if (!finitePositive(voxel_resolution_m)) {
-    return Status::Error("voxel_resolution_m must be a finite value > 0 (got " +
-                         std::to_string(voxel_resolution_m) + ")");
-  }
-  if (!(finitePositive(seed_resolution_m) && seed_resolution_m >= voxel_resolution_m)) {
-    return Status::Error("seed_resolution_m must be finite and >= voxel_resolution_m (got " +
+  if (Status s = checkParameterRange("lccp/voxel_resolution_m", voxel_resolution_m); !s) return s;
+  if (Status s = checkParameterRange("lccp/seed_resolution_m", seed_resolution_m); !s) return s;
+  if (!(seed_resolution_m >= voxel_resolution_m)) {
+    return Status::Error("lccp/seed_resolution_m must be >= lccp/voxel_resolution_m (got " +
                          std::to_string(seed_resolution_m) + ")");
   }
   if (!finiteNonNegative(spatial_importance) || !finiteNonNegative(normal_importance) ||
@@ -144,9 +144,7 @@ Status LccpSegmenter::Config::isValid() const {
   if (use_extended_convexity && implementation != "pcl") {
     return Status::Error("use_extended_convexity needs implementation: pcl");
   }
-  if (min_points < 1) {
-    return Status::Error("min_points must be >= 1 (got " + std::to_string(min_points) + ")");
-  }
+  if (Status s = checkParameterRange("lccp/min_points", min_points); !s) return s;
   return Status::Ok();
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <utility>
 
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 
 namespace mvod {
@@ -277,14 +278,8 @@ Status ManhattanFrameEstimator::Config::isValid() const {
     return Status::Error("manhattan inlier_angle_deg must be in (0, 45] (got " +
                          std::to_string(inlier_angle_deg) + ")");
   }
-  if (!(std::isfinite(normal_radius_m) && normal_radius_m > 0.0)) {
-    return Status::Error("manhattan normal_radius_m must be a finite value > 0 (got " +
-                         std::to_string(normal_radius_m) + ")");
-  }
-  if (max_normals < 3) {
-    return Status::Error("manhattan max_normals must be >= 3 (got " + std::to_string(max_normals) +
-                         ")");
-  }
+  if (Status s = checkParameterRange("box/normal_radius_m", normal_radius_m); !s) return s;
+  if (Status s = checkParameterRange("box/max_normals", max_normals); !s) return s;
   return Status::Ok();
 }
 

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/pipeline/utils/parallel.h"
 
 namespace mvod {
@@ -70,10 +71,7 @@ PointCloud keepBelowStatisticalThreshold(const PointCloud& finite,
 }  // namespace
 
 Status PointCloudFilter::Config::isValid() const {
-  if (!(std::isfinite(voxel_leaf_size_m) && voxel_leaf_size_m > 0.0)) {
-    return Status::Error("voxel_leaf_size_m must be a finite value > 0 (got " +
-                         std::to_string(voxel_leaf_size_m) + ")");
-  }
+  if (Status s = checkParameterRange("filter/voxel_leaf_size_m", voxel_leaf_size_m); !s) return s;
   if (!(std::isfinite(min_depth_m) && min_depth_m >= 0.0)) {
     return Status::Error("min_depth_m must be a finite value >= 0 (got " +
                          std::to_string(min_depth_m) + ")");
@@ -91,13 +89,9 @@ Status PointCloudFilter::Config::isValid() const {
     return Status::Error("outlier_removal must be voxel_neighbours, statistical or none (got '" +
                          outlier_removal + "')");
   }
-  if (min_voxel_neighbours < 0 || min_voxel_neighbours > 26) {
-    return Status::Error("min_voxel_neighbours must be in [0, 26] (got " +
-                         std::to_string(min_voxel_neighbours) + ")");
-  }
-  if (sor_mean_k < 1) {
-    return Status::Error("sor_mean_k must be >= 1 (got " + std::to_string(sor_mean_k) + ")");
-  }
+  if (Status s = checkParameterRange("filter/min_voxel_neighbours", min_voxel_neighbours); !s)
+    return s;
+  if (Status s = checkParameterRange("filter/sor_mean_k", sor_mean_k); !s) return s;
   if (!(std::isfinite(sor_stddev_mul) && sor_stddev_mul > 0.0)) {
     return Status::Error("sor_stddev_mul must be a finite value > 0 (got " +
                          std::to_string(sor_stddev_mul) + ")");

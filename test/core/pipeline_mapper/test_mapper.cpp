@@ -411,6 +411,11 @@ TEST_F(ObjectMapperTest, ConfigValidationNamesTheSection) {
   config = ObjectMapper::Config();
   config.database.fusion_voxel_size_m = -1.0;
   EXPECT_FALSE(config.isValid().ok());
+  // Named as the parameter file names it (database/fusion_voxel_size_m), once.
+  EXPECT_EQ(config.isValid().message().rfind("database/fusion_voxel_size_m must be", 0), 0u)
+      << config.isValid().message();
+  config = ObjectMapper::Config();
+  config.database.min_overlap_to_fuse = 2.0;  // a check without a table range: section prefixed
   EXPECT_EQ(config.isValid().message().rfind("database.", 0), 0u) << config.isValid().message();
   const std::string printed = ObjectMapper::Config().print();
   EXPECT_NE(printed.find("min_probability: 0.5"), std::string::npos);
