@@ -1,6 +1,11 @@
 #include "multiview_object_detection/io/map_path.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
 
@@ -65,6 +70,31 @@ Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool
     }
   }
   *resolved = target.string();
+  return Status::Ok();
+}
+
+Status prepareMapDirectory(const MapPathPolicy& policy) {
+  const std::string directory = policy.directory.empty() ? defaultMapDirectory() : policy.directory;
+  if (directory.empty() || directory[0] != '/') {
+    return Status::Error("map_directory '" + directory + "' is not an absolute path");
+  }
+  std::error_code error;
+  fs::create_directories(directory, error);
+  if (error) {
+    return Status::Error("map_directory '" + directory + "' cannot be created: " + error.message());
+  }
+  if (!fs::is_directory(directory, error)) {
+    return Status::Error("map_directory '" + directory + "' is not a directory");
+  }
+  // The saves' own temporary names (json_io) start with '.'; this probe's too.
+  std::string probe = directory + "/.write-probe-XXXXXX";
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0) {
+    return Status::Error("map_directory '" + directory +
+                         "' is not writable: " + std::strerror(errno));
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
   return Status::Ok();
 }
 

@@ -109,6 +109,13 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
     buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
   }
   const MapPathPolicy map_paths{config.map_directory, config.allow_any_map_path};
+  const Status writable = prepareMapDirectory(map_paths);
+  if (!writable && config.autosave_period_s > 0.0) {
+    fail(writable.message() +
+         " (set map_directory to a writable folder, or autosave_period_s 0 to run without saving)");
+    return;
+  }
+  if (!writable) ROS_WARN("%s: ~save_map will fail", writable.message().c_str());
   services_ = std::make_unique<ObjectDetectionServices>(nh_private_, config.world_frame, map_paths,
                                                         worker_.get(), buffer_.get(),
                                                         publishers_.get(), &stats_);

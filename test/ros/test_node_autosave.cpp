@@ -272,6 +272,50 @@ TEST(NodeShutdownTest, SigintDoesNotWaitForTheQueuedKeyframes) {
   fs::remove_all(root);
 }
 
+// map_directory is proved writable at start: with autosave on, a directory the node cannot write
+// ends the start naming it (the first autosave would have failed a minute later); with autosave off
+// the node runs and warns that ~save_map will fail.
+TEST(NodeStartTest, AnUnwritableMapDirectoryIsReportedAtStart) {
+  const fs::path root = fs::temp_directory_path() / ("mvod_map_dir_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  const std::string node = "/map_dir_node";
+  const auto run = [&](const std::vector<std::string>& extra, const std::string& out) {
+    std::vector<std::string> args = {"_detector:=topic", "_pose_source:=topic",
+                                     "_map_directory:=/proc/self"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return startNode((root / "maps").string(), node, args, (root / out).string());
+  };
+  // Autosave on (the default): the node ends.
+  const pid_t refused = run({}, "refused.out");
+  ASSERT_GT(refused, 0);
+  int status = 0;
+  pid_t ended = 0;
+  for (int i = 0; i < 600 && ended == 0; ++i) {
+    ended = ::waitpid(refused, &status, WNOHANG);
+    if (ended == 0) ros::WallDuration(0.1).sleep();
+  }
+  if (ended == 0) {
+    ::kill(refused, SIGKILL);
+    ::waitpid(refused, &status, 0);
+  }
+  EXPECT_EQ(ended, refused) << "the node kept running with an unwritable map_directory";
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0) << "status " << status;
+  std::string logs;
+  mvod::readFile((root / "refused.out").string(), &logs);
+  EXPECT_NE(logs.find("map_directory '/proc/self' is not writable"), std::string::npos) << logs;
+
+  // Autosave off: it runs, and says why saving will fail.
+  const pid_t running = run({"_autosave_period_s:=0"}, "running.out");
+  ASSERT_GT(running, 0);
+  EXPECT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  ::kill(running, SIGINT);
+  ::waitpid(running, &status, 0);
+  mvod::readFile((root / "running.out").string(), &logs);
+  EXPECT_NE(logs.find("~save_map will fail"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
 }  // namespace
 }  // namespace mvod_test
 

@@ -25,4 +25,8 @@ std::string defaultMapDirectory();
 Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool for_writing,
                       std::string* resolved);
 
+// Creates the map directory if missing and proves it writable by creating and removing a file in
+// it. The error names the directory and the reason (not absolute, a file, permission, read-only).
+Status prepareMapDirectory(const MapPathPolicy& policy);
+
 }  // namespace mvod

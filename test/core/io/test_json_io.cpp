@@ -605,6 +605,31 @@ TEST_F(MapPathTest, RelativePathsResolveIntoTheMapDirectoryAndOthersAreRefused) 
   EXPECT_EQ(resolved, (dir_ / "elsewhere.json").string());
 }
 
+TEST_F(MapPathTest, TheMapDirectoryIsCreatedAndProvedWritableAtStart) {
+  MapPathPolicy policy;
+  policy.directory = (dir_ / "new" / "maps").string();
+  ASSERT_TRUE(prepareMapDirectory(policy).ok());
+  EXPECT_TRUE(fs::is_directory(dir_ / "new" / "maps"));
+  EXPECT_TRUE(fs::is_empty(dir_ / "new" / "maps")) << "the probe file was left behind";
+
+  for (const std::string& bad : {std::string("/proc/self"), std::string("relative/maps"),
+                                 (dir_ / "file" / "below").string()}) {
+    std::ofstream(dir_ / "file") << "not a directory";
+    policy.directory = bad;
+    const Status status = prepareMapDirectory(policy);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("map_directory '" + bad + "'"), std::string::npos)
+        << status.message();
+  }
+  if (::geteuid() != 0) {  // root writes anywhere
+    fs::create_directories(dir_ / "read_only");
+    fs::permissions(dir_ / "read_only", fs::perms::owner_read | fs::perms::owner_exec);
+    policy.directory = (dir_ / "read_only").string();
+    EXPECT_NE(prepareMapDirectory(policy).message().find("not writable"), std::string::npos);
+    fs::permissions(dir_ / "read_only", fs::perms::owner_all);
+  }
+}
+
 TEST(MapPathDefaultTest, DefaultIsUnderRosHome) {
   const std::string directory = defaultMapDirectory();
   EXPECT_NE(directory.find("multiview_object_detection/maps"), std::string::npos);
