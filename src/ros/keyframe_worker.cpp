@@ -3,6 +3,7 @@
 #include <ros/console.h>
 
 #include <algorithm>
+#include <chrono>
 #include <sstream>
 #include <utility>
 
@@ -189,7 +190,7 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
   ObjectMapper::CorrectionReport report;
   Status applied;
   {
-    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
     applied = mapper_->correctPoses(corrections, &report);
     if (applied && report.keyframes_moved > 0) updateSnapshotLocked();
   }
@@ -233,7 +234,7 @@ void KeyframeWorker::applyPendingReconfigure() {
   bool segmenter_changed = false;
   const RuntimeConfig::Config config = config_->takeChanges(&mapper_changed, &segmenter_changed);
   if (mapper_changed) {
-    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
     ObjectMapper::Config mapper_config = config.mapperConfig();
     mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
     const Status updated = mapper_->updateConfig(mapper_config);
@@ -274,7 +275,7 @@ bool KeyframeWorker::updateGravityFromTf(const std::string& what) {
   }
   // Gravity points along -z of gravity_frame (REP 103: z up).
   const Eigen::Vector3d gravity_down_W = -T_W_G.linear().col(2);
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
+  std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
   ObjectMapper::Config mapper_config = mapper_->config();
   mapper_config.gravity_down_W = gravity_down_W;
   const Status updated = mapper_->updateConfig(mapper_config);
@@ -368,7 +369,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   KeyframeReport report;
   Status processed;
   {
-    std::lock_guard<std::mutex> lock(mapper_mutex_);
+    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
     processed = mapper_->processKeyframe(frame, detections, &report);
     removed_gone_ += static_cast<int>(report.removed.size());
     if (processed && config.refine_every_n_keyframes > 0 &&
@@ -473,9 +474,24 @@ void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* su
   if (history != nullptr) *history = map->history;
 }
 
+std::unique_lock<std::timed_mutex> KeyframeWorker::lockMap(double timeout_s, Status* busy) const {
+  std::unique_lock<std::timed_mutex> lock(mapper_mutex_, std::defer_lock);
+  if (timeout_s < 0.0) {
+    lock.lock();
+  } else if (!lock.try_lock_for(std::chrono::duration<double>(timeout_s))) {
+    std::ostringstream text;
+    text << "busy: the keyframe in progress did not finish within service_timeout_s (" << timeout_s
+         << " s); nothing was changed, try again";
+    *busy = Status::Error(text.str());
+  }
+  return lock;
+}
+
 Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary,
-                                  std::deque<KeyframeRecord> history) {
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
+                                  std::deque<KeyframeRecord> history, double timeout_s) {
+  Status busy;
+  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
+  if (!lock.owns_lock()) return busy;
   const Status replaced = mapper_->mutableDatabase().setObjects(objects);
   if (!replaced) return replaced;
   mapper_->setHistory(std::move(history));
@@ -486,28 +502,31 @@ Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const M
   return Status::Ok();
 }
 
-size_t KeyframeWorker::resetMap() {
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
-  const size_t removed = mapper_->database().size();
+Status KeyframeWorker::resetMap(double timeout_s, size_t* removed) {
+  Status busy;
+  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
+  if (!lock.owns_lock()) return busy;
+  *removed = mapper_->database().size();
   mapper_->reset();
   removed_atypical_ = 0;
   removed_intersecting_ = 0;
   removed_gone_ = 0;
   updateSnapshotLocked();
-  return removed;
+  return Status::Ok();
 }
 
-KeyframeWorker::Refinement KeyframeWorker::refine(const std::string& why) {
-  std::lock_guard<std::mutex> lock(mapper_mutex_);
+Status KeyframeWorker::refine(const std::string& why, double timeout_s, Refinement* refinement) {
+  Status busy;
+  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
+  if (!lock.owns_lock()) return busy;
   const int atypical_before = removed_atypical_;
   const int intersecting_before = removed_intersecting_;
   refineLocked(why);
-  Refinement refinement;
-  refinement.removed_atypical = removed_atypical_ - atypical_before;
-  refinement.removed_intersecting = removed_intersecting_ - intersecting_before;
-  refinement.objects_left = mapper_->database().size();
+  refinement->removed_atypical = removed_atypical_ - atypical_before;
+  refinement->removed_intersecting = removed_intersecting_ - intersecting_before;
+  refinement->objects_left = mapper_->database().size();
   updateSnapshotLocked();
-  return refinement;
+  return Status::Ok();
 }
 
 }  // namespace mvod

@@ -22,14 +22,15 @@ Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& 
   return writeFileAtomic(path, text);
 }
 
-Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects) {
+Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects,
+                   double timeout_s) {
   std::string text;
   std::vector<MapObject> loaded;
   MapSummary summary;
   std::deque<KeyframeRecord> history;
   Status status = readFile(path, &text);
   if (status) status = objectsFromJson(text, &loaded, &summary, &history);
-  if (status) status = worker->replaceMap(loaded, summary, std::move(history));
+  if (status) status = worker->replaceMap(loaded, summary, std::move(history), timeout_s);
   if (status && objects != nullptr) *objects = loaded.size();
   return status;
 }

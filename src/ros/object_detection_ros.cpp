@@ -116,9 +116,9 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
     return;
   }
   if (!writable) ROS_WARN("%s: ~save_map will fail", writable.message().c_str());
-  services_ = std::make_unique<ObjectDetectionServices>(nh_private_, config.world_frame, map_paths,
-                                                        worker_.get(), buffer_.get(),
-                                                        publishers_.get(), &stats_);
+  services_ = std::make_unique<ObjectDetectionServices>(
+      nh_private_, config.world_frame, map_paths, worker_.get(), buffer_.get(), publishers_.get(),
+      &stats_, config.service_timeout_s);
   if (config.autosave_period_s > 0.0) {
     std::string autosave_path;
     const std::string name = config.autosave_path.empty()
@@ -207,7 +207,8 @@ void ObjectDetectionRos::shutdown() {
   if (detections_) detections_->unsubscribe();
 
   // Sec. 3.5 on the final map.
-  worker_->refine("shutdown");
+  KeyframeWorker::Refinement refinement;
+  worker_->refine("shutdown", -1.0, &refinement);  // the worker has stopped: nothing to wait for
   if (ros::ok()) publishers_->publishMap(worker_->objects(), ros::Time::now());
   if (autosaver_) autosaver_->stop();  // the final map, refined
   services_->stop();

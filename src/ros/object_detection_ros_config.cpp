@@ -58,6 +58,7 @@ Status ObjectDetectionRosConfig::isValid() const {
     return Status::Error("score_threshold must be in [0, 1]");
   }
   if (Status s = checkParameterRange("detections_max_age_s", detections_max_age_s); !s) return s;
+  if (Status s = checkParameterRange("service_timeout_s", service_timeout_s); !s) return s;
   if (Status s = checkParameterRange("max_detections_per_frame", max_detections_per_frame); !s)
     return s;
   if (Status s = checkParameterRange("processing_queue_size", processing_queue_size); !s) return s;
@@ -97,6 +98,7 @@ std::string ObjectDetectionRosConfig::print() const {
       << "max_detections_per_frame: " << max_detections_per_frame << "\n"
       << "map_directory: " << (map_directory.empty() ? "(~/.ros default)" : map_directory) << "\n"
       << "allow_any_map_path: " << (allow_any_map_path ? "true" : "false") << "\n"
+      << "service_timeout_s: " << service_timeout_s << "\n"
       << "processing_queue_size: " << processing_queue_size << "\n"
       << "refine_every_n_keyframes: " << refine_every_n_keyframes << "\n"
       << "priors_file: " << priors_file << "\n"

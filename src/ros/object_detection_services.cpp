@@ -14,27 +14,37 @@ ObjectDetectionServices::ObjectDetectionServices(const ros::NodeHandle& nh_priva
                                                  const MapPathPolicy& map_paths,
                                                  KeyframeWorker* worker, KeyframeBuffer* buffer,
                                                  ObjectDetectionPublishers* publishers,
-                                                 SharedStatistics* stats)
+                                                 SharedStatistics* stats, double timeout_s)
     : world_frame_(world_frame),
       map_paths_(map_paths),
       worker_(worker),
       buffer_(buffer),
       publishers_(publishers),
-      stats_(stats) {
-  // Own queue: a long keyframe must not hold up the input callbacks.
-  ros::NodeHandle service_nh(nh_private);
-  service_nh.setCallbackQueue(&queue_);
+      stats_(stats),
+      timeout_s_(timeout_s) {
+  // Own queues: a long keyframe must not hold up the input callbacks, and a map change waiting for
+  // it (or a long ~load_map) must not hold up the readers.
+  ros::NodeHandle read_nh(nh_private);
+  read_nh.setCallbackQueue(&read_queue_);
   get_objects_srv_ =
-      service_nh.advertiseService("get_objects", &ObjectDetectionServices::getObjects, this);
-  save_map_srv_ = service_nh.advertiseService("save_map", &ObjectDetectionServices::saveMap, this);
-  load_map_srv_ = service_nh.advertiseService("load_map", &ObjectDetectionServices::loadMap, this);
-  reset_srv_ = service_nh.advertiseService("reset", &ObjectDetectionServices::reset, this);
-  refine_srv_ = service_nh.advertiseService("refine", &ObjectDetectionServices::refine, this);
-  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
-  spinner_->start();
+      read_nh.advertiseService("get_objects", &ObjectDetectionServices::getObjects, this);
+  save_map_srv_ = read_nh.advertiseService("save_map", &ObjectDetectionServices::saveMap, this);
+  ros::NodeHandle change_nh(nh_private);
+  change_nh.setCallbackQueue(&change_queue_);
+  load_map_srv_ = change_nh.advertiseService("load_map", &ObjectDetectionServices::loadMap, this);
+  reset_srv_ = change_nh.advertiseService("reset", &ObjectDetectionServices::reset, this);
+  refine_srv_ = change_nh.advertiseService("refine", &ObjectDetectionServices::refine, this);
+  // Two threads: a long ~save_map does not hold up ~get_objects.
+  read_spinner_ = std::make_unique<ros::AsyncSpinner>(2, &read_queue_);
+  change_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &change_queue_);
+  read_spinner_->start();
+  change_spinner_->start();
 }
 
-void ObjectDetectionServices::stop() { spinner_->stop(); }
+void ObjectDetectionServices::stop() {
+  read_spinner_->stop();
+  change_spinner_->stop();
+}
 
 bool ObjectDetectionServices::getObjects(
     multiview_object_detection::GetObjects::Request& request,
@@ -82,7 +92,7 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
   std::string path;
   size_t loaded = 0;
   Status status = resolveMapPath(request.path, map_paths_, false, &path);
-  if (status) status = loadMapFile(path, worker_, &loaded);
+  if (status) status = loadMapFile(path, worker_, &loaded, timeout_s_);
   if (!status) {
     response.success = false;
     response.message = "load_map refused '" + request.path + "': " + status.message() +
@@ -102,7 +112,14 @@ bool ObjectDetectionServices::reset(std_srvs::Trigger::Request& /*request*/,
                                     std_srvs::Trigger::Response& response) {
   worker_->clearQueue();
   worker_->cancelCurrent();  // resetMap() then waits a stage at most, not a whole keyframe
-  const size_t removed = worker_->resetMap();
+  size_t removed = 0;
+  const Status reset = worker_->resetMap(timeout_s_, &removed);
+  if (!reset) {
+    response.success = false;
+    response.message = "reset: " + reset.message();
+    ROS_WARN("%s", response.message.c_str());
+    return true;
+  }
   buffer_->reset();
   publishers_->publishMap(worker_->objects(), ros::Time::now());
   response.success = true;
@@ -114,7 +131,14 @@ bool ObjectDetectionServices::reset(std_srvs::Trigger::Request& /*request*/,
 
 bool ObjectDetectionServices::refine(std_srvs::Trigger::Request& /*request*/,
                                      std_srvs::Trigger::Response& response) {
-  const KeyframeWorker::Refinement refinement = worker_->refine("~refine");
+  KeyframeWorker::Refinement refinement;
+  const Status refined = worker_->refine("~refine", timeout_s_, &refinement);
+  if (!refined) {
+    response.success = false;
+    response.message = "refine: " + refined.message();
+    ROS_WARN("%s", response.message.c_str());
+    return true;
+  }
   response.message = "refinement removed " + std::to_string(refinement.removed_atypical) +
                      " atypical and " + std::to_string(refinement.removed_intersecting) +
                      " intersecting objects; " + std::to_string(refinement.objects_left) +

@@ -384,6 +384,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("detections_max_age_s", &cfg.detections_max_age_s);
   p.read("max_detections_per_frame", &cfg.max_detections_per_frame);
   p.read("map_directory", &cfg.map_directory);
+  p.read("service_timeout_s", &cfg.service_timeout_s);
   p.read("allow_any_map_path", &cfg.allow_any_map_path);
   p.read("autosave_period_s", &cfg.autosave_period_s);
   p.read("autosave_path", &cfg.autosave_path);

@@ -6,6 +6,7 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <std_srvs/Trigger.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -313,6 +314,57 @@ TEST(NodeStartTest, AnUnwritableMapDirectoryIsReportedAtStart) {
   ::waitpid(running, &status, 0);
   mvod::readFile((root / "running.out").string(), &logs);
   EXPECT_NE(logs.find("~save_map will fail"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
+// service_timeout_s bounds the map changes: while the worker is in a long keyframe (the paper's
+// method, a queue of 15), ~refine with a 0.1 s timeout answers "busy" and changes nothing, and
+// ~get_objects keeps answering from the last snapshot meanwhile.
+TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering) {
+  ros::NodeHandle nh;
+  const std::string node = "/busy_node";
+  const fs::path root = fs::temp_directory_path() / ("mvod_busy_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, node, true);
+  const pid_t pid = startNode(
+      (root / "maps").string(), node,
+      {"_detector:=topic", "_pose_source:=topic", "_keyframe_mode:=every_n", "_keyframe_every_n:=1",
+       "_paper_method:=true", "_processing_queue_size:=30", "_refine_every_n_keyframes:=0",
+       "_autosave_period_s:=0", "_service_timeout_s:=0.1"},
+      (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
+  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
+  for (int i = 0; i < 16; ++i) {
+    inputs.publish(stream.make(i % stream.options().num_frames, ros::Time(++second)), true, true);
+  }
+  EXPECT_TRUE(outputs.waitForObjectsCount(1, 60.0)) << "no keyframe processed";
+  int busy = 0, refined = 0, read = 0;
+  for (int i = 0; i < 20; ++i) {
+    std_srvs::Trigger refine;
+    if (ros::service::call(node + "/refine", refine)) {
+      if (!refine.response.success) {
+        EXPECT_NE(refine.response.message.find("busy"), std::string::npos)
+            << refine.response.message;
+        ++busy;
+      } else {
+        ++refined;
+      }
+    }
+    multiview_object_detection::GetObjects get;
+    if (ros::service::call(node + "/get_objects", get)) ++read;
+  }
+  std::printf("[ INFO     ] ~refine: %d busy, %d done; ~get_objects answered %d of 20\n", busy,
+              refined, read);
+  EXPECT_GT(busy, 0) << "~refine never gave up waiting for the keyframe in progress";
+  EXPECT_EQ(read, 20);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
   fs::remove_all(root);
 }
 

@@ -81,17 +81,18 @@ class KeyframeWorker {
   // The objects and the summary for objects.json (all but `frames`).
   void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
                    std::deque<KeyframeRecord>* history = nullptr) const;
-  // The map changes below wait for the keyframe being processed (bounded by
-  // max_detections_per_frame). Replaces the objects (~load_map); the keyframe count and gravity are
-  // kept. Refused (map unchanged) when the ids are out of range or repeated.
-  // The keyframe history loaded with the map replaces the mapper's (an empty one: the map's objects
-  // cannot follow corrections).
+  // The map changes below wait for the keyframe being processed, at most `timeout_s` (< 0: as
+  // long as it takes); past it they change nothing and return an error saying the worker is busy
+  // (the services pass service_timeout_s).
+  // Replaces the objects (~load_map); the keyframe count and gravity are kept. Refused (map
+  // unchanged) when the ids are out of range or repeated. The keyframe history loaded with the map
+  // replaces the mapper's (an empty one: the map's objects cannot follow corrections).
   Status replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary,
-                    std::deque<KeyframeRecord> history = {});
-  // Empties the map; ids keep counting. Returns the number of objects removed.
-  size_t resetMap();
+                    std::deque<KeyframeRecord> history = {}, double timeout_s = -1.0);
+  // Empties the map; ids keep counting. *removed: the number of objects removed.
+  Status resetMap(double timeout_s, size_t* removed);
   // Sec. 3.5 on the current map.
-  Refinement refine(const std::string& why);
+  Status refine(const std::string& why, double timeout_s, Refinement* refinement);
 
  private:
   void workerLoop();
@@ -102,6 +103,9 @@ class KeyframeWorker {
   void capDetections(int max_detections, const std::string& what,
                      std::vector<Detection2D>* detections);
   bool updateGravityFromTf(const std::string& what);
+  // The map's lock, waiting at most timeout_s (< 0: unbounded); not owned when that passed (*busy
+  // says why).
+  std::unique_lock<std::timed_mutex> lockMap(double timeout_s, Status* busy) const;
   void refineLocked(const std::string& why);  // needs mapper_mutex_
   void updateSnapshotLocked();                // needs mapper_mutex_
 
@@ -125,7 +129,7 @@ class KeyframeWorker {
   std::thread thread_;
 
   // The map (mapper_mutex_): the worker and the services.
-  mutable std::mutex mapper_mutex_;
+  mutable std::timed_mutex mapper_mutex_;
   std::unique_ptr<ObjectMapper> mapper_;
   int removed_atypical_ = 0;
   int removed_gone_ = 0;  // by the existence evidence, for the saved map's summary

@@ -25,7 +25,8 @@ Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& 
 
 // Reads the map file at `path` (resolved) into the worker, replacing its map (~load_map,
 // load_map_on_start); on any error the worker's map is kept. `objects` (may be null): how many.
-Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects = nullptr);
+Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects = nullptr,
+                   double timeout_s = -1.0);
 
 class MapAutosaver {
  public:

@@ -52,6 +52,9 @@ struct ObjectDetectionRosConfig {
   // (~/.ros/...); ros_params fills it in.
   std::string map_directory;
   bool allow_any_map_path = false;
+  // ~load_map, ~reset and ~refine wait this long at most for the keyframe in progress, then answer
+  // "busy" and change nothing.
+  double service_timeout_s = 10.0;
   // Autosave: the map (as ~save_map writes it) to autosave_path (resolved like ~save_map's paths)
   // every autosave_period_s when it changed, and at shutdown. 0 = off. An empty path is the
   // node's name: "<node>.autosave.json" (ros_params fills it in), so two nodes never share one.

@@ -1,6 +1,8 @@
 // The node's services: ~get_objects, ~save_map, ~load_map, ~reset and ~refine. They run on their
-// own callback queue and thread, so a slow keyframe does not stall the input callbacks; reading the
-// map (~get_objects, ~save_map) never waits for a keyframe. Map files lie in map_directory.
+// own callback queues and threads, so a slow keyframe does not stall the input callbacks. Reading
+// the map (~get_objects, ~save_map) has a queue of its own and answers from the last snapshot, also
+// while ~load_map parses a file; changing it (~load_map, ~reset, ~refine) waits for the keyframe in
+// progress at most service_timeout_s, then answers "busy". Map files lie in map_directory.
 #pragma once
 
 #include <multiview_object_detection/GetObjects.h>
@@ -26,7 +28,7 @@ class ObjectDetectionServices {
   ObjectDetectionServices(const ros::NodeHandle& nh_private, const std::string& world_frame,
                           const MapPathPolicy& map_paths, KeyframeWorker* worker,
                           KeyframeBuffer* buffer, ObjectDetectionPublishers* publishers,
-                          SharedStatistics* stats);
+                          SharedStatistics* stats, double timeout_s);
 
   ObjectDetectionServices(const ObjectDetectionServices&) = delete;
   ObjectDetectionServices& operator=(const ObjectDetectionServices&) = delete;
@@ -49,9 +51,12 @@ class ObjectDetectionServices {
   KeyframeBuffer* buffer_;
   ObjectDetectionPublishers* publishers_;
   SharedStatistics* stats_;
+  const double timeout_s_;  // service_timeout_s
 
-  ros::CallbackQueue queue_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
+  ros::CallbackQueue read_queue_;    // ~get_objects, ~save_map
+  ros::CallbackQueue change_queue_;  // ~load_map, ~reset, ~refine
+  std::unique_ptr<ros::AsyncSpinner> read_spinner_;
+  std::unique_ptr<ros::AsyncSpinner> change_spinner_;
   ros::ServiceServer get_objects_srv_;
   ros::ServiceServer save_map_srv_;
   ros::ServiceServer load_map_srv_;

@@ -33,6 +33,8 @@ const std::vector<ParameterRange>& parameterRanges() {
       {"detections_max_age_s", 0, 60, "s", false,
        "how long a keyframe's images wait for their detections"},
       {"max_detections_per_frame", 1, 10000, "", false, "object clouds cut per keyframe"},
+      {"service_timeout_s", 0.1, 600, "s", false,
+       "how long ~load_map, ~reset and ~refine wait for the keyframe in progress"},
       {"autosave_period_s", 1, 86400, "s", true, "one save at most per period"},
       {"processing_queue_size", 1, 1000, "", false,
        "keyframes held for the worker (images: about 2 MB each at 640x480)"},
