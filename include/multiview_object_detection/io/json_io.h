@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "multiview_object_detection/io/file_io.h"  // the map files are read and written with it
 #include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 
@@ -58,22 +59,6 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
 // the outputs untouched. history (optional): the keyframe history, empty when the file has none.
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
                        MapSummary* summary, std::deque<KeyframeRecord>* history = nullptr);
-
-// Atomic write: a temporary file beside `path` (".<name>.save-<pid>.XXXXXX"), then rename. A
-// replaced file keeps its mode; the temporaries of `path` a killed save left behind are removed
-// first. Concurrent saves to one path (threads or processes) each succeed, the last rename wins.
-// Refuses to replace anything but a regular file.
-Status writeFileAtomic(const std::string& path, const std::string& content);
-
-// Removes the temporaries of `path` whose process is no longer running (a save killed mid-write);
-// never another saver's file in progress, nor any file not named as a save's temporary. Returns
-// how many it removed.
-int removeOrphanTemporaries(const std::string& path);
-// Whole-file read of a regular file of at most max_bytes: a FIFO, device or directory is refused
-// at once (never blocks, never reads forever).
-constexpr size_t kDefaultMaxFileBytes = size_t{1} << 30;  // 1 GiB
-Status readFile(const std::string& path, std::string* content,
-                size_t max_bytes = kDefaultMaxFileBytes);
 
 std::vector<MapObject> databaseObjects(const ObjectDatabase& database);
 
