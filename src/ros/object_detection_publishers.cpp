@@ -9,6 +9,7 @@
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/markers.h"
 
 namespace mvod {
 namespace {

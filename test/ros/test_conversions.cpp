@@ -18,6 +18,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/markers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/ros_params.h"
 

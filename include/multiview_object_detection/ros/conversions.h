@@ -11,11 +11,7 @@
 #include <multiview_object_detection/ObjectArray.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
-#include <sensor_msgs/PointCloud2.h>
-#include <std_msgs/ColorRGBA.h>
-#include <visualization_msgs/MarkerArray.h>
 
-#include <set>
 #include <string>
 #include <vector>
 
@@ -97,21 +93,5 @@ multiview_object_detection::Object objectToMsg(const MapObject& object);
 Status objectFromMsg(const multiview_object_detection::Object& msg, MapObject* object);
 multiview_object_detection::ObjectArray objectsToMsg(const std::vector<MapObject>& objects,
                                                      const std_msgs::Header& header);
-
-// A colour per class (stable between runs) and one per object id.
-std_msgs::ColorRGBA classColor(int class_id);
-std_msgs::ColorRGBA objectColor(int object_id);
-
-// ns "boxes": LINE_LIST of the 12 box edges coloured by class; ns "labels": TEXT_VIEW_FACING
-// "chair #3 0.87" above the box; marker id = object id. Ids in *published_ids that are no longer in
-// `objects` get DELETE markers in both namespaces; on return *published_ids holds the current ids.
-visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& objects,
-                                                 const std_msgs::Header& header,
-                                                 std::set<int>* published_ids);
-
-// x y z rgb (float32 each, rgb packed as in PCL); the points of each object (its LCCP segment, else
-// its fused cloud) coloured by objectColor(id).
-void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs::Header& header,
-                          sensor_msgs::PointCloud2* cloud);
 
 }  // namespace mvod

@@ -1,0 +1,208 @@
+#include "multiview_object_detection/ros/markers.h"
+
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+
+#include "multiview_object_detection/pipeline/types/oriented_box.h"
+#include "multiview_object_detection/ros/conversions.h"
+
+namespace mvod {
+namespace {
+
+// HSV hue -> RGB with full saturation and value 0.9.
+std_msgs::ColorRGBA colorFromHue(double hue) {
+  hue = hue - std::floor(hue);
+  const double h = hue * 6.0;
+  const int sector = static_cast<int>(h) % 6;
+  const double f = h - std::floor(h);
+  const double v = 0.9;
+  const double p = v * 0.15;
+  const double q = v * (1.0 - 0.85 * f);
+  const double t = v * (0.15 + 0.85 * f);
+  double r = v, g = t, b = p;
+  switch (sector) {
+    case 0:
+      r = v;
+      g = t;
+      b = p;
+      break;
+    case 1:
+      r = q;
+      g = v;
+      b = p;
+      break;
+    case 2:
+      r = p;
+      g = v;
+      b = t;
+      break;
+    case 3:
+      r = p;
+      g = q;
+      b = v;
+      break;
+    case 4:
+      r = t;
+      g = p;
+      b = v;
+      break;
+    default:
+      r = v;
+      g = p;
+      b = q;
+      break;
+  }
+  std_msgs::ColorRGBA color;
+  color.r = static_cast<float>(r);
+  color.g = static_cast<float>(g);
+  color.b = static_cast<float>(b);
+  color.a = 1.f;
+  return color;
+}
+
+// Golden-ratio hues: neighbouring ids and classes get clearly different colours.
+double goldenHue(std::int64_t index) {
+  constexpr double kGolden = 0.618033988749895;
+  const double hue = 0.12 + kGolden * static_cast<double>(index);
+  return hue - std::floor(hue);
+}
+
+std::string labelText(const MapObject& object) {
+  char probability[16];
+  std::snprintf(probability, sizeof(probability), "%.2f", object.probability);
+  // A completed box (amodal completion) says so: part of it was never seen.
+  return object.class_name + " #" + std::to_string(object.id) + " " + probability +
+         (object.box_completed ? " (completed)" : "");
+}
+
+}  // namespace
+
+std_msgs::ColorRGBA classColor(int class_id) {
+  return colorFromHue(goldenHue(static_cast<std::int64_t>(class_id) + 1));
+}
+
+std_msgs::ColorRGBA objectColor(int object_id) {
+  // Offset from the class palette so an object's points differ from its box colour sequence.
+  return colorFromHue(goldenHue(3 * static_cast<std::int64_t>(object_id) + 7));
+}
+
+visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& objects,
+                                                 const std_msgs::Header& header,
+                                                 std::set<int>* published_ids) {
+  visualization_msgs::MarkerArray array;
+  std::set<int> current;
+  for (const MapObject& object : objects) {
+    if (!object.box.center_m.allFinite() || !object.box.size_m.allFinite()) continue;
+    current.insert(object.id);
+    visualization_msgs::Marker box;
+    box.header = header;
+    box.ns = "boxes";
+    box.id = object.id;
+    box.type = visualization_msgs::Marker::LINE_LIST;
+    box.action = visualization_msgs::Marker::ADD;
+    box.pose.orientation.w = 1.0;  // points are in the world frame
+    box.scale.x = 0.02;            // line width (m)
+    box.color = classColor(object.class_id);
+    const std::vector<Eigen::Vector3d> corners = object.box.corners();
+    // Corner i has sign bits (x: 1, y: 2, z: 4); the edges join corners one bit apart.
+    for (int i = 0; i < 8; ++i) {
+      for (int bit = 1; bit < 8; bit <<= 1) {
+        if (i & bit) continue;
+        for (const int c : {i, i | bit}) {
+          geometry_msgs::Point p;
+          p.x = corners[c].x();
+          p.y = corners[c].y();
+          p.z = corners[c].z();
+          box.points.push_back(p);
+        }
+      }
+    }
+    array.markers.push_back(box);
+
+    visualization_msgs::Marker label;
+    label.header = header;
+    label.ns = "labels";
+    label.id = object.id;
+    label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    label.action = visualization_msgs::Marker::ADD;
+    // Just above the box top: third box axis is up.
+    const Eigen::Vector3d up = object.box.rotation.col(2).normalized();
+    const Eigen::Vector3d position =
+        object.box.center_m + up * (0.5 * std::abs(object.box.size_m.z()) + 0.08);
+    label.pose.position.x = position.x();
+    label.pose.position.y = position.y();
+    label.pose.position.z = position.z();
+    label.pose.orientation.w = 1.0;
+    label.scale.z = 0.12;  // text height (m)
+    label.color = classColor(object.class_id);
+    label.text = labelText(object);
+    array.markers.push_back(label);
+  }
+  if (published_ids != nullptr) {
+    for (const int id : *published_ids) {
+      if (current.count(id) > 0) continue;
+      for (const char* ns : {"boxes", "labels"}) {
+        visualization_msgs::Marker erase;
+        erase.header = header;
+        erase.ns = ns;
+        erase.id = id;
+        erase.action = visualization_msgs::Marker::DELETE;
+        erase.pose.orientation.w = 1.0;
+        array.markers.push_back(erase);
+      }
+    }
+    *published_ids = std::move(current);
+  }
+  return array;
+}
+
+void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs::Header& header,
+                          sensor_msgs::PointCloud2* cloud) {
+  size_t total = 0;
+  for (const MapObject& object : objects) {
+    total += object.segment_W.empty() ? object.points_W.size() : object.segment_W.size();
+  }
+  cloud->header = header;
+  cloud->height = 1;
+  cloud->is_dense = true;
+  sensor_msgs::PointCloud2Modifier modifier(*cloud);
+  modifier.setPointCloud2Fields(
+      4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z", 1,
+      sensor_msgs::PointField::FLOAT32, "rgb", 1, sensor_msgs::PointField::FLOAT32);
+  modifier.resize(total);
+  // An iterator over an empty cloud binds a reference to no data (undefined behaviour).
+  if (total == 0) return;
+  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x");
+  sensor_msgs::PointCloud2Iterator<float> y(*cloud, "y");
+  sensor_msgs::PointCloud2Iterator<float> z(*cloud, "z");
+  sensor_msgs::PointCloud2Iterator<float> rgb(*cloud, "rgb");
+  size_t written = 0;
+  for (const MapObject& object : objects) {
+    const std_msgs::ColorRGBA c = objectColor(object.id);
+    const uint32_t packed = (static_cast<uint32_t>(c.r * 255.f) << 16) |
+                            (static_cast<uint32_t>(c.g * 255.f) << 8) |
+                            static_cast<uint32_t>(c.b * 255.f);
+    float packed_float = 0.f;
+    std::memcpy(&packed_float, &packed, sizeof(float));
+    const PointCloud& points = object.segment_W.empty() ? object.points_W : object.segment_W;
+    for (const Eigen::Vector3f& p : points) {
+      if (!p.allFinite()) continue;
+      *x = p.x();
+      *y = p.y();
+      *z = p.z();
+      *rgb = packed_float;
+      ++x;
+      ++y;
+      ++z;
+      ++rgb;
+      ++written;
+    }
+  }
+  if (written != total) modifier.resize(written);  // non-finite points were skipped
+}
+
+}  // namespace mvod
