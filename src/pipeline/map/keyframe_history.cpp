@@ -7,6 +7,7 @@
 
 #include "multiview_object_detection/pipeline/map/depth_view.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
@@ -35,9 +36,10 @@ Status KeyframeHistory::Config::isValid() const {
     return Status::Error("stamp_tolerance_s must be in [0, 1] (got " +
                          std::to_string(stamp_tolerance_s) + ")");
   }
-  if (max_keyframes_with_depth < 0 || max_keyframes_with_depth > 1000000) {
-    return Status::Error("max_keyframes_with_depth must be in [0, 1000000] (got " +
-                         std::to_string(max_keyframes_with_depth) + ")");
+  if (Status s =
+          checkParameterRange("corrections/max_keyframes_with_depth", max_keyframes_with_depth);
+      !s) {
+    return s;
   }
   return Status::Ok();
 }

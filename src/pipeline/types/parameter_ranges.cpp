@@ -51,10 +51,12 @@ const std::vector<ParameterRange>& parameterRanges() {
       {"box/normal_radius_m", 0.005, 0.5, "m", false, "neighbours searched per normal"},
       {"box/max_normals", 3, 1000000, "", false, "normals per box search"},
       {"box/outline_cell_m", 0.002, 0.5, "m", true, "footprint outline cells"},
-      {"gravity/ransac_iterations", 1, 10000, "", false, "plane hypotheses per keyframe"},
-      {"gravity/voxel_size_m", 0.005, 1.0, "m", false, "points the plane search sees"},
       {"database/fusion_voxel_size_m", kMinMapVoxelSizeM, 0.2, "m", false,
        "the map's voxel keys address +-5,000 m from 5 mm (map_limits.h)"},
+      {"gravity/ransac_iterations", 1, 10000, "", false, "plane hypotheses per keyframe"},
+      {"gravity/voxel_size_m", 0.005, 1.0, "m", false, "points the plane search sees"},
+      {"corrections/max_keyframes_with_depth", 0, 10000, "", false,
+       "depth images kept for corrections: 0.6 MB each at 640x480, 6 GB at the top"},
   };
   return kRanges;
 }
