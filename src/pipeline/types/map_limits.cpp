@@ -15,16 +15,4 @@ Status checkCameraInMap(const Eigen::Isometry3d& T_W_C, const std::string& what)
   return Status::Error(text.str());
 }
 
-Status checkMapVoxelSize(double voxel_size_m, const std::string& name) {
-  if (std::isfinite(voxel_size_m) && voxel_size_m >= kMinMapVoxelSizeM &&
-      voxel_size_m <= kMapCoordinateLimitM) {
-    return Status::Ok();
-  }
-  std::ostringstream text;
-  text << name << " must be in [" << kMinMapVoxelSizeM << ", " << kMapCoordinateLimitM
-       << "] m (got " << voxel_size_m << "): smaller voxels' keys would wrap within the map's +-"
-       << kMapCoordinateLimitM << " m";
-  return Status::Error(text.str());
-}
-
 }  // namespace mvod

@@ -40,7 +40,8 @@ const std::vector<ParameterRange>& parameterRanges() {
        "keyframes held for the worker (images: about 2 MB each at 640x480)"},
       {"refine_every_n_keyframes", 0, 10000, "", false, "0 = only on ~refine and at shutdown"},
       {"filter/voxel_leaf_size_m", 0.002, 0.5, "m", false,
-       "finer than a Kinect's pixel footprint at 1 m (1.7 mm) keeps every point: no reduction"},
+       "finer than a Kinect's pixel footprint at 1 m (1 m / 525 px = 1.9 mm) keeps every point: no "
+       "reduction"},
       {"filter/min_voxel_neighbours", 0, 26, "", false, "of the 26 neighbours"},
       {"filter/sor_mean_k", 1, 200, "", false, "neighbours searched per point"},
       {"lccp/voxel_resolution_m", 0.003, 0.2, "m", false,

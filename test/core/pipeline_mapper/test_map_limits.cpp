@@ -12,6 +12,7 @@
 #include "multiview_object_detection/pipeline/map/object_database.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/pipeline/types/map_limits.h"
+#include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace mvod {
@@ -72,9 +73,8 @@ TEST(MapLimitsTest, VoxelKeysDoNotWrapWithinTheMap) {
 }
 
 TEST(MapLimitsTest, VoxelsTooSmallForTheMapAreRefused) {
-  EXPECT_TRUE(checkMapVoxelSize(kMinMapVoxelSizeM, "v").ok());
-  EXPECT_FALSE(checkMapVoxelSize(kMinMapVoxelSizeM * 0.99, "v").ok());
-  EXPECT_FALSE(checkMapVoxelSize(1e-6, "v").ok());
+  // The range table's floor for the map voxel is the one the keys need.
+  EXPECT_EQ(findParameterRange("database/fusion_voxel_size_m")->min, kMinMapVoxelSizeM);
   ObjectDatabase::Config database;
   database.fusion_voxel_size_m = 1e-6;  // a mistyped parameter: keys would wrap at 1 m
   const Status refused = database.isValid();

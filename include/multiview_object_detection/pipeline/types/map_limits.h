@@ -35,8 +35,4 @@ static_assert(kCameraCoordinateLimitM + 2.0 * kMaxSensorRangeM <= kMapCoordinate
 // beyond kCameraCoordinateLimitM.
 Status checkCameraInMap(const Eigen::Isometry3d& T_W_C, const std::string& what);
 
-// Ok, or why a map voxel of `voxel_size_m` is refused (`name` names the parameter): not finite,
-// or smaller than kMinMapVoxelSizeM.
-Status checkMapVoxelSize(double voxel_size_m, const std::string& name);
-
 }  // namespace mvod
