@@ -116,9 +116,6 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
     return;
   }
   if (!writable) ROS_WARN("%s: ~save_map will fail", writable.message().c_str());
-  services_ = std::make_unique<ObjectDetectionServices>(
-      nh_private_, config.world_frame, map_paths, worker_.get(), buffer_.get(), publishers_.get(),
-      &stats_, config.service_timeout_s);
   if (config.autosave_period_s > 0.0) {
     std::string autosave_path;
     const std::string name = config.autosave_path.empty()
@@ -133,6 +130,11 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
                                                 worker_.get(), &stats_);
   }
   if (!config.load_map_on_start.empty()) loadMapOnStart(config, map_paths);
+  // Advertised once the map is loaded: their threads answer at once, and ~get_objects must not
+  // answer an empty map while load_map_on_start is still reading the file.
+  services_ = std::make_unique<ObjectDetectionServices>(
+      nh_private_, config.world_frame, map_paths, worker_.get(), buffer_.get(), publishers_.get(),
+      &stats_, config.service_timeout_s);
 
   // Dynamic reconfigure starts from the values in effect, not from the .cfg defaults.
   reconfigure_server_ = std::make_unique<ReconfigureServer>(reconfigure_mutex_, nh_private_);
@@ -211,7 +213,7 @@ void ObjectDetectionRos::shutdown() {
   worker_->refine("shutdown", -1.0, &refinement);  // the worker has stopped: nothing to wait for
   if (ros::ok()) publishers_->publishMap(worker_->objects(), ros::Time::now());
   if (autosaver_) autosaver_->stop();  // the final map, refined
-  services_->stop();
+  if (services_) services_->stop();
   ROS_INFO("object detection stopped: %d keyframes processed, %zu objects in the map",
            statistics().keyframes_processed, objects().size());
 }

@@ -17,6 +17,7 @@
 #include <mutex>
 #include <random>
 
+#include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "test_node_common.h"
 
@@ -314,6 +315,57 @@ TEST(NodeStartTest, AnUnwritableMapDirectoryIsReportedAtStart) {
   ::waitpid(running, &status, 0);
   mvod::readFile((root / "running.out").string(), &logs);
   EXPECT_NE(logs.find("~save_map will fail"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
+TEST(NodeStartTest, TheFirstGetObjectsAnswersTheMapLoadedAtStart) {
+  // A map big enough that loading it takes a while: ~get_objects must not be advertised (and answer
+  // an empty map) before load_map_on_start has read it.
+  const fs::path root =
+      fs::temp_directory_path() / ("mvod_load_start_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  constexpr int kObjects = 24;
+  constexpr int kPointsPerObject = 25000;
+  std::vector<mvod::MapObject> objects;
+  for (int id = 1; id <= kObjects; ++id) {
+    mvod::MapObject object;
+    object.id = id;
+    object.class_id = 56;
+    object.class_name = "chair";
+    object.probability = 0.8;
+    object.observations = 3;
+    object.box.center_m = Eigen::Vector3d(1.5 * id, 0.0, 0.45);
+    object.box.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
+    object.box.rotation.setIdentity();
+    object.last_keyframe = 2;
+    // Points on the file format's 1 mm grid.
+    for (int i = 0; i < kPointsPerObject; ++i) {
+      object.points_W.emplace_back(1.5f * id + 0.001f * (i % 500), 0.001f * (i / 500), 0.45f);
+    }
+    object.segment_W = object.points_W;
+    objects.push_back(std::move(object));
+  }
+  const std::string map_path = (root / "maps" / "big.json").string();
+  ASSERT_TRUE(
+      mvod::writeFileAtomic(map_path, mvod::objectsToJson(objects, mvod::MapSummary(), true)).ok());
+  const std::string node = "/load_start_node";
+  const pid_t pid = startNode((root / "maps").string(), node,
+                              {"_detector:=topic", "_pose_source:=topic", "_autosave_period_s:=0",
+                               "_load_map_on_start:=big.json"},
+                              (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 60000));
+  multiview_object_detection::GetObjects get;
+  EXPECT_TRUE(ros::service::call(node + "/get_objects", get));
+  EXPECT_EQ(get.response.objects.objects.size(), static_cast<size_t>(kObjects))
+      << "the first ~get_objects did not answer the map loaded at start";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  std::string logs;
+  mvod::readFile((root / "node.out").string(), &logs);
+  EXPECT_NE(logs.find("load_map_on_start: resumed 24 objects"), std::string::npos) << logs;
   fs::remove_all(root);
 }
 
