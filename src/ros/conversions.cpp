@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/intrinsics_check.h"
@@ -165,6 +166,19 @@ Status intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& msg, const std::s
   }
   *intrinsics = K;
   return Status::Ok();
+}
+
+std::string distortionWarning(const sensor_msgs::CameraInfo& msg, const std::string& topic) {
+  const bool distorted = std::any_of(msg.D.begin(), msg.D.end(), [](double d) { return d != 0.0; });
+  if (!distorted) return "";
+  std::ostringstream coefficients;
+  coefficients.precision(4);
+  for (size_t i = 0; i < msg.D.size(); ++i) coefficients << (i > 0 ? ", " : "") << msg.D[i];
+  return describeInput(topic, msg.header) + ": camera_info has non-zero distortion (" +
+         (msg.distortion_model.empty() ? std::string("model unnamed") : msg.distortion_model) +
+         " D = [" + coefficients.str() +
+         "]); the node uses K only and expects rectified images: subscribe it to image_proc's "
+         "rgb/image_rect_color and depth_image_proc's depth_registered/image_rect";
 }
 
 namespace {

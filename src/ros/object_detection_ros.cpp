@@ -17,6 +17,7 @@
 #include "multiview_object_detection/ros/keyframe_worker.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
 #include "multiview_object_detection/ros/object_detection_services.h"
+#include "multiview_object_detection/ros/reconfigure_names.h"
 #include "multiview_object_detection/ros/rgbd_input.h"
 #include "multiview_object_detection/ros/ros_params.h"
 #include "multiview_object_detection/ros/runtime_config.h"
@@ -192,6 +193,7 @@ void ObjectDetectionRos::reconfigureCallback(multiview_object_detection::ObjectD
                                              uint32_t /*level*/) {
   KeyframeSelector::Config keyframes;
   if (!config_->reconfigure(&rc, &keyframes)) return;
+  setYamlParameters(nh_private_, rc);  // the live value under the YAML name too
   // After the config's lock is released: the input stage takes the buffer's lock first.
   buffer_->setKeyframeConfig(keyframes);
 }

@@ -11,7 +11,7 @@ RgbdInput::RgbdInput(const ros::NodeHandle& nh, const ros::NodeHandle& nh_privat
                      const ObjectDetectionRosConfig& config, SharedStatistics* stats,
                      const std::atomic<bool>& shut_down)
     : nh_(nh), nh_private_(nh_private), config_(config), stats_(stats), shut_down_(shut_down) {
-  topics_.depth = config_.depth_registered ? "depth_registered/image_raw" : "depth/image_raw";
+  topics_.depth = config_.depth_registered ? "depth_registered/image_rect" : "depth/image_rect";
   // Messages name the inputs as remapped.
   topics_.color = nh_.resolveName(topics_.color);
   topics_.depth = nh_.resolveName(topics_.depth);
@@ -95,6 +95,12 @@ void RgbdInput::rgbdCallback(const sensor_msgs::ImageConstPtr& color,
   if (!checked) {
     reject("RGB-D input rejected: " + checked.message());
     return;
+  }
+  for (const auto& [info, topic] : {std::make_pair(color_info, topics_.color_info),
+                                    std::make_pair(depth_info, topics_.depth_info)}) {
+    if (!info) continue;
+    const std::string distortion = distortionWarning(*info, topic);
+    if (!distortion.empty()) warnThrottled(distortion);
   }
   frame.camera_frame = config_.camera_frame.empty() ? color->header.frame_id : config_.camera_frame;
   if (config_.pose_source == "tf" && frame.camera_frame.empty()) {

@@ -4,14 +4,17 @@
 #include <gtest/gtest.h>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <regex>
 #include <set>
 
 #include "multiview_object_detection/ObjectDetectionConfig.h"
@@ -20,6 +23,7 @@
 #include "multiview_object_detection/ros/conversions.h"
 #include "multiview_object_detection/ros/markers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
+#include "multiview_object_detection/ros/reconfigure_names.h"
 #include "multiview_object_detection/ros/ros_params.h"
 
 namespace mvod {
@@ -253,6 +257,21 @@ TEST(RosConversionsTest, CameraInfoNoRgbdCameraHasIsRejectedNamingTheTopic) {
   ASSERT_TRUE(checkRgbdMessages(msgs, topics).ok());
   msgs.depth_info = cameraInfo(15, 15, 159.5, 119.5, 320, 240);
   expectRefused({"depth/camera_info", "field of view"});
+}
+
+TEST(RosConversionsTest, DistortedCameraInfoGivesAWarningNamingTheTopic) {
+  sensor_msgs::CameraInfo info = *cameraInfo(525, 525, 319.5, 239.5, 640, 480);
+  info.D.clear();
+  EXPECT_EQ(distortionWarning(info, "/camera/rgb/camera_info"), "");
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  EXPECT_EQ(distortionWarning(info, "/camera/rgb/camera_info"), "");
+  info.D[0] = 0.2624;
+  info.D[1] = -0.9531;
+  const std::string warning = distortionWarning(info, "/camera/rgb/camera_info");
+  EXPECT_TRUE(contains(warning, "/camera/rgb/camera_info")) << warning;
+  EXPECT_TRUE(contains(warning, "plumb_bob D = [0.2624, -0.9531, 0, 0, 0]")) << warning;
+  EXPECT_TRUE(contains(warning, "rgb/image_rect_color")) << warning;
 }
 
 TEST(RosConversionsTest, RgbdFrameRegisteredAndUnregistered) {
@@ -795,6 +814,37 @@ TEST(RosConversionsTest, DynamicReconfigureLimitsAreTheTablesRanges) {
     }
   }
   EXPECT_GE(compared, 3);  // keyframe_every_n, fusion voxel size, refine_every_n_keyframes
+}
+
+// One name per setting: every dynamic_reconfigure parameter has a YAML name in the node's config
+// file (its own name, or the nested name the .cfg writes with '_').
+TEST(RosConversionsTest, EveryReconfigureNameHasItsYamlNameInTheConfigFile) {
+  using multiview_object_detection::ObjectDetectionConfig;
+  // Down the nested maps to a value (const access: a missing key gives an undefined node).
+  std::function<bool(const YAML::Node&, const std::string&)> hasScalar;
+  hasScalar = [&hasScalar](const YAML::Node& node, const std::string& path) {
+    const std::string::size_type slash = path.find('/');
+    const YAML::Node child = node[path.substr(0, slash)];
+    if (!child) return false;
+    if (slash == std::string::npos) return child.IsScalar();
+    return child.IsMap() && hasScalar(child, path.substr(slash + 1));
+  };
+  // The settings paper_method changes are commented out there ("# enable: true  # default ..."):
+  // uncommented for the look-up.
+  std::ifstream file(std::string(MVOD_SOURCE_DIR) + "/config/object_detection.yaml");
+  ASSERT_TRUE(file.good());
+  const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  const YAML::Node yaml = YAML::Load(
+      std::regex_replace(text, std::regex("^( *)# ([a-z_]+: )", std::regex::multiline), "$1$2"));
+  int nested = 0;
+  for (const auto& description : ObjectDetectionConfig::__getParamDescriptions__()) {
+    const std::string yaml_name = yamlParameterName(description->name);
+    if (yaml_name != description->name) ++nested;
+    EXPECT_TRUE(hasScalar(yaml, yaml_name))
+        << description->name << " -> " << yaml_name
+        << " is not a parameter of config/object_detection.yaml";
+  }
+  EXPECT_EQ(nested, 10);
 }
 
 }  // namespace mvod

@@ -41,8 +41,8 @@ pid_t startNode(const std::string& map_directory, const std::string& node = kNod
                 const std::vector<std::string>& extra = {}, const std::string& output = "") {
   std::vector<std::string> args = {nodeBinary(),
                                    "__name:=" + node.substr(1),
-                                   std::string("rgb/image_raw:=") + kRgbTopic,
-                                   std::string("depth_registered/image_raw:=") + kDepthTopic,
+                                   std::string("rgb/image_rect_color:=") + kRgbTopic,
+                                   std::string("depth_registered/image_rect:=") + kDepthTopic,
                                    std::string("rgb/camera_info:=") + kInfoTopic,
                                    std::string("pose:=") + kPoseTopic,
                                    std::string("detections:=") + kDetectionsTopic,

@@ -109,7 +109,7 @@ TEST_F(NodeBadInputTest, WrongEncodingIsReported) {
   frame.rgb = toImageMsg(gray, "mono8", frame.rgb.header);
   const ros::Time since = ros::Time::now();
   inputs_->publish(frame, true, true, true);
-  EXPECT_TRUE(reported(*pose_node_, {"encoding"}, {"mono8", "image_raw"}, since));
+  EXPECT_TRUE(reported(*pose_node_, {"encoding"}, {"mono8", "image_rect_color"}, since));
   EXPECT_TRUE(reported(*pose_node_, {"encoding", std::to_string(stamp.sec)}, {}, since))
       << "the report does not name the stamp";
   EXPECT_FALSE(pose_node_->hasObjectsAt(stamp));
@@ -123,7 +123,7 @@ TEST_F(NodeBadInputTest, MismatchedImageSizesAreReported) {
   frame.depth = toImageMsg(small_depth, "16UC1", frame.depth.header);
   const ros::Time since = ros::Time::now();
   inputs_->publish(frame, true, true, true);
-  EXPECT_TRUE(reported(*pose_node_, {"size"}, {"image_raw", "depth", "160", "120"}, since));
+  EXPECT_TRUE(reported(*pose_node_, {"size"}, {"image_rect", "depth", "160", "120"}, since));
   EXPECT_TRUE(reported(*pose_node_, {"size", std::to_string(stamp.sec)}, {}, since))
       << "the report does not name the stamp";
   EXPECT_FALSE(pose_node_->hasObjectsAt(stamp));
@@ -153,6 +153,19 @@ TEST_F(NodeBadInputTest, CameraInfoWithAFieldOfViewNoRgbdCameraHasIsReported) {
   inputs_->publish(frame, true, true, true);
   EXPECT_TRUE(reported(*pose_node_, {"camera_info", "field of view"}, {}, since));
   EXPECT_FALSE(pose_node_->hasObjectsAt(stamp));
+  EXPECT_TRUE(answers(kPoseNode));
+}
+
+// Distortion: the node uses K only; a camera_info with non-zero D (unrectified images) is warned
+// about, naming the topic and the rectified topics to use.
+TEST_F(NodeBadInputTest, DistortedCameraInfoIsWarnedAbout) {
+  const ros::Time stamp = stampAt(3) + ros::Duration(0.75);
+  FrameMsgs frame = stream_->make(0, stamp);
+  frame.info.distortion_model = "plumb_bob";
+  frame.info.D = {0.1, -0.2, 0.0, 0.0, 0.0};
+  const ros::Time since = ros::Time::now();
+  inputs_->publish(frame, true, true, true);
+  EXPECT_TRUE(reported(*pose_node_, {"camera_info", "distortion", "image_rect_color"}, {}, since));
   EXPECT_TRUE(answers(kPoseNode));
 }
 
@@ -193,7 +206,9 @@ TEST_F(NodeBadInputTest, NanPoseIsReported) {
 }
 
 TEST_F(NodeBadInputTest, GoodFramesAfterBadOnesAreMapped) {
-  // Three keyframes of the lap (keyframe_every_n 1), with pose, TF and detections.
+  // Three keyframes of the lap (keyframe_every_n 1), with pose, TF and detections. (Of the frames
+  // before, only the distorted camera_info's is mapped: a warning, not a refusal.)
+  const size_t before = pose_node_->keyframePoses();
   for (int i = 0; i < 3; ++i) {
     const ros::Time stamp = stampAt(10 + i);
     inputs_->publish(stream_->make(i, stamp), true, true, true);
@@ -205,7 +220,7 @@ TEST_F(NodeBadInputTest, GoodFramesAfterBadOnesAreMapped) {
   }
   EXPECT_FALSE(pose_node_->lastObjects().objects.empty());
   EXPECT_FALSE(tf_node_->lastObjects().objects.empty());
-  EXPECT_EQ(pose_node_->keyframePoses(), 3u);
+  EXPECT_EQ(pose_node_->keyframePoses(), before + 3);
 }
 
 TEST_F(NodeBadInputTest, OutOfOrderFrameIsDroppedAndLaterFramesProcessed) {

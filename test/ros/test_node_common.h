@@ -39,8 +39,8 @@
 namespace mvod_test {
 
 // Absolute input topics of the tests; the .test files remap the node's relative inputs onto them.
-constexpr char kRgbTopic[] = "/camera/rgb/image_raw";
-constexpr char kDepthTopic[] = "/camera/depth_registered/image_raw";
+constexpr char kRgbTopic[] = "/camera/rgb/image_rect_color";
+constexpr char kDepthTopic[] = "/camera/depth_registered/image_rect";
 constexpr char kInfoTopic[] = "/camera/rgb/camera_info";
 constexpr char kPoseTopic[] = "/slam/pose";
 constexpr char kDetectionsTopic[] = "/detector/detections";

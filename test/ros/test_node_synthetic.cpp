@@ -4,6 +4,7 @@
 // Checks the objects against the scene's ground truth, the markers, the services and the map round
 // trip.
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Trigger.h>
@@ -519,6 +520,39 @@ TEST_F(NodeSyntheticTest, RefineRemovesAtypicalObjectsAndDeletesTheirMarkers) {
   }
   EXPECT_TRUE(outputs_->waitFor([&] { return idsOf(outputs_->lastObjects()) == remaining; }, 5.0))
       << "~objects not republished after ~refine";
+}
+
+// One name per setting: a dynamic_reconfigure change shows under the YAML name (rosparam get), not
+// only under the reconfigure name that has '_' for '/'.
+TEST_F(NodeSyntheticTest, AReconfigureChangeShowsUnderTheYamlName) {
+  const std::string node(kNode);
+  double voxel_m = 0.0;
+  ASSERT_TRUE(ros::param::get(node + "/database/fusion_voxel_size_m", voxel_m));
+  bool existence = false;
+  ASSERT_TRUE(ros::param::get(node + "/database/existence/enable", existence));
+  const auto reconfigure = [&](double new_voxel_m, bool new_existence) {
+    dynamic_reconfigure::Reconfigure srv;
+    dynamic_reconfigure::DoubleParameter voxel;
+    voxel.name = "database_fusion_voxel_size_m";
+    voxel.value = new_voxel_m;
+    srv.request.config.doubles.push_back(voxel);
+    dynamic_reconfigure::BoolParameter enable;
+    enable.name = "database_existence_enable";
+    enable.value = new_existence;
+    srv.request.config.bools.push_back(enable);
+    return ros::service::call(node + "/set_parameters", srv);
+  };
+  ASSERT_TRUE(reconfigure(0.02, !existence));
+  double live_voxel_m = 0.0;
+  bool live_existence = existence;
+  EXPECT_TRUE(ros::param::get(node + "/database/fusion_voxel_size_m", live_voxel_m));
+  EXPECT_TRUE(ros::param::get(node + "/database/existence/enable", live_existence));
+  EXPECT_DOUBLE_EQ(live_voxel_m, 0.02);
+  EXPECT_EQ(live_existence, !existence);
+  // Back to what the other tests expect.
+  ASSERT_TRUE(reconfigure(voxel_m, existence));
+  EXPECT_TRUE(ros::param::get(node + "/database/fusion_voxel_size_m", live_voxel_m));
+  EXPECT_DOUBLE_EQ(live_voxel_m, voxel_m);
 }
 
 }  // namespace

@@ -45,11 +45,15 @@ struct RgbdMessages {
   sensor_msgs::CameraInfoConstPtr depth_info;
 };
 struct RgbdTopics {
-  std::string color = "rgb/image_raw";
-  std::string depth = "depth_registered/image_raw";
+  // depth_image_proc's names: the node reads only K, so the images must be rectified.
+  std::string color = "rgb/image_rect_color";
+  std::string depth = "depth_registered/image_rect";
   std::string color_info = "rgb/camera_info";
   std::string depth_info = "depth/camera_info";
 };
+// A warning naming the topic when camera_info has non-zero distortion coefficients (the node uses K
+// only, so unrectified images would misplace points); empty when D is empty or all zero.
+std::string distortionWarning(const sensor_msgs::CameraInfo& msg, const std::string& topic);
 // Cheap checks on headers only (encodings, sizes, camera_info), before any pixel is copied.
 Status checkRgbdMessages(const RgbdMessages& msgs, const RgbdTopics& topics);
 // Images and intrinsics into an RgbdFrame (stamp = colour stamp). T_W_C: colour camera -> world;
