@@ -6,8 +6,9 @@ SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
 PKG := multiview_object_detection
 ROOT := $(CURDIR)
-# The workspace lies in a dot-folder: its src/ links back to this repository, and roslib's package
-# crawl (roslaunch's $$(find)) follows links but skips dot-folders, so it does not loop through it.
+# The workspace lies in a dot-folder under build/. Its package folder holds a link to each of this
+# repository's entries but build/: a link to the repository itself would put the workspace inside its
+# own package, and rosrun's `find -L` over the package reported a file system loop on every call.
 WS ?= $(ROOT)/build/.ws
 JOBS ?= $(shell nproc)
 BUILD_TYPE ?= Release
@@ -25,11 +26,17 @@ all: build
 deps:
 	@bash scripts/install_deps.sh
 
-$(WS)/src/$(PKG):
-	@mkdir -p $(WS)/src
-	@ln -sfn $(ROOT) $(WS)/src/$(PKG)
+# $(call link_package,WORKSPACE): the package folder of WORKSPACE, links made for new entries and removed
+# for gone ones (a workspace of the earlier layout, one link to the repository, is converted).
+link_package = pkg_dir=$(1)/src/$(PKG); mkdir -p $(1)/src; if [ -L "$$pkg_dir" ]; then rm "$$pkg_dir"; fi; \
+	mkdir -p "$$pkg_dir"; find "$$pkg_dir" -maxdepth 1 -xtype l -delete; \
+	for entry in $(ROOT)/*; do [ "$$(basename "$$entry")" = build ] || ln -sfn "$$entry" "$$pkg_dir/"; done
 
-build: deps $(WS)/src/$(PKG)
+.PHONY: workspace sanitize-workspace
+workspace:
+	@$(call link_package,$(WS))
+
+build: deps workspace
 	@cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
 
 test: build
@@ -58,11 +65,10 @@ SAN_ENV := ASAN_OPTIONS=alloc_dealloc_mismatch=0:detect_leaks=1:log_path=$(SAN_L
 	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=0:suppressions=$(SAN_SUPP)/ubsan.supp \
 	LSAN_OPTIONS=suppressions=$(SAN_SUPP)/lsan.supp:print_suppressions=0 ROS_LOG_DIR=$(SAN_LOGS)/ros
 
-$(SAN_WS)/src/$(PKG):
-	@mkdir -p $(SAN_WS)/src
-	@ln -sfn $(ROOT) $(SAN_WS)/src/$(PKG)
+sanitize-workspace:
+	@$(call link_package,$(SAN_WS))
 
-test-sanitize: deps $(SAN_WS)/src/$(PKG)
+test-sanitize: deps sanitize-workspace
 	@cd $(SAN_WS) && catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
 	@rm -rf $(SAN_WS)/build/test_results $(SAN_LOGS) && mkdir -p $(SAN_LOGS)
 	@cd $(SAN_WS) && $(SAN_ENV) catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(SAN_WS)/run_tests.log \

@@ -1,6 +1,7 @@
 // object_detection.launch ends when its node exits: a node that cannot start (no model files) must
-// not leave a launch running with no detection. roslaunch runs here with its own master on a port
-// of its own; it must be gone well within kLaunchTimeoutS.
+// not leave a launch running with no detection. And rosrun of the package's tools prints no noise.
+// roslaunch runs here with its own master on a port of its own; it must be gone well within
+// kLaunchTimeoutS.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -43,6 +44,23 @@ TEST(LaunchRequiredTest, LaunchEndsWhenTheNodeCannotStart) {
   EXPECT_NE(text.str().find("FastestDet.onnx"), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("REQUIRED process"), std::string::npos) << text.str();
   fs::remove_all(dir);
+}
+
+// rosrun searches the package folder with `find -L`: the workspace's package folder must not lead
+// back into the workspace (it printed "find: File system loop detected" twice on every call).
+TEST(RosrunTest, FindsTheToolsWithoutAFileSystemLoop) {
+  if (std::system("command -v rosrun > /dev/null 2>&1") != 0) GTEST_SKIP() << "rosrun not found";
+  const fs::path log = fs::temp_directory_path() / ("mvod_rosrun_" + std::to_string(::getpid()));
+  const std::string command =
+      "rosrun multiview_object_detection print_parameter_ranges > '" + log.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  fs::remove(log);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << text.str();
+  EXPECT_NE(text.str().find("filter/voxel_leaf_size_m"), std::string::npos) << text.str();
+  EXPECT_EQ(text.str().find("File system loop"), std::string::npos) << text.str();
 }
 
 }  // namespace
