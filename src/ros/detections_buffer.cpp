@@ -23,6 +23,8 @@ constexpr double kTimeJumpBackS = 1.0;
 
 void DetectionsBuffer::subscribe(ros::NodeHandle nh) {
   using Msg = multiview_object_detection::InstanceDetections;
+  // A detector may run on some frames only: its silence is checked, not its rate.
+  if (stats_ != nullptr) stats_->inputs().expect(nh.resolveName("detections"), false);
   sub_ = nh.subscribe<Msg>("detections", 30,
                            guardedCallback<Msg>(nh.resolveName("detections"), stats_,
                                                 [this](const boost::shared_ptr<const Msg>& msg) {

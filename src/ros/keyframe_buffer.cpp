@@ -52,6 +52,7 @@ KeyframeBuffer::KeyframeBuffer(const ObjectDetectionRosConfig& config, const Rgb
 
 void KeyframeBuffer::start(ros::NodeHandle nh) {
   if (config_.pose_source == "topic") {
+    stats_->inputs().expect(nh.resolveName("pose"), true);
     pose_sub_ = nh.subscribe<geometry_msgs::PoseStamped>(
         "pose", 100,
         guardedCallback<geometry_msgs::PoseStamped>(

@@ -15,6 +15,7 @@
 #include "multiview_object_detection/ros/keyframe_buffer.h"
 #include "multiview_object_detection/ros/keyframe_poses_input.h"
 #include "multiview_object_detection/ros/keyframe_worker.h"
+#include "multiview_object_detection/ros/node_diagnostics.h"
 #include "multiview_object_detection/ros/object_detection_publishers.h"
 #include "multiview_object_detection/ros/object_detection_services.h"
 #include "multiview_object_detection/ros/reconfigure_names.h"
@@ -92,6 +93,7 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   // The stages, each told only about the ones it hands work to.
   input_ = std::make_unique<RgbdInput>(nh_, nh_private_, config, &stats_, shut_down_);
   publishers_ = std::make_unique<ObjectDetectionPublishers>(nh_, nh_private_, config, &stats_);
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, nh_private_, &stats_);
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   if (config.detector == "topic")
     detections_ = std::make_unique<DetectionsBuffer>(shut_down_, &stats_);
@@ -154,11 +156,13 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   }
   tf_input_ = std::make_unique<TfInput>(tf_buffer_.get(), &stats_);
   tf_input_->start(nh_);
+  // The stale and rate checks count from here.
+  stats_.inputs().configure({config.input_min_rate_hz, config.input_timeout_s});
   input_->subscribe([this](PendingFrame frame) { buffer_->addFrame(std::move(frame)); });
   if (detections_) detections_->subscribe(nh_);
   keyframe_poses_->subscribe(nh_);
   buffer_->start(nh_);
-  publishers_->startDiagnostics();
+  diagnostics_->start();
 }
 
 void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolicy& paths) {
@@ -202,7 +206,7 @@ void ObjectDetectionRos::shutdown() {
   if (!ok_ || shut_down_.exchange(true)) return;
   // No new input.
   buffer_->stop();
-  publishers_->stopDiagnostics();
+  diagnostics_->stop();
   input_->unsubscribe();
   keyframe_poses_->unsubscribe();
   // Within a stage's time: the keyframe in progress is cancelled and the queue dropped (the map is

@@ -28,6 +28,8 @@ SegmenterOptions ObjectDetectionRosConfig::segmenterOptions() const {
 Status ObjectDetectionRosConfig::isValid() const {
   if (world_frame.empty()) return Status::Error("world_frame must not be empty");
   if (Status s = checkParameterRange("queue_size", queue_size); !s) return s;
+  if (Status s = checkParameterRange("input_min_rate_hz", input_min_rate_hz); !s) return s;
+  if (Status s = checkParameterRange("input_timeout_s", input_timeout_s); !s) return s;
   if (pose_source != "tf" && pose_source != "topic") {
     return Status::Error("pose_source '" + pose_source + "' is unknown (use tf or topic)");
   }
@@ -74,6 +76,8 @@ std::string ObjectDetectionRosConfig::print() const {
       << "depth_registered: " << (depth_registered ? "true" : "false") << "\n"
       << "queue_size: " << queue_size << "\n"
       << "exact_sync: " << (exact_sync ? "true" : "false") << "\n"
+      << "input_min_rate_hz: " << input_min_rate_hz << "\n"
+      << "input_timeout_s: " << input_timeout_s << "\n"
       << "pose_source: " << pose_source << "\n"
       << "tf_timeout_s: " << tf_timeout_s << "\n"
       << "pose_max_time_diff_s: " << pose_max_time_diff_s << "\n"

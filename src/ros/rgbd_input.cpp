@@ -27,6 +27,9 @@ void RgbdInput::subscribe(FrameCallback callback) {
   color_sub_.subscribe(*it_, topics_.color, queue_size, hints);
   depth_sub_.subscribe(*it_, topics_.depth, queue_size, hints);
   color_info_sub_.subscribe(nh_, topics_.color_info, queue_size);
+  stats_->inputs().expect(topics_.color, true);
+  stats_->inputs().expect(topics_.depth, true);
+  stats_->inputs().expect(topics_.color_info, true);
   color_stamps_ = std::make_unique<StampFilter<Image>>(topics_.color, stats_);
   depth_stamps_ = std::make_unique<StampFilter<Image>>(topics_.depth, stats_);
   color_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.color_info, stats_);
@@ -51,6 +54,7 @@ void RgbdInput::subscribe(FrameCallback callback) {
     }
   } else {
     depth_info_sub_.subscribe(nh_, topics_.depth_info, queue_size);
+    stats_->inputs().expect(topics_.depth_info, true);
     depth_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.depth_info, stats_);
     depth_info_stamps_->connectInput(depth_info_sub_);
     const auto callback = boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, _4);

@@ -371,6 +371,8 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("depth_registered", &cfg.depth_registered);
   p.read("queue_size", &cfg.queue_size);
   p.read("exact_sync", &cfg.exact_sync);
+  p.read("input_min_rate_hz", &cfg.input_min_rate_hz);
+  p.read("input_timeout_s", &cfg.input_timeout_s);
   p.read("pose_source", &cfg.pose_source);
   p.read("tf_timeout_s", &cfg.tf_timeout_s);
   p.read("pose_max_time_diff_s", &cfg.pose_max_time_diff_s);

@@ -21,6 +21,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/input_monitor.h"
 #include "multiview_object_detection/ros/markers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/reconfigure_names.h"
@@ -845,6 +846,51 @@ TEST(RosConversionsTest, EveryReconfigureNameHasItsYamlNameInTheConfigFile) {
         << " is not a parameter of config/object_detection.yaml";
   }
   EXPECT_EQ(nested, 10);
+}
+
+// Dead and slow inputs: an input silent for timeout_s (or since the start) is an error naming it, a
+// slow one a warning, a steady one ok with its rate; unexpected topics are not tracked.
+TEST(InputMonitorTest, SilentInputsAreErrorsSlowOnesWarningsAndTheyRecover) {
+  using Clock = InputMonitor::Clock;
+  const Clock::time_point t0 = Clock::now();
+  const auto at = [t0](double s) {
+    return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  InputMonitor monitor;
+  monitor.configure({/*min_rate_hz=*/2.0, /*timeout_s=*/3.0}, t0);
+  monitor.expect("/camera/rgb/image_rect_color", true);
+  monitor.expect("/detections", false);
+  monitor.received("/not/expected", at(0.1));
+
+  std::vector<InputMonitor::Report> reports = monitor.reports(at(1.0));
+  ASSERT_EQ(reports.size(), 2u);
+  EXPECT_EQ(reports[0].level, InputMonitor::kOk) << reports[0].message;  // waiting, not yet late
+  reports = monitor.reports(at(3.5));
+  EXPECT_EQ(reports[0].level, InputMonitor::kError);
+  EXPECT_NE(reports[0].message.find("/camera/rgb/image_rect_color"), std::string::npos);
+  EXPECT_NE(reports[0].message.find("remapped"), std::string::npos) << reports[0].message;
+  EXPECT_EQ(reports[1].level, InputMonitor::kError);
+
+  // 10 Hz from 4 s to 10 s: ok, about 10 Hz.
+  for (int i = 0; i < 60; ++i) monitor.received("/camera/rgb/image_rect_color", at(4.0 + 0.1 * i));
+  for (double t = 4.0; t < 10.0; t += 2.0) monitor.received("/detections", at(t));
+  reports = monitor.reports(at(10.0));
+  EXPECT_EQ(reports[0].level, InputMonitor::kOk) << reports[0].message;
+  EXPECT_NEAR(reports[0].rate_hz, 10.0, 0.5);
+  EXPECT_EQ(reports[0].messages, 60);
+  EXPECT_EQ(reports[1].level, InputMonitor::kOk) << reports[1].message;  // 0.5 Hz: no rate check
+
+  // 1 Hz: slower than 2 Hz, a warning.
+  for (double t = 10.0; t < 16.0; t += 1.0) monitor.received("/camera/rgb/image_rect_color", at(t));
+  reports = monitor.reports(at(16.0));
+  EXPECT_EQ(reports[0].level, InputMonitor::kWarn) << reports[0].message;
+  EXPECT_NE(reports[0].message.find("below input_min_rate_hz"), std::string::npos);
+
+  // Silent for 3 s: an error again, naming how long.
+  reports = monitor.reports(at(19.5));
+  EXPECT_EQ(reports[0].level, InputMonitor::kError) << reports[0].message;
+  EXPECT_NEAR(reports[0].silent_s, 4.5, 1e-6);
+  EXPECT_NE(reports[0].message.find("nothing on"), std::string::npos) << reports[0].message;
 }
 
 }  // namespace mvod

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <random>
 
@@ -417,6 +418,76 @@ TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering
   ::kill(pid, SIGINT);
   int status = 0;
   ::waitpid(pid, &status, 0);
+  fs::remove_all(root);
+}
+
+// /diagnostics notices a dead input: with input_timeout_s 2, the colour topic's status is an ERROR
+// naming it within seconds of the start (nothing published), OK while frames come, and an ERROR
+// again once they stop.
+TEST(NodeDiagnosticsTest, ADeadInputIsAnErrorAndOkWhenItResumes) {
+  ros::NodeHandle nh;
+  const std::string node = "/diagnostics_node";
+  const fs::path root = fs::temp_directory_path() / ("mvod_diag_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  std::mutex mutex;
+  std::map<std::string, diagnostic_msgs::DiagnosticStatus> statuses;  // by name, the latest
+  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name.rfind(node.substr(1) + ":", 0) == 0) statuses[status.name] = status;
+        }
+      });
+  const std::string colour = node.substr(1) + ": input " + kRgbTopic;
+  const auto levelIs = [&](int level) {
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto found = statuses.find(colour);
+    return found != statuses.end() && found->second.level == level;
+  };
+  const auto describe = [&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    std::string text;
+    for (const auto& [name, status] : statuses) {
+      text += name + ": " + std::to_string(status.level) + " " + status.message + "\n";
+    }
+    return text;
+  };
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, node, true);
+  const pid_t pid = startNode(
+      (root / "maps").string(), node,
+      {"_detector:=topic", "_pose_source:=topic", "_input_timeout_s:=2", "_autosave_period_s:=0"},
+      (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  EXPECT_TRUE(outputs.waitFor([&] { return levelIs(2); }, 15.0))
+      << "no ERROR for the silent colour topic\n"
+      << describe();
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_NE(statuses[colour].message.find(kRgbTopic), std::string::npos);
+    EXPECT_EQ(statuses[colour].hardware_id, "none");
+    EXPECT_EQ(statuses.count(node.substr(1) + ": map"), 1u) << describe();
+  }
+  // Frames at about 5 Hz until the status is OK (at most 15 s).
+  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
+  bool ok = false;
+  for (int i = 0; i < 75 && !ok; ++i) {
+    inputs.publish(stream.make(i % stream.options().num_frames, ros::Time(++second)), true, true);
+    ros::WallDuration(0.2).sleep();
+    ok = levelIs(0);
+  }
+  EXPECT_TRUE(ok) << "the colour topic's status did not return to OK\n" << describe();
+  // Stopped: an ERROR again.
+  EXPECT_TRUE(outputs.waitFor([&] { return levelIs(2); }, 15.0)) << describe();
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  std::string logs;
+  mvod::readFile((root / "node.out").string(), &logs);
+  EXPECT_NE(logs.find(std::string("nothing on '") + kRgbTopic), std::string::npos) << logs;
   fs::remove_all(root);
 }
 

@@ -81,8 +81,7 @@ class NodeChangingRoomTest : public ::testing::Test {
         boost::function<void(const diagnostic_msgs::DiagnosticArray::ConstPtr&)>(
             [](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
               for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
-                if (status.name.find(kNode) == std::string::npos ||
-                    status.name.find(kSecondNode) != std::string::npos) {
+                if (status.name.rfind(std::string(kNode + 1) + ":", 0) != 0) {  // "<node>: <task>"
                   continue;
                 }
                 std::lock_guard<std::mutex> lock(mutex_);

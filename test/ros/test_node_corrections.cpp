@@ -240,8 +240,7 @@ TEST_F(NodeCorrectionsTest, PosesMatchingNoKeyframeAreCountedAndNaNsRefused) {
   ros::Subscriber diagnostics = nh_->subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
         for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
-          if (status.name.find(kNode) == std::string::npos ||
-              status.name.find(kSecondNode) != std::string::npos) {
+          if (status.name.rfind(std::string(kNode + 1) + ":", 0) != 0) {  // "<node>: <task>"
             continue;
           }
           std::lock_guard<std::mutex> lock(mutex);

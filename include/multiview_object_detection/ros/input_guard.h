@@ -58,6 +58,7 @@ boost::function<void(const boost::shared_ptr<const Msg>&)> guardedCallback(const
                                                                            SharedStatistics* stats,
                                                                            Handler handler) {
   return [topic, stats, handler](const boost::shared_ptr<const Msg>& msg) {
+    if (stats != nullptr) stats->inputs().received(topic);
     runGuarded("input '" + topic + "'", stats, [&] {
       if (!acceptInputStamp(msg->header.stamp, "message on '" + topic + "'", stats)) return;
       handler(msg);

@@ -1,6 +1,6 @@
-// Everything the node publishes: the map (objects, markers, object cloud), the keyframe path, the
-// detection image and /diagnostics. Topics are private (~objects, ...), latched where a late rviz
-// should still see the map.
+// Everything the node publishes but /diagnostics (node_diagnostics.h): the map (objects, markers,
+// object cloud), the keyframe path and the detection image. Topics are private (~objects, ...),
+// latched where a late rviz should still see the map.
 #pragma once
 
 #include <image_transport/image_transport.h>
@@ -21,7 +21,7 @@ namespace mvod {
 
 class ObjectDetectionPublishers {
  public:
-  // Advertises every output; /diagnostics starts with startDiagnostics().
+  // Advertises every output (/diagnostics: NodeDiagnostics).
   ObjectDetectionPublishers(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
                             const ObjectDetectionRosConfig& config, SharedStatistics* stats);
 
@@ -39,13 +39,7 @@ class ObjectDetectionPublishers {
   void publishDetectionImage(const cv::Mat& color_bgr, const std::vector<Detection2D>& detections,
                              const std_msgs::Header& header);
 
-  // /diagnostics every second from the statistics.
-  void startDiagnostics();
-  void stopDiagnostics();
-
  private:
-  void publishDiagnostics(const ros::WallTimerEvent& event);
-
   ros::NodeHandle nh_;
   const ObjectDetectionRosConfig config_;  // fixed fields only (world_frame, publish_object_cloud)
   SharedStatistics* stats_;
@@ -55,17 +49,10 @@ class ObjectDetectionPublishers {
   ros::Publisher markers_pub_;
   ros::Publisher object_cloud_pub_;
   ros::Publisher keyframes_pub_;
-  ros::Publisher diagnostics_pub_;
   std::unique_ptr<image_transport::ImageTransport> private_it_;
   image_transport::Publisher detections_image_pub_;
   std::mutex publish_mutex_;
   std::set<int> published_marker_ids_;  // publish_mutex_
-
-  ros::WallTimer diagnostics_timer_;
-  int dropped_at_last_diagnostics_ = 0;  // the timer's thread only
-  int exceptions_at_last_diagnostics_ = 0;
-  int refused_at_last_diagnostics_ = 0;
-  int autosave_failures_at_last_diagnostics_ = 0;
 };
 
 }  // namespace mvod

@@ -6,6 +6,7 @@
 //   -> KeyframeBuffer (pose from TF or topic, waited for without blocking; keyframe selection)
 //   -> KeyframeWorker (bounded queue, oldest dropped; ONE thread: detector + ObjectMapper)
 //   -> ObjectDetectionPublishers.
+// NodeDiagnostics publishes /diagnostics: the map's status and one per input (silent, slow).
 //
 // ObjectDetectionServices run on their own callback queue and thread, so a slow keyframe does not
 // stall the input.
@@ -35,6 +36,7 @@ class DetectionsBuffer;
 class KeyframeBuffer;
 class KeyframePosesInput;
 class KeyframeWorker;
+class NodeDiagnostics;
 class ObjectDetectionPublishers;
 class ObjectDetectionServices;
 class RgbdInput;
@@ -102,6 +104,7 @@ class ObjectDetectionRos {
   std::unique_ptr<KeyframePosesInput> keyframe_poses_;
   std::unique_ptr<RgbdInput> input_;
   std::unique_ptr<ObjectDetectionServices> services_;
+  std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<MapAutosaver> autosaver_;  // autosave_period_s > 0 only
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<ReconfigureServer> reconfigure_server_;

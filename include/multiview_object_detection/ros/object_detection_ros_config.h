@@ -20,6 +20,10 @@ struct ObjectDetectionRosConfig {
   bool depth_registered = true;  // false: depth/image_raw + depth/camera_info, T_C_D from TF
   int queue_size = 10;
   bool exact_sync = false;
+  // /diagnostics: an input (images, camera_info, pose topic) slower than this is a warning, and
+  // any input silent for input_timeout_s (or since the start) is an error naming the topic.
+  double input_min_rate_hz = 1.0;
+  double input_timeout_s = 5.0;
 
   // Camera pose: "tf" (world_frame <- camera frame at the image stamp) or "topic" (PoseStamped).
   std::string pose_source = "tf";

@@ -4,6 +4,7 @@
 #include <mutex>
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "multiview_object_detection/ros/input_monitor.h"
 
 namespace mvod {
 
@@ -66,9 +67,14 @@ class SharedStatistics {
     return change(stats_);
   }
 
+  // Arrivals per input, for the stale and rate checks on /diagnostics (its own lock).
+  InputMonitor& inputs() { return inputs_; }
+  const InputMonitor& inputs() const { return inputs_; }
+
  private:
   mutable std::mutex mutex_;
   ObjectDetectionStatistics stats_;
+  InputMonitor inputs_;
 };
 
 }  // namespace mvod

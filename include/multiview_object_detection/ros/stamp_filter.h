@@ -32,6 +32,7 @@ class StampFilter : public message_filters::SimpleFilter<M> {
 
  private:
   void add(const EventType& event) {
+    if (stats_ != nullptr) stats_->inputs().received(topic_);
     runGuarded("input '" + topic_ + "'", stats_, [&] {
       if (!acceptInputStamp(event.getMessage()->header.stamp, "message on '" + topic_ + "'",
                             stats_)) {

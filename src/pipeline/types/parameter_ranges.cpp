@@ -27,6 +27,9 @@ std::string rangeText(const ParameterRange& range) {
 const std::vector<ParameterRange>& parameterRanges() {
   static const std::vector<ParameterRange> kRanges = {
       {"queue_size", 1, 1000, "", false, "RGB-D sets held for synchronisation (4 images each)"},
+      {"input_min_rate_hz", 0, 1000, "Hz", false, "a slower input is a warning on /diagnostics"},
+      {"input_timeout_s", 0.5, 86400, "s", false,
+       "an input silent this long is an error on /diagnostics"},
       {"tf_timeout_s", 0, 60, "s", false, "how long a frame may wait for its pose"},
       {"pose_max_time_diff_s", 0, 10, "s", false, "pose to image stamp distance"},
       {"keyframe_every_n", 1, 1000, "", false, "frames between keyframes"},

@@ -42,6 +42,8 @@ TEST(ParameterRangesTest, EveryRangeIsAParameterWhoseDefaultLiesInside) {
       EXPECT_STREQ(range.unit, "m");
     } else if (name.size() > 2 && name.compare(name.size() - 2, 2, "_s") == 0) {
       EXPECT_STREQ(range.unit, "s");
+    } else if (name.size() > 3 && name.compare(name.size() - 3, 3, "_hz") == 0) {
+      EXPECT_STREQ(range.unit, "Hz");
     } else {
       EXPECT_STREQ(range.unit, "");
     }

@@ -1,0 +1,132 @@
+#include "multiview_object_detection/ros/node_diagnostics.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include <string>
+#include <utility>
+
+namespace mvod {
+namespace {
+
+using diagnostic_msgs::DiagnosticStatus;
+
+}  // namespace
+
+NodeDiagnostics::NodeDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
+                                 SharedStatistics* stats)
+    : stats_(stats),
+      updater_(std::make_unique<diagnostic_updater::Updater>(nh, nh_private)),
+      nh_(nh) {
+  // A software node: no device of its own (the camera is the driver's).
+  updater_->setHardwareID("none");
+  updater_->add("map", this, &NodeDiagnostics::mapStatus);
+}
+
+void NodeDiagnostics::start() {
+  addInputTasks();
+  timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &NodeDiagnostics::update, this);
+}
+
+void NodeDiagnostics::stop() { timer_.stop(); }
+
+void NodeDiagnostics::addInputTasks() {
+  for (const InputMonitor::Report& report : stats_->inputs().reports()) {
+    const std::string topic = report.topic;
+    updater_->add("input " + topic, [this, topic](diagnostic_updater::DiagnosticStatusWrapper& s) {
+      inputStatus(topic, s);
+    });
+  }
+}
+
+void NodeDiagnostics::update(const ros::WallTimerEvent& /*event*/) {
+  // force_update: Updater::update() follows ros::Time, which stands still while a bag is paused.
+  updater_->force_update();
+}
+
+void NodeDiagnostics::inputStatus(const std::string& topic,
+                                  diagnostic_updater::DiagnosticStatusWrapper& status) {
+  InputMonitor::Report report;
+  for (InputMonitor::Report& r : stats_->inputs().reports()) {
+    if (r.topic == topic) report = std::move(r);
+  }
+  status.summary(static_cast<unsigned char>(report.level), report.message);
+  status.add("topic", topic);
+  status.add("rate hz", report.rate_hz);
+  status.add("silent s", report.silent_s);
+  status.add("messages", report.messages);
+  // Logged once when it goes silent, once when it is back.
+  int& last = input_levels_[topic];
+  if (report.level == InputMonitor::kError && last != InputMonitor::kError) {
+    ROS_ERROR("%s", report.message.c_str());
+  } else if (report.level != InputMonitor::kError && last == InputMonitor::kError) {
+    ROS_INFO("'%s' is back: %s", topic.c_str(), report.message.c_str());
+  }
+  last = report.level;
+}
+
+void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const ObjectDetectionStatistics stats = stats_->get();
+  status.summary(DiagnosticStatus::OK, "ok");
+  if (stats.keyframes_dropped > dropped_at_last_) {
+    status.summary(DiagnosticStatus::WARN,
+                   "keyframes dropped: processing is slower than the keyframe rate");
+  } else if (stats.autosave_failures > autosave_failures_at_last_) {
+    status.summary(DiagnosticStatus::WARN,
+                   "autosave failed (the previous autosave is kept; see the log)");
+  } else if (stats.callback_exceptions > exceptions_at_last_) {
+    status.summary(DiagnosticStatus::WARN,
+                   "a callback failed with an exception (input dropped; see the log)");
+  } else if (stats.stamps_refused > refused_at_last_) {
+    status.summary(DiagnosticStatus::WARN,
+                   "input refused for its stamp (past 2038 or far ahead of the clock)");
+  } else if (stats.waiting_for_gravity) {
+    status.summary(DiagnosticStatus::WARN, "waiting for gravity");
+  }
+  dropped_at_last_ = stats.keyframes_dropped;
+  exceptions_at_last_ = stats.callback_exceptions;
+  refused_at_last_ = stats.stamps_refused;
+  autosave_failures_at_last_ = stats.autosave_failures;
+  const std::pair<const char*, double> values[] = {
+      {"frames received", stats.frames_received},
+      {"frames rejected", stats.frames_rejected},
+      {"stamps refused", stats.stamps_refused},
+      {"callback exceptions", stats.callback_exceptions},
+      {"autosaves", stats.autosaves},
+      {"autosave failures", stats.autosave_failures},
+      {"autosave ms", stats.autosave_ms},
+      {"autosave bytes", stats.autosave_bytes},
+      {"pose failures", stats.pose_failures},
+      {"time jumps back", stats.time_jumps},
+      {"detections capped", stats.detections_capped},
+      {"keyframes selected", stats.keyframes_selected},
+      {"keyframes dropped", stats.keyframes_dropped},
+      {"keyframes cancelled", stats.keyframes_cancelled},
+      {"keyframes processed", stats.keyframes_processed},
+      {"keyframes failed", stats.keyframes_failed},
+      {"queue length", stats.queue_length},
+      {"objects", stats.objects},
+      {"removed atypical", stats.removed_atypical},
+      {"removed intersecting", stats.removed_intersecting},
+      {"detection ms", stats.detection_ms},
+      {"extraction ms", stats.stage_times.extraction_ms},
+      {"filter ms", stats.stage_times.filter_ms},
+      {"lccp ms", stats.stage_times.lccp_ms},
+      {"manhattan ms", stats.stage_times.manhattan_ms},
+      {"fusion ms", stats.stage_times.fusion_ms},
+      {"existence ms", stats.stage_times.existence_ms},
+      {"refinement ms", stats.stage_times.refinement_ms},
+      {"keyframe total ms", stats.stage_times.total_ms},
+      {"latency ms", stats.latency_ms},
+      {"latency median ms", stats.latency_median_ms},
+      {"removed gone", stats.removed_gone},
+      {"keyframe pose messages", stats.keyframe_pose_messages},
+      {"keyframe poses refused", stats.keyframe_poses_refused},
+      {"keyframe poses unmatched", stats.keyframe_poses_unmatched},
+      {"corrections applied", stats.corrections_applied},
+      {"keyframes corrected", stats.keyframes_corrected},
+      {"correction ms", stats.correction_ms},
+  };
+  for (const auto& [key, value] : values) status.add(key, value);
+}
+
+}  // namespace mvod
