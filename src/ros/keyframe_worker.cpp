@@ -481,7 +481,7 @@ std::unique_lock<std::timed_mutex> KeyframeWorker::lockMap(double timeout_s, Sta
   } else if (!lock.try_lock_for(std::chrono::duration<double>(timeout_s))) {
     std::ostringstream text;
     text << "busy: the keyframe in progress did not finish within service_timeout_s (" << timeout_s
-         << " s); nothing was changed, try again";
+         << " s); the map was not changed, try again";
     *busy = Status::Error(text.str());
   }
   return lock;

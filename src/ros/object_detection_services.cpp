@@ -116,7 +116,9 @@ bool ObjectDetectionServices::reset(std_srvs::Trigger::Request& /*request*/,
   const Status reset = worker_->resetMap(timeout_s_, &removed);
   if (!reset) {
     response.success = false;
-    response.message = "reset: " + reset.message();
+    // The queue is already dropped and the keyframe in progress told to stop: only the map is kept.
+    response.message = "reset: " + reset.message() +
+                       " (the queued keyframes were dropped and the one in progress cancelled)";
     ROS_WARN("%s", response.message.c_str());
     return true;
   }

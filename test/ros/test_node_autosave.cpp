@@ -233,46 +233,91 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   fs::remove_all(root);
 }
 
+// A node on the paper's (slow) method with a long queue: 16 keyframes published, the first
+// processed, the others queued behind a long keyframe in progress.
+class SlowNodeWithAQueue {
+ public:
+  SlowNodeWithAQueue(ros::NodeHandle& nh, const std::string& node)
+      : node_(node),
+        root_(fs::temp_directory_path() / ("mvod" + node + "_" + std::to_string(::getpid()))),
+        stream_(SyntheticStream::Options()),
+        inputs_(nh),
+        outputs_(nh, node, true) {
+    fs::remove_all(root_);
+    fs::create_directories(root_ / "maps");
+  }
+  ~SlowNodeWithAQueue() {
+    if (pid_ > 0) stop(SIGKILL);
+    fs::remove_all(root_);
+  }
+
+  // Starts it (more parameters in `extra`) and feeds it; a failure says which step failed.
+  ::testing::AssertionResult start(const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"_detector:=topic",
+                                     "_pose_source:=topic",
+                                     "_keyframe_mode:=every_n",
+                                     "_keyframe_every_n:=1",
+                                     "_paper_method:=true",
+                                     "_processing_queue_size:=30",
+                                     "_refine_every_n_keyframes:=0",
+                                     "_autosave_period_s:=0"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    pid_ = startNode((root_ / "maps").string(), node_, args, (root_ / "node.out").string());
+    if (pid_ <= 0) return ::testing::AssertionFailure() << "fork failed";
+    if (!ros::service::waitForService(node_ + "/get_objects", 30000)) {
+      return ::testing::AssertionFailure() << "the node did not start";
+    }
+    if (!outputs_.waitFor([&] { return inputs_.connected(1, 1) && outputs_.connected(); }, 30.0)) {
+      return ::testing::AssertionFailure() << "the topics did not connect";
+    }
+    int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
+    for (int i = 0; i < 16; ++i) {
+      inputs_.publish(stream_.make(i % stream_.options().num_frames, ros::Time(++second)), true,
+                      true);
+    }
+    if (!outputs_.waitForObjectsCount(1, 60.0)) {
+      return ::testing::AssertionFailure() << "no keyframe processed\n" << outputs_.allLogs();
+    }
+    return ::testing::AssertionSuccess();
+  }
+
+  pid_t pid() const { return pid_; }
+  // Sends `signal` and waits for the node to end; its wait status.
+  int stop(int signal) {
+    int status = -1;
+    if (pid_ > 0 && ::kill(pid_, signal) == 0) ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return status;
+  }
+  const fs::path& root() const { return root_; }
+  NodeOutputs& outputs() { return outputs_; }
+
+ private:
+  std::string node_;
+  fs::path root_;
+  SyntheticStream stream_;
+  InputPublisher inputs_;
+  NodeOutputs outputs_;
+  pid_t pid_ = -1;
+};
+
 TEST(NodeShutdownTest, SigintDoesNotWaitForTheQueuedKeyframes) {
   // The paper's method (slow) with a long queue: SIGINT cancels the keyframe in progress and drops
   // the queue instead of working it off first.
   ros::NodeHandle nh;
-  const std::string node = "/sigint_node";
-  const fs::path root = fs::temp_directory_path() / ("mvod_sigint_" + std::to_string(::getpid()));
-  fs::remove_all(root);
-  fs::create_directories(root / "maps");
-  SyntheticStream stream{SyntheticStream::Options()};
-  InputPublisher inputs(nh);
-  NodeOutputs outputs(nh, node, true);
-  const pid_t pid =
-      startNode((root / "maps").string(), node,
-                {"_detector:=topic", "_pose_source:=topic", "_keyframe_mode:=every_n",
-                 "_keyframe_every_n:=1", "_paper_method:=true", "_processing_queue_size:=30",
-                 "_refine_every_n_keyframes:=0", "_autosave_period_s:=0"},
-                (root / "node.out").string());
-  ASSERT_GT(pid, 0);
-  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
-  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
-  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
-  for (int i = 0; i < 16; ++i) {
-    inputs.publish(stream.make(i % stream.options().num_frames, ros::Time(++second)), true, true);
-  }
-  EXPECT_TRUE(outputs.waitForObjectsCount(1, 60.0)) << "no keyframe processed\n"
-                                                    << outputs.allLogs();
+  SlowNodeWithAQueue node(nh, "/sigint_node");
+  ASSERT_TRUE(node.start({}));
   const ros::WallTime signalled = ros::WallTime::now();
-  ASSERT_EQ(::kill(pid, SIGINT), 0);
-  int status = 0;
-  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  const int status = node.stop(SIGINT);
   const double exit_s = (ros::WallTime::now() - signalled).toSec();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
   std::printf("[ INFO     ] SIGINT to exit: %.2f s\n", exit_s);
   // The queue was dropped (or the keyframe in progress cancelled), not worked off.
   std::string logs;
-  mvod::readFile((root / "node.out").string(), &logs);
+  mvod::readFile((node.root() / "node.out").string(), &logs);
   EXPECT_TRUE(logs.find("queued keyframe(s) dropped") != std::string::npos ||
               logs.find("cancelled (shutdown)") != std::string::npos)
       << logs;
-  fs::remove_all(root);
 }
 
 // map_directory is proved writable at start: with autosave on, a directory the node cannot write
@@ -375,27 +420,9 @@ TEST(NodeStartTest, TheFirstGetObjectsAnswersTheMapLoadedAtStart) {
 // ~get_objects keeps answering from the last snapshot meanwhile.
 TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering) {
   ros::NodeHandle nh;
+  SlowNodeWithAQueue slow(nh, "/busy_node");
+  ASSERT_TRUE(slow.start({"_service_timeout_s:=0.1"}));
   const std::string node = "/busy_node";
-  const fs::path root = fs::temp_directory_path() / ("mvod_busy_" + std::to_string(::getpid()));
-  fs::remove_all(root);
-  fs::create_directories(root / "maps");
-  SyntheticStream stream{SyntheticStream::Options()};
-  InputPublisher inputs(nh);
-  NodeOutputs outputs(nh, node, true);
-  const pid_t pid = startNode(
-      (root / "maps").string(), node,
-      {"_detector:=topic", "_pose_source:=topic", "_keyframe_mode:=every_n", "_keyframe_every_n:=1",
-       "_paper_method:=true", "_processing_queue_size:=30", "_refine_every_n_keyframes:=0",
-       "_autosave_period_s:=0", "_service_timeout_s:=0.1"},
-      (root / "node.out").string());
-  ASSERT_GT(pid, 0);
-  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
-  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
-  int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
-  for (int i = 0; i < 16; ++i) {
-    inputs.publish(stream.make(i % stream.options().num_frames, ros::Time(++second)), true, true);
-  }
-  EXPECT_TRUE(outputs.waitForObjectsCount(1, 60.0)) << "no keyframe processed";
   int busy = 0, refined = 0, read = 0;
   for (int i = 0; i < 20; ++i) {
     std_srvs::Trigger refine;
@@ -415,10 +442,7 @@ TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering
               refined, read);
   EXPECT_GT(busy, 0) << "~refine never gave up waiting for the keyframe in progress";
   EXPECT_EQ(read, 20);
-  ::kill(pid, SIGINT);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  fs::remove_all(root);
+  slow.stop(SIGINT);
 }
 
 // /diagnostics notices a dead input: with input_timeout_s 2, the colour topic's status is an ERROR
