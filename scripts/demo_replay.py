@@ -7,10 +7,13 @@ Used by `make demo` (scripts/demo.sh); also usable alone:
       [--gravity-down "[0, -1, 0]" | --gravity-estimate] [--keyframe-every N] [--rate R] [--no-rviz]
 
 Starts roslaunch (its own master on a free port, so it never meets another master) with the node and, on a
-virtual X display (Xvfb), rviz. Plays the bag with `rosbag play --clock`, waits on /diagnostics until every
-selected keyframe is processed, calls ~refine and ~save_map (DIR/objects.json, with clouds), prints
-~get_objects as a table, shows the map in rviz gravity-up and saves a screenshot (DIR/rviz.png). Everything it
-started is stopped on the way out. Exit status: 0 ok, 1 the node failed or found nothing, 2 bad arguments.
+virtual X display (Xvfb), rviz. Plays the bag with its clock (BagPlayer: like `rosbag play --clock`, but never
+more than a few frames ahead of what the node received, so a loaded machine slows the replay down instead of
+losing frames), waits on /diagnostics until every selected keyframe is processed, calls ~refine and ~save_map
+(DIR/objects.json, with clouds), prints ~get_objects as a table, shows the map in rviz gravity-up and saves a
+screenshot (DIR/rviz.png). Everything it started is stopped on the way out. Exit status: 0 ok; 1 the node
+failed, found nothing, or did not take every frame of the bag (lost, rejected, dropped or failed: the message
+says which); 2 bad arguments.
 
 Needs the Python message packages (Debian's python3-{std,geometry,diagnostic,sensor,visualization,tf2}-msgs,
 python3-std-srvs; deps/debian-packages.txt) and this package's own, generated in the catkin devel space.
@@ -135,6 +138,65 @@ def view_transform(saved_map):
 
 # ---------------------------------------------------------------------------------------------------------
 
+class BagPlayer:
+    """Plays a bag with its clock, like `rosbag play --clock`, but never more than MAX_AHEAD colour frames
+    ahead of what the node reports received (/diagnostics "frames received", every diagnostic_period): on a
+    loaded machine the replay slows down instead of the node's subscriber queues dropping frames."""
+    MAX_AHEAD = 3
+    WAIT_S = 60.0  # for the node to take one frame
+
+    def __init__(self, path, rate, demo):
+        import rosbag
+        self.bag = rosbag.Bag(path)
+        self.rate = rate
+        self.demo = demo
+        topics = self.bag.get_type_and_topic_info().topics
+        self.colour_topics = [t for t in topics if t.endswith('rgb/image_raw')]
+        if len(self.colour_topics) != 1:
+            raise DemoError('the bag has %d colour topics (*/rgb/image_raw), not one' % len(self.colour_topics))
+        self.frames = self.bag.get_message_count(self.colour_topics)
+
+    def play(self, tick):
+        import rospy
+        from rosgraph_msgs.msg import Clock
+        clock = rospy.Publisher('/clock', Clock, queue_size=10)
+        publishers = {}
+        for topic, info in self.bag.get_type_and_topic_info().topics.items():
+            msg_class = None
+            for _, msg, _ in self.bag.read_messages(topics=[topic]):
+                msg_class = type(msg)
+                break
+            publishers[topic] = rospy.Publisher(topic, msg_class, queue_size=100,
+                                                latch=topic.endswith('tf_static'))
+        # The node subscribes to the colour topic once it runs: wait for the connection.
+        colour = publishers[self.colour_topics[0]]
+        self.demo.wait_for(lambda: colour.get_num_connections() > 0, 60, 'the node to subscribe to the bag')
+        time.sleep(1.0)  # the other topics' connections
+        sent = 0
+        first_bag = None
+        first_wall = time.time()
+        for topic, msg, stamp in self.bag.read_messages():
+            tick()
+            if first_bag is None:
+                first_bag = stamp.to_sec()
+            due = first_wall + (stamp.to_sec() - first_bag) / self.rate
+            if due > time.time():
+                time.sleep(due - time.time())
+            if topic == self.colour_topics[0]:
+                self.wait_for_node(sent - self.MAX_AHEAD, tick)
+                sent += 1
+            clock.publish(Clock(clock=stamp))
+            publishers[topic].publish(msg)
+        self.wait_for_node(sent, tick)
+
+    def wait_for_node(self, frames, tick):
+        """Until the node reports `frames` received (at most WAIT_S: the end check tells what was lost)."""
+        deadline = time.time() + self.WAIT_S
+        while self.demo.received() < frames and time.time() < deadline:
+            tick()
+            time.sleep(0.01)
+
+
 class Demo:
 
     def __init__(self, args):
@@ -179,6 +241,9 @@ class Demo:
             self.diagnostics = msg
             self.diagnostics_count += 1
 
+    def received(self):
+        return 0 if self.diagnostics is None else self.stat('frames received')
+
     def progress(self):
         d = self.diagnostics
         if d is None:
@@ -194,6 +259,20 @@ class Demo:
         done = self.stat('keyframes processed') + self.stat('keyframes failed') + \
             self.stat('keyframes dropped')
         return self.stat('queue length') == 0 and done >= self.stat('keyframes selected')
+
+    def check_complete(self, frames):
+        """Every frame of the bag received and accepted, every keyframe processed: else the demo fails."""
+        problems = []
+        lost = frames - self.stat('frames received')
+        if lost > 0:
+            problems.append('%d of the bag\'s %d frames never reached the node' % (lost, frames))
+        for key in ('frames rejected', 'keyframes dropped', 'keyframes failed', 'pose failures'):
+            if self.stat(key) > 0:
+                problems.append('%s: %d' % (key, self.stat(key)))
+        if self.stat('keyframes processed') == 0:
+            problems.append('no keyframe was processed')
+        if problems:
+            raise DemoError('; '.join(problems) + ' (%s; the log says why)' % self.progress())
 
     def call(self, name, srv_class, *args):
         import rospy
@@ -228,7 +307,7 @@ class Demo:
         command = ['roslaunch', '-p', str(port), PKG, 'replay.launch', 'bag:=' + a.bag, 'play:=false',
                    'rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
                    'pose_source:=topic', 'keyframe_mode:=every_n', 'keyframe_every_n:=%d' % a.keyframe_every,
-                   'processing_queue_size:=%d' % a.queue_size,
+                   'processing_queue_size:=%d' % a.queue_size, 'diagnostic_period:=0.05',
                    'map_directory:=' + os.path.abspath(a.output_dir)]
         if a.rviz_config:
             command.append('rviz_config:=' + a.rviz_config)
@@ -272,24 +351,19 @@ class Demo:
 
         # -- play ----------------------------------------------------------------------------------------
         start = time.time()
-        # --delay: time for the node to connect to each topic before the first message.
-        play = ['rosbag', 'play', '--clock', '--quiet', '--delay', '2', '--rate', str(a.rate), a.bag]
-        log('playing the bag: ' + ' '.join(play))
-        player = subprocess.Popen(play, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                  start_new_session=True)
-        self.processes.append((player, 'rosbag play'))
-        last_print = time.time()
-        while player.poll() is None:
+        player = BagPlayer(a.bag, a.rate, self)
+        log('playing the bag (%d frames, at most %d ahead of what the node received)'
+            % (player.frames, BagPlayer.MAX_AHEAD))
+        last_print = [time.time()]
+
+        def tick():
             self.check_alive()
             if time.time() - start > a.timeout:
                 raise DemoError('timed out after %.0f s playing the bag' % a.timeout)
-            if time.time() - last_print >= 10:
+            if time.time() - last_print[0] >= 10:
                 log('  %3.0f s: %s' % (time.time() - start, self.progress()))
-                last_print = time.time()
-            time.sleep(0.25)
-        if player.returncode != 0:
-            raise DemoError('rosbag play failed (%d): %s' % (player.returncode,
-                                                              player.stderr.read().decode(errors='replace')))
+                last_print[0] = time.time()
+        player.play(tick)
         log('bag played in %.0f s; waiting for the node to finish its keyframes' % (time.time() - start))
 
         # -- drain: two diagnostics in a row with an empty queue and every selected keyframe done ----------
@@ -309,11 +383,7 @@ class Demo:
         last_print_box = [time.time()]
         self.wait_for(settled, max(30.0, a.timeout - (time.time() - start)), 'the keyframe queue to drain')
         log('done in %.0f s: %s' % (time.time() - start, self.progress()))
-        if self.stat('keyframes dropped') > 0:
-            log('WARNING: %d keyframes dropped (the node was slower than the bag: lower --rate)'
-                % self.stat('keyframes dropped'))
-        if self.stat('keyframes processed') == 0:
-            raise DemoError('no keyframe was processed (%s)' % self.progress())
+        self.check_complete(player.frames)
 
         # -- results -------------------------------------------------------------------------------------
         from std_srvs.srv import Trigger
@@ -405,7 +475,7 @@ def main():
     parser.add_argument('--gravity-estimate', action='store_true', help='gravity_source:=estimate')
     parser.add_argument('--keyframe-every', type=int, default=10)
     parser.add_argument('--queue-size', type=int, default=200, help='processing_queue_size: keep every keyframe')
-    parser.add_argument('--rate', type=float, default=1.0, help='rosbag play rate')
+    parser.add_argument('--rate', type=float, default=1.0, help='play rate (slower when the node lags)')
     parser.add_argument('--timeout', type=float, default=600, help='seconds for play + processing')
     parser.add_argument('--no-rviz', action='store_true', help='no rviz, no screenshot')
     parser.add_argument('--paper-method', action='store_true', help='the node runs the paper\'s method')

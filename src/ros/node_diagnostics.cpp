@@ -13,10 +13,11 @@ using diagnostic_msgs::DiagnosticStatus;
 }  // namespace
 
 NodeDiagnostics::NodeDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
-                                 SharedStatistics* stats)
+                                 SharedStatistics* stats, double period_s)
     : stats_(stats),
       updater_(std::make_unique<diagnostic_updater::Updater>(nh, nh_private)),
-      nh_(nh) {
+      nh_(nh),
+      period_s_(period_s) {
   // A software node: no device of its own (the camera is the driver's).
   updater_->setHardwareID("none");
   updater_->add("map", this, &NodeDiagnostics::mapStatus);
@@ -24,7 +25,7 @@ NodeDiagnostics::NodeDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandl
 
 void NodeDiagnostics::start() {
   addInputTasks();
-  timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &NodeDiagnostics::update, this);
+  timer_ = nh_.createWallTimer(ros::WallDuration(period_s_), &NodeDiagnostics::update, this);
 }
 
 void NodeDiagnostics::stop() { timer_.stop(); }

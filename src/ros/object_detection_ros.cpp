@@ -93,7 +93,8 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   // The stages, each told only about the ones it hands work to.
   input_ = std::make_unique<RgbdInput>(nh_, nh_private_, config, &stats_, shut_down_);
   publishers_ = std::make_unique<ObjectDetectionPublishers>(nh_, nh_private_, config, &stats_);
-  diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, nh_private_, &stats_);
+  diagnostics_ =
+      std::make_unique<NodeDiagnostics>(nh_, nh_private_, &stats_, config.diagnostic_period);
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   if (config.detector == "topic")
     detections_ = std::make_unique<DetectionsBuffer>(shut_down_, &stats_);

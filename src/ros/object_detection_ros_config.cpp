@@ -30,6 +30,7 @@ Status ObjectDetectionRosConfig::isValid() const {
   if (Status s = checkParameterRange("queue_size", queue_size); !s) return s;
   if (Status s = checkParameterRange("input_min_rate_hz", input_min_rate_hz); !s) return s;
   if (Status s = checkParameterRange("input_timeout_s", input_timeout_s); !s) return s;
+  if (Status s = checkParameterRange("diagnostic_period", diagnostic_period); !s) return s;
   if (pose_source != "tf" && pose_source != "topic") {
     return Status::Error("pose_source '" + pose_source + "' is unknown (use tf or topic)");
   }
@@ -78,6 +79,7 @@ std::string ObjectDetectionRosConfig::print() const {
       << "exact_sync: " << (exact_sync ? "true" : "false") << "\n"
       << "input_min_rate_hz: " << input_min_rate_hz << "\n"
       << "input_timeout_s: " << input_timeout_s << "\n"
+      << "diagnostic_period: " << diagnostic_period << "\n"
       << "pose_source: " << pose_source << "\n"
       << "tf_timeout_s: " << tf_timeout_s << "\n"
       << "pose_max_time_diff_s: " << pose_max_time_diff_s << "\n"

@@ -373,6 +373,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("exact_sync", &cfg.exact_sync);
   p.read("input_min_rate_hz", &cfg.input_min_rate_hz);
   p.read("input_timeout_s", &cfg.input_timeout_s);
+  p.read("diagnostic_period", &cfg.diagnostic_period);
   p.read("pose_source", &cfg.pose_source);
   p.read("tf_timeout_s", &cfg.tf_timeout_s);
   p.read("pose_max_time_diff_s", &cfg.pose_max_time_diff_s);

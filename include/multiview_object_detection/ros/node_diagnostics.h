@@ -1,4 +1,5 @@
-// /diagnostics with diagnostic_updater, once a second (wall time, so a paused bag still shows):
+// /diagnostics with diagnostic_updater, every diagnostic_period (wall time, so a paused bag still
+// shows):
 // "<node>: map" (queue, drops, failures, stage times; WARN on drops, failed autosaves, callback
 // exceptions, refused stamps, waiting for gravity) and "<node>: input <topic>" per expected input
 // (InputMonitor: ERROR when it is silent, WARN when slow). An input going silent is also logged
@@ -19,7 +20,7 @@ namespace mvod {
 class NodeDiagnostics {
  public:
   NodeDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
-                  SharedStatistics* stats);
+                  SharedStatistics* stats, double period_s);
   // Call after the inputs are subscribed (their statuses are made then).
   void start();
   void stop();
@@ -33,6 +34,7 @@ class NodeDiagnostics {
   SharedStatistics* stats_;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::NodeHandle nh_;
+  double period_s_;
   ros::WallTimer timer_;
   // The timer's thread only.
   std::map<std::string, int> input_levels_;

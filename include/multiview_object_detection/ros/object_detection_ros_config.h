@@ -24,6 +24,9 @@ struct ObjectDetectionRosConfig {
   // any input silent for input_timeout_s (or since the start) is an error naming the topic.
   double input_min_rate_hz = 1.0;
   double input_timeout_s = 5.0;
+  // Seconds between /diagnostics messages (diagnostic_updater's parameter name). make demo's player
+  // sets it short to pace the bag on what the node received.
+  double diagnostic_period = 1.0;
 
   // Camera pose: "tf" (world_frame <- camera frame at the image stamp) or "topic" (PoseStamped).
   std::string pose_source = "tf";

@@ -30,6 +30,7 @@ const std::vector<ParameterRange>& parameterRanges() {
       {"input_min_rate_hz", 0, 1000, "Hz", false, "a slower input is a warning on /diagnostics"},
       {"input_timeout_s", 0.5, 86400, "s", false,
        "an input silent this long is an error on /diagnostics"},
+      {"diagnostic_period", 0.02, 60, "s", false, "between /diagnostics messages"},
       {"tf_timeout_s", 0, 60, "s", false, "how long a frame may wait for its pose"},
       {"pose_max_time_diff_s", 0, 10, "s", false, "pose to image stamp distance"},
       {"keyframe_every_n", 1, 1000, "", false, "frames between keyframes"},
