@@ -183,18 +183,22 @@ class BagPlayer:
             if due > time.time():
                 time.sleep(due - time.time())
             if topic == self.colour_topics[0]:
-                self.wait_for_node(sent - self.MAX_AHEAD, tick)
+                # The schedule moves by the time waited: after a stall the bag goes on at its rate.
+                first_wall += self.wait_for_node(sent - self.MAX_AHEAD, tick)
                 sent += 1
             clock.publish(Clock(clock=stamp))
             publishers[topic].publish(msg)
         self.wait_for_node(sent, tick)
 
     def wait_for_node(self, frames, tick):
-        """Until the node reports `frames` received (at most WAIT_S: the end check tells what was lost)."""
-        deadline = time.time() + self.WAIT_S
+        """Until the node reports `frames` received (at most WAIT_S: the end check tells what was lost).
+        Returns the seconds waited."""
+        start = time.time()
+        deadline = start + self.WAIT_S
         while self.demo.received() < frames and time.time() < deadline:
             tick()
             time.sleep(0.01)
+        return time.time() - start
 
 
 class Demo:
@@ -355,9 +359,13 @@ class Demo:
         log('playing the bag (%d frames, at most %d ahead of what the node received)'
             % (player.frames, BagPlayer.MAX_AHEAD))
         last_print = [time.time()]
+        last_check = [0.0]
 
         def tick():
-            self.check_alive()
+            # Called per message and every 10 ms of a wait: the launch log is read twice a second.
+            if time.time() - last_check[0] >= 0.5:
+                self.check_alive()
+                last_check[0] = time.time()
             if time.time() - start > a.timeout:
                 raise DemoError('timed out after %.0f s playing the bag' % a.timeout)
             if time.time() - last_print[0] >= 10:

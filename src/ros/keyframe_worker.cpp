@@ -79,12 +79,14 @@ void KeyframeWorker::enqueue(KeyframeJob job) {
           [](ObjectDetectionStatistics& stats) { return ++stats.keyframes_dropped; });
     }
     queue_length = static_cast<int>(queue_.size());
+    // Under the queue's lock, like the worker's update when it takes a job: set after the lock, a
+    // length could overwrite the worker's newer one (a queue of 1 reported for an empty queue).
+    stats_->update([queue_length](ObjectDetectionStatistics& stats) {
+      ++stats.keyframes_selected;
+      stats.queue_length = queue_length;
+    });
   }
   queue_cv_.notify_one();
-  stats_->update([queue_length](ObjectDetectionStatistics& stats) {
-    ++stats.keyframes_selected;
-    stats.queue_length = queue_length;
-  });
   if (!dropped_what.empty()) {
     ROS_WARN_THROTTLE(kLogThrottlePeriodS,
                       "processing queue full (processing_queue_size %d): dropped the oldest "
@@ -98,6 +100,7 @@ void KeyframeWorker::clearQueue() {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   queue_.clear();
   pending_corrections_.clear();
+  stats_->update([](ObjectDetectionStatistics& stats) { stats.queue_length = 0; });
 }
 
 void KeyframeWorker::cancelCurrent() { cancel_ = true; }
