@@ -10,6 +10,10 @@ ROOT := $(CURDIR)
 # repository's entries but build/: a link to the repository itself would put the workspace inside its
 # own package, and rosrun's `find -L` over the package reported a file system loop on every call.
 WS ?= $(ROOT)/build/.ws
+# vision_msgs and jsk_recognition_msgs stand-ins where the real packages are not installed (Debian has
+# neither): their own workspace, built first; the package's workspace is built on top of it.
+STANDIN_WS ?= $(ROOT)/build/.ws-standin
+WS_ENV := set +u; if [ -f $(STANDIN_WS)/devel/setup.sh ]; then . $(STANDIN_WS)/devel/setup.sh; fi; set -u;
 JOBS ?= $(shell nproc)
 BUILD_TYPE ?= Release
 CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
@@ -32,16 +36,19 @@ link_package = pkg_dir=$(1)/src/$(PKG); mkdir -p $(1)/src; if [ -L "$$pkg_dir" ]
 	mkdir -p "$$pkg_dir"; find "$$pkg_dir" -maxdepth 1 -xtype l -delete; \
 	for entry in $(ROOT)/*; do [ "$$(basename "$$entry")" = build ] || ln -sfn "$$entry" "$$pkg_dir/"; done
 
-.PHONY: workspace sanitize-workspace
-workspace:
+.PHONY: workspace sanitize-workspace standin
+workspace: standin
 	@$(call link_package,$(WS))
 
+standin: deps
+	@bash scripts/build_standin.sh $(STANDIN_WS) $(CATKIN_ARGS) -j$(JOBS)
+
 build: deps workspace
-	@cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
+	@$(WS_ENV) cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
 
 test: build
 	@rm -rf $(WS)/build/test_results
-	@cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(WS)/run_tests.log \
+	@$(WS_ENV) cd $(WS) && catkin_make $(CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(WS)/run_tests.log \
 		| grep -E '^\[ *(RUN|OK|FAILED|PASSED|SKIPPED) |^\[==|FAILURE|ERROR|Skipping|SKIP|error:|Error [0-9]|undefined reference' || true
 	@catkin_test_results $(WS)/build/test_results || true
 	@/usr/bin/python3 scripts/test_summary.py $(WS)/build/test_results
@@ -57,7 +64,8 @@ SAN_LOGS := $(SAN_WS)/sanitizer_logs
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1
 SAN_CATKIN_ARGS := -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
 	-DCMAKE_BUILD_TYPE=RelWithDebInfo '-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG' \
-	'-DCMAKE_CXX_FLAGS=$(SAN_FLAGS)' -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON
+	'-DCMAKE_CXX_FLAGS=$(SAN_FLAGS)' -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCATKIN_ENABLE_TESTING=ON \
+	-DMVOD_STANDARD_MESSAGES=OFF
 SAN_SUPP := $(ROOT)/test/sanitize
 # ASan and LSan write their reports to $(SAN_LOGS)/asan.<pid>; gcc's UBSan runtime is a separate library that
 # ignores log_path, so its reports go to stderr: the test log, and the ROS logs (ROS_LOG_DIR) of the nodes.
@@ -65,13 +73,15 @@ SAN_ENV := ASAN_OPTIONS=alloc_dealloc_mismatch=0:detect_leaks=1:log_path=$(SAN_L
 	UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=0:suppressions=$(SAN_SUPP)/ubsan.supp \
 	LSAN_OPTIONS=suppressions=$(SAN_SUPP)/lsan.supp:print_suppressions=0 ROS_LOG_DIR=$(SAN_LOGS)/ros
 
-sanitize-workspace:
+sanitize-workspace: standin
 	@$(call link_package,$(SAN_WS))
 
+# Built with MVOD_STANDARD_MESSAGES=OFF: the node without vision_msgs and jsk_recognition_msgs is built and
+# tested here (make test builds it with their stand-ins).
 test-sanitize: deps sanitize-workspace
-	@cd $(SAN_WS) && catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
+	@$(WS_ENV) cd $(SAN_WS) && catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) 2>&1 | grep -v -E '^-- ' | tail -n 40
 	@rm -rf $(SAN_WS)/build/test_results $(SAN_LOGS) && mkdir -p $(SAN_LOGS)
-	@cd $(SAN_WS) && $(SAN_ENV) catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(SAN_WS)/run_tests.log \
+	@$(WS_ENV) cd $(SAN_WS) && $(SAN_ENV) catkin_make $(SAN_CATKIN_ARGS) -j$(JOBS) run_tests 2>&1 | tee $(SAN_WS)/run_tests.log \
 		| grep -E '^\[ *(RUN|OK|FAILED|PASSED|SKIPPED) |^\[==|FAILURE|ERROR|Skipping|SKIP|error:|Error [0-9]|undefined reference' || true
 	@catkin_test_results $(SAN_WS)/build/test_results || true
 	@tests=0; /usr/bin/python3 scripts/test_summary.py $(SAN_WS)/build/test_results || tests=$$?; \

@@ -364,6 +364,11 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
         if (!(status = readPlyVertices(cloud_path.string(), &prediction.points_W, nullptr))) {
           return status;
         }
+        // offline_detection writes the clouds in the frame of its objects.json (its objects are
+        // already back in the world frame: objectsFromJson).
+        if (summary.objects_in_gravity_frame) {
+          prediction.points_W = transformCloud(prediction.points_W, summary.T_W_O);
+        }
         if (!prediction.points_W.empty()) break;
       }
     }

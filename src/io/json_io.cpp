@@ -15,6 +15,8 @@
 
 #include "history_json.h"
 #include "json_fields.h"
+#include "multiview_object_detection/pipeline/map/output_frame.h"
+#include "multiview_object_detection/pipeline/types/map_limits.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace mvod {
@@ -321,6 +323,41 @@ Status readObject(const json& value, const std::string& path, MapObject* out) {
   return Status::Ok();
 }
 
+// "frame": {"name": "gravity_aligned", "T_world_frame": 4 rows of 4}: the frame the objects are in.
+json frameToJson(const Eigen::Isometry3d& T_W_O) {
+  json rows = json::array();
+  const Eigen::Matrix4d m = T_W_O.matrix();
+  for (int r = 0; r < 4; ++r) rows.push_back(json::array({m(r, 0), m(r, 1), m(r, 2), m(r, 3)}));
+  return {{"name", "gravity_aligned"}, {"T_world_frame", rows}};
+}
+
+Status frameFromJson(const json& frame, Eigen::Isometry3d* T_W_O) {
+  if (!frame.is_object()) return fieldError("frame", "expected an object");
+  const auto rows = frame.find("T_world_frame");
+  if (rows == frame.end() || !rows->is_array() || rows->size() != 4) {
+    return fieldError("frame.T_world_frame", "expected 4 rows of 4 numbers");
+  }
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    const json& row = (*rows)[r];
+    if (!row.is_array() || row.size() != 4) {
+      return fieldError("frame.T_world_frame", "expected 4 rows of 4 numbers");
+    }
+    for (int c = 0; c < 4; ++c) {
+      if (!row[c].is_number()) return fieldError("frame.T_world_frame", "expected numbers");
+      m(r, c) = row[c].get<double>();
+    }
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.matrix().topRows<3>() = m.topRows<3>();
+  if (!m.allFinite() || !m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9) ||
+      !isValidPose(T, 1e-6) || T.translation().cwiseAbs().maxCoeff() > kMapCoordinateLimitM) {
+    return fieldError("frame.T_world_frame", "not a rigid transform within the map's limits");
+  }
+  *T_W_O = T;
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::vector<MapObject> databaseObjects(const ObjectDatabase& database) {
@@ -343,8 +380,14 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
   doc["frames"] = summary.frames;
   doc["keyframes"] = summary.keyframes;
   doc["gravity_down"] = vectorToJson(summary.gravity_down_W);
+  if (std::isfinite(summary.floor_height_m)) doc["floor_height_m"] = summary.floor_height_m;
+  std::vector<MapObject> objects_O;
+  if (summary.objects_in_gravity_frame) {
+    objects_O = objectsInFrame(objects, summary.T_W_O.inverse(), include_clouds);
+    doc["frame"] = frameToJson(summary.T_W_O);
+  }
   json list = json::array();
-  for (const MapObject& object : objects) {
+  for (const MapObject& object : summary.objects_in_gravity_frame ? objects_O : objects) {
     json rotation = json::array();
     for (int r = 0; r < 3; ++r) {
       rotation.push_back(json::array(
@@ -465,6 +508,12 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   if (!(status = readInt(doc, "", "frames", 0, &parsed.frames))) return status;
   if (!(status = readInt(doc, "", "keyframes", 0, &parsed.keyframes))) return status;
   if (!(status = readVector3(doc, "", "gravity_down", &parsed.gravity_down_W))) return status;
+  if (doc.contains("floor_height_m")) {  // maps of 0.9.x and before have none
+    if (!(status = readNumber(doc, "", "floor_height_m", &parsed.floor_height_m))) return status;
+    if (std::abs(parsed.floor_height_m) > kMapCoordinateLimitM) {
+      return fieldError("floor_height_m", "beyond the map's limits");
+    }
+  }
 
   const json* removed = nullptr;
   if (!(status = member(doc, "", "removed", &removed))) return status;
@@ -513,6 +562,11 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
     }
   }
 
+  if (doc.contains("frame")) {  // the offline tools' files (maps of 0.9.x and before have none)
+    if (!(status = frameFromJson(doc["frame"], &parsed.T_W_O))) return status;
+    parsed.objects_in_gravity_frame = true;
+  }
+
   const json* list = nullptr;
   if (!(status = member(doc, "", "objects", &list))) return status;
   if (!list->is_array()) return fieldError("objects", "expected an array");
@@ -525,7 +579,16 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
     if (!ids.insert(object.id).second) {
       return fieldError(path + ".id", "duplicate id " + std::to_string(object.id));
     }
+    if (parsed.objects_in_gravity_frame &&
+        (object.evidence_voxel_size_m > 0.0 || object.free_space_cell_m > 0.0)) {
+      return fieldError(path,
+                        "evidence or free space grids in a file written in the gravity-aligned "
+                        "frame (they cannot be rotated)");
+    }
     parsed_objects.push_back(std::move(object));
+  }
+  if (parsed.objects_in_gravity_frame) {
+    parsed_objects = objectsInFrame(parsed_objects, parsed.T_W_O, true);  // back into the world
   }
 
   // The keyframe history (optional: a map without it loads, but cannot follow corrections).

@@ -260,6 +260,14 @@ bool ObjectMapper::updateGravity(const RgbdFrame& frame) {
   return gravity_estimator_.addFrame(points_D, frame.T_W_D);
 }
 
+double ObjectMapper::floorHeight_m() const {
+  return floor_.hasFloor() ? floor_.floorHeight_m() : std::numeric_limits<double>::quiet_NaN();
+}
+
+void ObjectMapper::restoreFloor(double floor_height_m) {
+  if (std::isfinite(floor_height_m)) floor_.setFloor(floor_height_m, gravity().up);
+}
+
 void ObjectMapper::reset() {
   database_.clear();
   history_.clear();

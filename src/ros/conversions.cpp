@@ -313,6 +313,13 @@ Status transformFromMsg(const geometry_msgs::Transform& msg, Eigen::Isometry3d* 
   return poseFromMsg(pose, T);
 }
 
+geometry_msgs::Pose boxPoseToMsg(const OrientedBox& box) {
+  Eigen::Isometry3d T_B = Eigen::Isometry3d::Identity();
+  T_B.linear() = box.rotation;
+  T_B.translation() = box.center_m;
+  return poseToMsg(T_B);
+}
+
 geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T) {
   Eigen::Isometry3d proper = T;
   proper.linear() = properRotation(T.linear());
@@ -520,10 +527,7 @@ multiview_object_detection::Object objectToMsg(const MapObject& object) {
   msg.class_name = object.class_name;
   msg.probability = static_cast<float>(object.probability);
   msg.observations = object.observations;
-  Eigen::Isometry3d T_W_B = Eigen::Isometry3d::Identity();
-  T_W_B.linear() = object.box.rotation;
-  T_W_B.translation() = object.box.center_m;
-  msg.pose = poseToMsg(T_W_B);
+  msg.pose = boxPoseToMsg(object.box);
   msg.size.x = object.box.size_m.x();
   msg.size.y = object.box.size_m.y();
   msg.size.z = object.box.size_m.z();

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <utility>
 
+#include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
@@ -226,7 +227,7 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
       "(%.1f ms)",
       report.keyframes_moved, report.views_replayed, report.objects_before, report.objects_after,
       report.time_ms);
-  publishers_->publishMap(snapshot()->objects, ros::Time::now());
+  publishMap(ros::Time::now());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -400,7 +401,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     for (const MapObject& object : report.removed) ids.push_back(object.id);
     ROS_INFO("%s: %zu objects gone (their places seen through, or not detected where seen): %s",
              what.c_str(), ids.size(), idList(ids).c_str());
-    publishers_->publishRemoved(report.removed, header.stamp);
+    publishers_->publishRemoved(report.removed, snapshot()->T_W_O, header.stamp);
   }
   stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
     ++stats.keyframes_processed;
@@ -409,7 +410,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     stats.detection_ms = detection_ms;
     stats.stage_times = report.times;
   });
-  publishers_->publishMap(snapshot()->objects, header.stamp);
+  publishMap(header.stamp);
   recordLatency(msSince(job.received));
 }
 
@@ -454,6 +455,8 @@ void KeyframeWorker::updateSnapshotLocked() {
   snapshot->objects = databaseObjects(mapper_->database());
   snapshot->summary.keyframes = mapper_->keyframesProcessed();
   snapshot->summary.gravity_down_W = -mapper_->gravity().up;
+  snapshot->summary.floor_height_m = mapper_->floorHeight_m();
+  snapshot->T_W_O = gravityAlignedPose(mapper_->gravity(), mapper_->floorHeight_m());
   snapshot->summary.removed_atypical = removed_atypical_;
   snapshot->summary.removed_intersecting = removed_intersecting_;
   snapshot->summary.removed_gone = removed_gone_;
@@ -468,6 +471,11 @@ std::shared_ptr<const KeyframeWorker::MapSnapshot> KeyframeWorker::snapshot() co
 }
 
 std::vector<MapObject> KeyframeWorker::objects() const { return snapshot()->objects; }
+
+void KeyframeWorker::publishMap(const ros::Time& stamp) const {
+  const std::shared_ptr<const MapSnapshot> map = snapshot();
+  publishers_->publishMap(map->objects, map->T_W_O, stamp);
+}
 
 void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
                                  std::deque<KeyframeRecord>* history) const {
@@ -498,6 +506,7 @@ Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const M
   const Status replaced = mapper_->mutableDatabase().setObjects(objects);
   if (!replaced) return replaced;
   mapper_->setHistory(std::move(history));
+  mapper_->restoreFloor(summary.floor_height_m);
   removed_atypical_ = summary.removed_atypical;
   removed_intersecting_ = summary.removed_intersecting;
   removed_gone_ = summary.removed_gone;

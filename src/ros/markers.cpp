@@ -162,9 +162,17 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
 
 void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs::Header& header,
                           sensor_msgs::PointCloud2* cloud) {
+  std::vector<const MapObject*> pointers;
+  pointers.reserve(objects.size());
+  for (const MapObject& object : objects) pointers.push_back(&object);
+  objectsToPointCloud2(pointers, header, cloud);
+}
+
+void objectsToPointCloud2(const std::vector<const MapObject*>& objects,
+                          const std_msgs::Header& header, sensor_msgs::PointCloud2* cloud) {
   size_t total = 0;
-  for (const MapObject& object : objects) {
-    total += object.segment_W.empty() ? object.points_W.size() : object.segment_W.size();
+  for (const MapObject* object : objects) {
+    total += object->segment_W.empty() ? object->points_W.size() : object->segment_W.size();
   }
   cloud->header = header;
   cloud->height = 1;
@@ -181,14 +189,14 @@ void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs:
   sensor_msgs::PointCloud2Iterator<float> z(*cloud, "z");
   sensor_msgs::PointCloud2Iterator<float> rgb(*cloud, "rgb");
   size_t written = 0;
-  for (const MapObject& object : objects) {
-    const std_msgs::ColorRGBA c = objectColor(object.id);
+  for (const MapObject* object : objects) {
+    const std_msgs::ColorRGBA c = objectColor(object->id);
     const uint32_t packed = (static_cast<uint32_t>(c.r * 255.f) << 16) |
                             (static_cast<uint32_t>(c.g * 255.f) << 8) |
                             static_cast<uint32_t>(c.b * 255.f);
     float packed_float = 0.f;
     std::memcpy(&packed_float, &packed, sizeof(float));
-    const PointCloud& points = object.segment_W.empty() ? object.points_W : object.segment_W;
+    const PointCloud& points = object->segment_W.empty() ? object->points_W : object->segment_W;
     for (const Eigen::Vector3f& p : points) {
       if (!p.allFinite()) continue;
       *x = p.x();

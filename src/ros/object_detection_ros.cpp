@@ -22,6 +22,7 @@
 #include "multiview_object_detection/ros/rgbd_input.h"
 #include "multiview_object_detection/ros/ros_params.h"
 #include "multiview_object_detection/ros/runtime_config.h"
+#include "multiview_object_detection/ros/standard_messages.h"
 
 namespace mvod {
 
@@ -88,7 +89,13 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   ok_ = true;
   ROS_INFO_STREAM("object detection: " << (segmenter ? segmenter->name() : "detections topic")
                                        << ", priors " << config.priors_file << "\n"
-                                       << config.print());
+                                       << config.print() << "standard messages: "
+                                       << (publishesVisionMsgs() ? "~detections_3d" : "")
+                                       << (publishesJskRecognitionMsgs() ? " ~bounding_boxes" : "")
+                                       << (publishesVisionMsgs() || publishesJskRecognitionMsgs()
+                                               ? ""
+                                               : "none (built without vision_msgs and "
+                                                 "jsk_recognition_msgs)"));
 
   // The stages, each told only about the ones it hands work to.
   input_ = std::make_unique<RgbdInput>(nh_, nh_private_, config, &stats_, shut_down_);
@@ -136,9 +143,11 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   if (!config.load_map_on_start.empty()) loadMapOnStart(config, map_paths);
   // Advertised once the map is loaded: their threads answer at once, and ~get_objects must not
   // answer an empty map while load_map_on_start is still reading the file.
-  services_ = std::make_unique<ObjectDetectionServices>(
-      nh_private_, config.world_frame, map_paths, worker_.get(), buffer_.get(), publishers_.get(),
-      &stats_, config.service_timeout_s);
+  services_ = std::make_unique<ObjectDetectionServices>(nh_private_, map_paths, worker_.get(),
+                                                        buffer_.get(), publishers_.get(), &stats_,
+                                                        config.service_timeout_s);
+  // The output frame's TF from the start (a loaded map's, or that of the configured gravity).
+  publishers_->publishOutputFrame(worker_->snapshot()->T_W_O);
 
   // Dynamic reconfigure starts from the values in effect, not from the .cfg defaults.
   reconfigure_server_ = std::make_unique<ReconfigureServer>(reconfigure_mutex_, nh_private_);
@@ -183,7 +192,7 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
   status = loadMapFile(path, worker_.get(), &objects);
   if (status) {
     ROS_INFO("load_map_on_start: resumed %zu objects from %s", objects, path.c_str());
-    publishers_->publishMap(worker_->objects(), ros::Time::now());
+    worker_->publishMap(ros::Time::now());
     return;
   }
   // Kept for a person to look at, and out of the autosave's way.
@@ -218,7 +227,7 @@ void ObjectDetectionRos::shutdown() {
   // Sec. 3.5 on the final map.
   KeyframeWorker::Refinement refinement;
   worker_->refine("shutdown", -1.0, &refinement);  // the worker has stopped: nothing to wait for
-  if (ros::ok()) publishers_->publishMap(worker_->objects(), ros::Time::now());
+  if (ros::ok()) worker_->publishMap(ros::Time::now());
   if (autosaver_) autosaver_->stop();  // the final map, refined
   if (services_) services_->stop();
   ROS_INFO("object detection stopped: %d keyframes processed, %zu objects in the map",

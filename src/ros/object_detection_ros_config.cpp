@@ -73,6 +73,8 @@ Status ObjectDetectionRosConfig::isValid() const {
 std::string ObjectDetectionRosConfig::print() const {
   std::ostringstream out;
   out << "world_frame: " << world_frame << "\n"
+      << "output_frame: " << outputFrame()
+      << (publishesOutputFrame() ? " (gravity-aligned, TF)" : "") << "\n"
       << "camera_frame: " << (camera_frame.empty() ? "(image frame_id)" : camera_frame) << "\n"
       << "depth_registered: " << (depth_registered ? "true" : "false") << "\n"
       << "queue_size: " << queue_size << "\n"

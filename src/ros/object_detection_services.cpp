@@ -10,13 +10,11 @@
 namespace mvod {
 
 ObjectDetectionServices::ObjectDetectionServices(const ros::NodeHandle& nh_private,
-                                                 const std::string& world_frame,
                                                  const MapPathPolicy& map_paths,
                                                  KeyframeWorker* worker, KeyframeBuffer* buffer,
                                                  ObjectDetectionPublishers* publishers,
                                                  SharedStatistics* stats, double timeout_s)
-    : world_frame_(world_frame),
-      map_paths_(map_paths),
+    : map_paths_(map_paths),
       worker_(worker),
       buffer_(buffer),
       publishers_(publishers),
@@ -50,16 +48,17 @@ bool ObjectDetectionServices::getObjects(
     multiview_object_detection::GetObjects::Request& request,
     multiview_object_detection::GetObjects::Response& response) {
   const std::set<int> ids(request.ids.begin(), request.ids.end());
+  const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
   std::vector<MapObject> selected;
-  for (MapObject& object : worker_->objects()) {
+  for (const MapObject& object : map->objects) {
     if (!request.class_name.empty() && object.class_name != request.class_name) continue;
     if (!ids.empty() && ids.count(object.id) == 0) continue;
-    selected.push_back(std::move(object));
+    selected.push_back(object);
   }
   std_msgs::Header header;
-  header.frame_id = world_frame_;
+  header.frame_id = publishers_->outputFrame();
   header.stamp = ros::Time::now();
-  response.objects = objectsToMsg(selected, header);
+  response.objects = objectsToMsg(publishers_->inOutputFrame(selected, map->T_W_O, false), header);
   return true;
 }
 
@@ -104,7 +103,7 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
   response.success = true;
   response.message = "loaded " + std::to_string(loaded) + " objects from " + path;
   ROS_INFO("%s", response.message.c_str());
-  publishers_->publishMap(worker_->objects(), ros::Time::now());
+  worker_->publishMap(ros::Time::now());
   return true;
 }
 
@@ -123,7 +122,7 @@ bool ObjectDetectionServices::reset(std_srvs::Trigger::Request& /*request*/,
     return true;
   }
   buffer_->reset();
-  publishers_->publishMap(worker_->objects(), ros::Time::now());
+  worker_->publishMap(ros::Time::now());
   response.success = true;
   response.message =
       "map reset: " + std::to_string(removed) + " objects removed (ids keep counting)";
@@ -146,7 +145,7 @@ bool ObjectDetectionServices::refine(std_srvs::Trigger::Request& /*request*/,
                      " intersecting objects; " + std::to_string(refinement.objects_left) +
                      " objects left";
   response.success = true;
-  publishers_->publishMap(worker_->objects(), ros::Time::now());
+  worker_->publishMap(ros::Time::now());
   return true;
 }
 

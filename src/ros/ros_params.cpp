@@ -367,6 +367,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   const ParamReader p(nh_private, errors);
   ObjectDetectionRosConfig cfg;
   p.read("world_frame", &cfg.world_frame);
+  p.read("output_frame", &cfg.output_frame);
   p.read("camera_frame", &cfg.camera_frame);
   p.read("depth_registered", &cfg.depth_registered);
   p.read("queue_size", &cfg.queue_size);

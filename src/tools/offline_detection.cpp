@@ -29,6 +29,7 @@
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/ply_writer.h"
+#include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
@@ -68,6 +69,10 @@ const char* const kUsage =
     "  --every N              every N-th frame is a keyframe (default: 10)\n"
     "  --first N, --last N    only frames with index in [first, last]\n"
     "  --output FILE          objects.json to write (default: objects.json)\n"
+    "  --output-frame F       gravity_aligned: the table, objects.json and the clouds in a frame\n"
+    "                         with z up and the floor at z = 0 (its pose in the dataset's world\n"
+    "                         frame is in objects.json; evaluate and ~load_map read it back);\n"
+    "                         world: the dataset's world frame (default: gravity_aligned)\n"
     "  --save-clouds DIR      one ASCII PLY per object: fused cloud and LCCP segment\n"
     "  --overlays DIR         detections drawn on each keyframe's colour image (PNG)\n"
     "  --timings FILE         per-keyframe stage times as CSV (keyframes with detections)\n"
@@ -122,6 +127,7 @@ struct Options {
   int first = std::numeric_limits<int>::min();
   int last = std::numeric_limits<int>::max();
   std::string output = "objects.json";
+  std::string output_frame = "gravity_aligned";
   std::string save_clouds;
   std::string overlays;
   std::string timings;
@@ -170,6 +176,13 @@ void addInputOptions(CLI::App* app, Options* options) {
       return "--format must be auto, 7scenes or scenenn, not '" + text + "'";
     }
     options->format = text;
+    return std::string();
+  });
+  cli::addValue(app, "--output-frame", [options](const std::string& text) {
+    if (text != "gravity_aligned" && text != "world") {
+      return "--output-frame must be gravity_aligned or world, not '" + text + "'";
+    }
+    options->output_frame = text;
     return std::string();
   });
   cli::addInteger(app, "--simulated-seed", 0, std::numeric_limits<unsigned int>::max(),
@@ -356,7 +369,9 @@ std::string fileSafe(std::string name) {
   return name;
 }
 
-void printTable(const std::vector<mvod::MapObject>& objects) {
+void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame) {
+  std::printf("objects in the %s frame%s\n", frame.c_str(),
+              frame == "gravity_aligned" ? " (z up, the floor at z = 0)" : "");
   std::printf("%4s  %-16s %5s %4s  %-26s %-22s %8s\n", "id", "class", "prob", "obs", "centre (m)",
               "size (m)", "yaw (deg)");
   for (const mvod::MapObject& o : objects) {
@@ -692,6 +707,7 @@ mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
   summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
   summary.removed_gone = stats.removed_gone;
   summary.gravity_down_W = -mapper.gravity().up;
+  summary.floor_height_m = mapper.floorHeight_m();
   summary.counts = stats.counts;
   auto stage_median = [&](double mvod::StageTimes::*field) {
     std::vector<double> values;
@@ -787,13 +803,22 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
               mvod::ObjectMapper* mapper) {
   stats.counts.before_refinement = static_cast<int>(mapper->database().size());
   const mvod::ObjectMapper::RefinementReport refinement = mapper->refine();
-  const mvod::MapSummary summary = summarize(stats, num_frames, *mapper, refinement);
+  mvod::MapSummary summary = summarize(stats, num_frames, *mapper, refinement);
+  if (options.output_frame == "gravity_aligned") {
+    summary.objects_in_gravity_frame = true;
+    summary.T_W_O = mvod::gravityAlignedPose(mapper->gravity(), mapper->floorHeight_m());
+  }
   if (!options.quiet) printCostGrowth(stats.stage_times);
   if (!options.timings.empty() && writeTimings(options.timings, stats) != kContinue) {
     return kExitFailure;
   }
   const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper->database());
-  printTable(objects);
+  // What the table and the clouds show: objects.json is written in the same frame (objectsToJson).
+  const std::vector<mvod::MapObject> shown =
+      summary.objects_in_gravity_frame
+          ? mvod::objectsInFrame(objects, summary.T_W_O.inverse(), !options.save_clouds.empty())
+          : std::vector<mvod::MapObject>();
+  printTable(summary.objects_in_gravity_frame ? shown : objects, options.output_frame);
   int exit_code = kExitOk;
   const mvod::Status written =
       mvod::writeFileAtomic(options.output, mvod::objectsToJson(objects, summary, false));
@@ -801,7 +826,8 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
     std::cerr << "offline_detection: " << written.message() << "\n";
     exit_code = kExitFailure;
   }
-  if (!options.save_clouds.empty() && !saveClouds(options.save_clouds, objects)) {
+  if (!options.save_clouds.empty() &&
+      !saveClouds(options.save_clouds, summary.objects_in_gravity_frame ? shown : objects)) {
     exit_code = kExitFailure;
   }
   if (!options.quiet) {

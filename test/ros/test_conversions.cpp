@@ -514,7 +514,7 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
 TEST(RosConversionsTest, EmptyMapsAndExtremeIdsConvert) {
   // An empty map (after ~reset): a valid cloud of no points (no iterator over no data).
   sensor_msgs::PointCloud2 cloud;
-  objectsToPointCloud2({}, makeHeader("map", 4.0), &cloud);
+  objectsToPointCloud2(std::vector<MapObject>{}, makeHeader("map", 4.0), &cloud);
   EXPECT_EQ(cloud.width * cloud.height, 0u);
   EXPECT_EQ(cloud.fields.size(), 4u);
   // Ids and classes at the ends of int get colours in [0, 1] (3 * id + 7 would overflow int).

@@ -9,6 +9,8 @@
 #include <std_srvs/Trigger.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include <mutex>
 #include <random>
 
+#include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "test_node_common.h"
@@ -418,6 +421,76 @@ TEST(NodeStartTest, TheFirstGetObjectsAnswersTheMapLoadedAtStart) {
 // service_timeout_s bounds the map changes: while the worker is in a long keyframe (the paper's
 // method, a queue of 15), ~refine with a 0.1 s timeout answers "busy" and changes nothing, and
 // ~get_objects keeps answering from the last snapshot meanwhile.
+// A SLAM world tilted like ORB-SLAM2's (the redkitchen's gravity, y down): the node publishes TF
+// map -> map_gravity_aligned with z against gravity and its origin on the floor the loaded map was
+// saved with, and answers with the map's upright chair standing on that floor, 0.45 m up.
+TEST(NodeOutputFrameTest, ATiltedWorldComesOutZUpOnTheLoadedMapsFloor) {
+  const fs::path root =
+      fs::temp_directory_path() / ("mvod_output_frame_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  const Eigen::Vector3d down = Eigen::Vector3d(-0.009, 0.904, 0.427).normalized();
+  const mvod::GravityFrame gravity(down);
+  constexpr double kFloorM = -1.3;  // 1.3 m below the first camera
+  mvod::MapObject chair;
+  chair.id = 4;
+  chair.class_id = 56;
+  chair.class_name = "chair";
+  chair.probability = 0.8;
+  chair.observations = 3;
+  chair.box.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
+  chair.box.rotation = gravity.rotationFromYaw(0.3);
+  chair.yaw_rad = 0.3;
+  chair.box.center_m = (kFloorM + 0.45) * gravity.up + 2.0 * gravity.x_h;
+  chair.last_keyframe = 2;
+  mvod::MapSummary summary;
+  summary.gravity_down_W = down;
+  summary.floor_height_m = kFloorM;
+  ASSERT_TRUE(mvod::writeFileAtomic((root / "maps" / "tilted.json").string(),
+                                    mvod::objectsToJson({chair}, summary, false))
+                  .ok());
+  const std::string node = "/output_frame_node";
+  // A list: not expressible as a _name:=value argument.
+  ros::param::set(node + "/gravity_down", std::vector<double>{down.x(), down.y(), down.z()});
+  const pid_t pid = startNode((root / "maps").string(), node,
+                              {"_detector:=topic", "_pose_source:=topic", "_autosave_period_s:=0",
+                               "_load_map_on_start:=tilted.json"},
+                              (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);
+  std::string error;
+  const bool has_tf =
+      tf_buffer.canTransform(kWorldFrame, kOutputFrame, ros::Time(0), ros::Duration(30.0), &error);
+  multiview_object_detection::GetObjects get;
+  const bool answered = ros::service::waitForService(node + "/get_objects", 30000) &&
+                        ros::service::call(node + "/get_objects", get);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  std::string logs;
+  mvod::readFile((root / "node.out").string(), &logs);
+  fs::remove_all(root);
+  ros::param::del(node);
+
+  ASSERT_TRUE(answered) << logs;
+  ASSERT_TRUE(has_tf) << error << "\n" << logs;
+  const geometry_msgs::Transform t =
+      tf_buffer.lookupTransform(kWorldFrame, kOutputFrame, ros::Time(0)).transform;
+  const Eigen::Quaterniond q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+  const Eigen::Vector3d origin_W(t.translation.x, t.translation.y, t.translation.z);
+  EXPECT_LT((q.toRotationMatrix().col(2) + down).norm(), 1e-6) << "z of the output frame is not up";
+  EXPECT_LT((origin_W - kFloorM * gravity.up).norm(), 1e-6) << origin_W.transpose();
+
+  const multiview_object_detection::ObjectArray& answer = get.response.objects;
+  EXPECT_EQ(answer.header.frame_id, kOutputFrame);
+  ASSERT_EQ(answer.objects.size(), 1u) << logs;
+  const Eigen::Isometry3d T_O_B = fromPoseMsg(answer.objects[0].pose);
+  EXPECT_GT(T_O_B.linear().col(2).z(), 1.0 - 1e-6) << "the chair is not upright";
+  EXPECT_NEAR(T_O_B.translation().z(), 0.45, 1e-4) << "not 0.45 m above the floor";
+  EXPECT_NEAR(std::atan2(T_O_B.linear()(1, 0), T_O_B.linear()(0, 0)), 0.3, 1e-4);
+}
+
 TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering) {
   ros::NodeHandle nh;
   SlowNodeWithAQueue slow(nh, "/busy_node");

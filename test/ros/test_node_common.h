@@ -45,6 +45,8 @@ constexpr char kInfoTopic[] = "/camera/rgb/camera_info";
 constexpr char kPoseTopic[] = "/slam/pose";
 constexpr char kDetectionsTopic[] = "/detector/detections";
 constexpr char kWorldFrame[] = "map";
+// The node's default output frame (config/object_detection.yaml): z up, on the floor.
+constexpr char kOutputFrame[] = "map_gravity_aligned";
 constexpr char kCameraFrame[] = "camera_rgb_optical_frame";
 
 inline geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {

@@ -6,8 +6,11 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
+#include <ros/topic.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -16,6 +19,12 @@
 
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/MapFile.h"
+#ifdef MVOD_HAVE_VISION_MSGS
+#include <vision_msgs/Detection3DArray.h>
+#endif
+#ifdef MVOD_HAVE_JSK_RECOGNITION_MSGS
+#include <jsk_recognition_msgs/BoundingBoxArray.h>
+#endif
 #include "test_node_common.h"
 
 namespace mvod_test {
@@ -67,6 +76,8 @@ class NodeSyntheticTest : public ::testing::Test {
     image_sub_ = nh_->subscribe(std::string(kNode) + "/detections_image", 10, onImage);
     cloud_sub_ = nh_->subscribe(std::string(kNode) + "/object_cloud", 10, onCloud);
     diagnostics_sub_ = nh_->subscribe("/diagnostics", 100, onDiagnostics);
+    tf_buffer_ = new tf2_ros::Buffer;
+    tf_listener_ = new tf2_ros::TransformListener(*tf_buffer_, *nh_);
 
     connected_ = outputs_->waitFor(
         [] {
@@ -90,12 +101,31 @@ class NodeSyntheticTest : public ::testing::Test {
     repeat_was_keyframe_ = outputs_->waitForObjectsAt(repeat_stamp, 2.0);
     objects_after_repeat_ = outputs_->objectsReceived() - received;
     objects_ = outputs_->lastObjects();
+    // The output frame the objects are published in, in the world frame (TF from the node).
+    std::string error;
+    has_T_W_O_ = tf_buffer_->canTransform(kWorldFrame, kOutputFrame, ros::Time(0),
+                                          ros::Duration(5.0), &error);
+    if (has_T_W_O_) {
+      const geometry_msgs::Transform t =
+          tf_buffer_->lookupTransform(kWorldFrame, kOutputFrame, ros::Time(0)).transform;
+      geometry_msgs::Pose pose;
+      pose.position.x = t.translation.x;
+      pose.position.y = t.translation.y;
+      pose.position.z = t.translation.z;
+      pose.orientation = t.rotation;
+      T_W_O_ = fromPoseMsg(pose);
+    }
   }
+
+  // An object's centre in the world frame of the ground truth.
+  static Eigen::Vector3d worldCenterOf(const Object& object) { return T_W_O_ * centerOf(object); }
 
   static void TearDownTestSuite() {
     image_sub_.shutdown();
     cloud_sub_.shutdown();
     diagnostics_sub_.shutdown();
+    delete tf_listener_;
+    delete tf_buffer_;
     delete outputs_;
     delete inputs_;
     delete stream_;
@@ -162,6 +192,10 @@ class NodeSyntheticTest : public ::testing::Test {
   static sensor_msgs::PointCloud2 last_cloud_;
   static int clouds_;
   static std::vector<diagnostic_msgs::DiagnosticStatus> diagnostics_;
+  static tf2_ros::Buffer* tf_buffer_;
+  static tf2_ros::TransformListener* tf_listener_;
+  static bool has_T_W_O_;
+  static Eigen::Isometry3d T_W_O_;
 };
 
 ros::NodeHandle* NodeSyntheticTest::nh_ = nullptr;
@@ -182,6 +216,10 @@ std::vector<sensor_msgs::Image> NodeSyntheticTest::images_;
 sensor_msgs::PointCloud2 NodeSyntheticTest::last_cloud_;
 int NodeSyntheticTest::clouds_ = 0;
 std::vector<diagnostic_msgs::DiagnosticStatus> NodeSyntheticTest::diagnostics_;
+tf2_ros::Buffer* NodeSyntheticTest::tf_buffer_ = nullptr;
+tf2_ros::TransformListener* NodeSyntheticTest::tf_listener_ = nullptr;
+bool NodeSyntheticTest::has_T_W_O_ = false;
+Eigen::Isometry3d NodeSyntheticTest::T_W_O_ = Eigen::Isometry3d::Identity();
 
 TEST_F(NodeSyntheticTest, EveryMovedFrameIsAKeyframeWithItsPose) {
   ASSERT_EQ(keyframe_done_.size(), frames_.size());
@@ -204,8 +242,21 @@ TEST_F(NodeSyntheticTest, EveryMovedFrameIsAKeyframeWithItsPose) {
   }
 }
 
+TEST_F(NodeSyntheticTest, TheOutputFrameIsZUpOnTheFloorUnderTheWorldOrigin) {
+  ASSERT_TRUE(has_T_W_O_) << "no TF " << kWorldFrame << " -> " << kOutputFrame;
+  // gravity_down [0, 0, -1]: the world is already z up, so the rotation is the identity; the
+  // origin is the world origin moved along up to the floor the node found (the room's is z = 0).
+  EXPECT_TRUE(T_W_O_.linear().isApprox(Eigen::Matrix3d::Identity(), 1e-6)) << T_W_O_.linear();
+  EXPECT_NEAR(T_W_O_.translation().x(), 0.0, 1e-9);
+  EXPECT_NEAR(T_W_O_.translation().y(), 0.0, 1e-9);
+  EXPECT_NEAR(T_W_O_.translation().z(), 0.0, 0.05);
+  std::printf("output frame: origin %.4f m above the world origin\n", T_W_O_.translation().z());
+  EXPECT_EQ(objects_.header.frame_id, kOutputFrame);
+  EXPECT_EQ(getObjects("", {}).header.frame_id, kOutputFrame);
+}
+
 TEST_F(NodeSyntheticTest, ObjectsMatchTheGroundTruth) {
-  EXPECT_EQ(objects_.header.frame_id, kWorldFrame);
+  EXPECT_EQ(objects_.header.frame_id, kOutputFrame);
   ASSERT_FALSE(objects_.objects.empty());
   const std::set<std::string> scene_classes = {"dining table", "chair", "couch",
                                                "tv",           "cup",   "book"};
@@ -244,7 +295,7 @@ TEST_F(NodeSyntheticTest, ObjectsMatchTheGroundTruth) {
     double best_m = 1e9;
     for (const Object& object : objects_.objects) {
       if (object.class_name != name) continue;
-      const double d = (centerOf(object) - truth[k].box.center_m).norm();
+      const double d = (worldCenterOf(object) - truth[k].box.center_m).norm();
       if (d < best_m) {
         best_m = d;
         best = &object;
@@ -255,8 +306,8 @@ TEST_F(NodeSyntheticTest, ObjectsMatchTheGroundTruth) {
                 name.c_str(), truth[k].box.center_m.x(), truth[k].box.center_m.y(),
                 truth[k].box.center_m.z(), best->id, best_m, best->size.z, truth[k].box.size_m.z());
     EXPECT_LT(best_m, 0.10) << name << " at " << truth[k].box.center_m.transpose()
-                            << ": nearest is #" << best->id << " at " << centerOf(*best).transpose()
-                            << "\n"
+                            << ": nearest is #" << best->id << " at "
+                            << worldCenterOf(*best).transpose() << "\n"
                             << describe(objects_);
     EXPECT_NEAR(best->size.z, truth[k].box.size_m.z(), 0.10) << name << " #" << best->id;
   }
@@ -269,6 +320,75 @@ TEST_F(NodeSyntheticTest, ObjectsMatchTheGroundTruth) {
   EXPECT_TRUE(has_atypical) << describe(objects_);
 }
 
+// The last latched message of type M on `topic`, waited for up to timeout_s (false: none).
+template <typename M>
+bool latest(const std::string& topic, double timeout_s, M* out) {
+  const boost::shared_ptr<const M> msg =
+      ros::topic::waitForMessage<M>(topic, ros::Duration(timeout_s));
+  if (!msg) return false;
+  *out = *msg;
+  return true;
+}
+
+// Pose and size of a box message against an object's.
+void expectSameBox(const geometry_msgs::Pose& pose, const geometry_msgs::Vector3& size,
+                   const Object& object) {
+  EXPECT_LT((fromPoseMsg(pose).translation() - centerOf(object)).norm(), 1e-6) << "#" << object.id;
+  EXPECT_TRUE(fromPoseMsg(pose).linear().isApprox(fromPoseMsg(object.pose).linear(), 1e-6))
+      << "#" << object.id;
+  EXPECT_NEAR(size.x, object.size.x, 1e-6) << "#" << object.id;
+  EXPECT_NEAR(size.y, object.size.y, 1e-6) << "#" << object.id;
+  EXPECT_NEAR(size.z, object.size.z, 1e-6) << "#" << object.id;
+}
+
+TEST_F(NodeSyntheticTest, VisionMsgsDetectionsAreTheObjects) {
+#ifdef MVOD_HAVE_VISION_MSGS
+  vision_msgs::Detection3DArray array;
+  ASSERT_TRUE(latest(std::string(kNode) + "/detections_3d", 10.0, &array)) << "no ~detections_3d";
+  EXPECT_EQ(array.header.frame_id, kOutputFrame);
+  EXPECT_EQ(array.header.stamp, objects_.header.stamp);
+  ASSERT_EQ(array.detections.size(), objects_.objects.size());
+  for (size_t i = 0; i < array.detections.size(); ++i) {
+    const vision_msgs::Detection3D& detection = array.detections[i];
+    const Object& object = objects_.objects[i];
+    EXPECT_EQ(detection.header.frame_id, kOutputFrame);
+    ASSERT_EQ(detection.results.size(), 1u) << "#" << object.id;
+    EXPECT_EQ(detection.results[0].id, object.class_id) << "#" << object.id;
+    EXPECT_NEAR(detection.results[0].score, object.probability, 1e-6) << "#" << object.id;
+    expectSameBox(detection.bbox.center, detection.bbox.size, object);
+    // publish_object_cloud (the default): the object's points.
+    const size_t points =
+        static_cast<size_t>(detection.source_cloud.width) * detection.source_cloud.height;
+    EXPECT_EQ(points, static_cast<size_t>(object.num_points)) << "#" << object.id;
+  }
+#else
+  GTEST_SKIP() << "built without vision_msgs: ~detections_3d is not published (CMake did not find "
+                  "the package; `make build` builds a stand-in, deps/standin/README.md)";
+#endif
+}
+
+TEST_F(NodeSyntheticTest, JskBoundingBoxesAreTheObjects) {
+#ifdef MVOD_HAVE_JSK_RECOGNITION_MSGS
+  jsk_recognition_msgs::BoundingBoxArray array;
+  ASSERT_TRUE(latest(std::string(kNode) + "/bounding_boxes", 10.0, &array)) << "no ~bounding_boxes";
+  EXPECT_EQ(array.header.frame_id, kOutputFrame);
+  EXPECT_EQ(array.header.stamp, objects_.header.stamp);
+  ASSERT_EQ(array.boxes.size(), objects_.objects.size());
+  for (size_t i = 0; i < array.boxes.size(); ++i) {
+    const jsk_recognition_msgs::BoundingBox& box = array.boxes[i];
+    const Object& object = objects_.objects[i];
+    EXPECT_EQ(box.header.frame_id, kOutputFrame);
+    EXPECT_EQ(static_cast<int>(box.label), object.class_id) << "#" << object.id;
+    EXPECT_NEAR(box.value, object.probability, 1e-6) << "#" << object.id;
+    expectSameBox(box.pose, box.dimensions, object);
+  }
+#else
+  GTEST_SKIP() << "built without jsk_recognition_msgs: ~bounding_boxes is not published (CMake "
+                  "did not find the package; `make build` builds a stand-in, "
+                  "deps/standin/README.md)";
+#endif
+}
+
 TEST_F(NodeSyntheticTest, MarkersShowEveryObject) {
   const std::map<NodeOutputs::MarkerKey, visualization_msgs::Marker> markers = outputs_->markers();
   std::map<std::string, std_msgs::ColorRGBA> class_colors;
@@ -277,7 +397,7 @@ TEST_F(NodeSyntheticTest, MarkersShowEveryObject) {
     ASSERT_NE(box, markers.end()) << "no box marker for #" << object.id;
     const visualization_msgs::Marker& edges = box->second;
     EXPECT_EQ(edges.type, visualization_msgs::Marker::LINE_LIST);
-    EXPECT_EQ(edges.header.frame_id, kWorldFrame);
+    EXPECT_EQ(edges.header.frame_id, kOutputFrame);
     ASSERT_EQ(edges.points.size(), 24u) << "#" << object.id << ": 12 edges, 2 points each";
     EXPECT_GT(edges.color.a, 0.5f);
     EXPECT_GT(edges.scale.x, 0.0);
@@ -343,9 +463,9 @@ TEST_F(NodeSyntheticTest, DetectionsImageCloudAndDiagnostics) {
   }
   EXPECT_TRUE(drawn) << "the detections image is not one of the keyframes with overlays";
 
-  // Object clouds: x y z rgb in the world frame, inside the room.
+  // Object clouds: x y z rgb in the output frame, inside the room.
   ASSERT_GT(clouds_, 0) << "no ~object_cloud";
-  EXPECT_EQ(last_cloud_.header.frame_id, kWorldFrame);
+  EXPECT_EQ(last_cloud_.header.frame_id, kOutputFrame);
   std::map<std::string, int> offsets;
   for (const sensor_msgs::PointField& field : last_cloud_.fields)
     offsets[field.name] = field.offset;
@@ -361,7 +481,9 @@ TEST_F(NodeSyntheticTest, DetectionsImageCloudAndDiagnostics) {
     return value;
   };
   for (size_t i = 0; i < points; i += 97) {
-    const float x = coordinate(i, "x"), y = coordinate(i, "y"), z = coordinate(i, "z");
+    const Eigen::Vector3d p_W =
+        T_W_O_ * Eigen::Vector3d(coordinate(i, "x"), coordinate(i, "y"), coordinate(i, "z"));
+    const double x = p_W.x(), y = p_W.y(), z = p_W.z();
     EXPECT_TRUE(x > -0.05 && x < room.room_size_x_m + 0.05 && y > -0.05 &&
                 y < room.room_size_y_m + 0.05 && z > -0.05 &&
                 z < 1.5)  // the furniture is lower than the camera

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <deque>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,6 +31,16 @@ struct MapSummary {
     int before_refinement = 0;  // database size before Sec. 3.5
   } counts;
   Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
+  // The floor's height along -gravity_down (m; NaN: none found). Optional in the file: a loaded
+  // map keeps the floor, and so the output frame's origin (output_frame.h), it was saved with.
+  double floor_height_m = std::numeric_limits<double>::quiet_NaN();
+  // The offline tools' files: the objects are written in the gravity-aligned frame O
+  // (output_frame.h: z up, the floor at z = 0) with T_W_O, O's pose in the input's world frame,
+  // alongside ("frame"). objectsToJson writes them in O when set (without the evidence and free
+  // space grids, which cannot rotate); objectsFromJson returns them in the world frame again and
+  // sets both fields, so every reader (the node's ~load_map, evaluate) gets world coordinates.
+  bool objects_in_gravity_frame = false;
+  Eigen::Isometry3d T_W_O = Eigen::Isometry3d::Identity();
 };
 
 // {"frames", "keyframes", "gravity_down", "objects": [{"id", "class_name", "class_id",

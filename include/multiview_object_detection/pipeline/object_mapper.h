@@ -148,6 +148,10 @@ class ObjectMapper {
                            const PointCloud& points_D, ObjectObservation* observation,
                            StageTimes* times) const;
   const FloorEstimator& floor() const { return floor_; }
+  // The floor's height along gravity().up, NaN when none was found yet.
+  double floorHeight_m() const;
+  // A loaded map's floor (NaN: nothing changes); later keyframes refine it as usual.
+  void restoreFloor(double floor_height_m);
 
   const ObjectDatabase& database() const { return database_; }
   ObjectDatabase& mutableDatabase() { return database_; }

@@ -70,6 +70,8 @@ sensor_msgs::ImagePtr colorImageToMsg(const cv::Mat& bgr, const std_msgs::Header
 Status poseFromMsg(const geometry_msgs::Pose& msg, Eigen::Isometry3d* T);
 Status transformFromMsg(const geometry_msgs::Transform& msg, Eigen::Isometry3d* T);
 geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T);
+// A box's centre and orientation (its axes).
+geometry_msgs::Pose boxPoseToMsg(const OrientedBox& box);
 geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T);
 
 // ---- Detections -------------------------------------------------------------------------------

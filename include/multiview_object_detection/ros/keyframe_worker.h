@@ -75,9 +75,14 @@ class KeyframeWorker {
     MapSummary summary;  // all but `frames`
     // What the map follows corrections with (records share their depth and cuts: cheap copies).
     std::deque<KeyframeRecord> history;
+    // The gravity-aligned output frame in the world frame (output_frame.h): the gravity and the
+    // floor this map was built with.
+    Eigen::Isometry3d T_W_O = Eigen::Isometry3d::Identity();
   };
   std::shared_ptr<const MapSnapshot> snapshot() const;
   std::vector<MapObject> objects() const;
+  // The current map on the publishers' topics (in the output frame, with its TF).
+  void publishMap(const ros::Time& stamp) const;
   // The objects and the summary for objects.json (all but `frames`).
   void mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
                    std::deque<KeyframeRecord>* history = nullptr) const;

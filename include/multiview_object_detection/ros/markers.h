@@ -30,5 +30,8 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
 // its fused cloud) coloured by objectColor(id).
 void objectsToPointCloud2(const std::vector<MapObject>& objects, const std_msgs::Header& header,
                           sensor_msgs::PointCloud2* cloud);
+// The same for any selection of objects (one object: vision_msgs' source_cloud).
+void objectsToPointCloud2(const std::vector<const MapObject*>& objects,
+                          const std_msgs::Header& header, sensor_msgs::PointCloud2* cloud);
 
 }  // namespace mvod

@@ -14,6 +14,14 @@ namespace mvod {
 struct ObjectDetectionRosConfig {
   // Frames.
   std::string world_frame = "map";
+  // Frame of every output (objects, markers, clouds, services): the gravity-aligned frame, z up,
+  // origin on the floor under world_frame's origin, published as TF world_frame -> output_frame
+  // (output_frame.h). Equal to world_frame (or empty): outputs in world_frame, no TF.
+  std::string output_frame = "map_gravity_aligned";
+  bool publishesOutputFrame() const { return !output_frame.empty() && output_frame != world_frame; }
+  const std::string& outputFrame() const {
+    return publishesOutputFrame() ? output_frame : world_frame;
+  }
   std::string camera_frame;  // empty = the colour image's header.frame_id
 
   // RGB-D input (message_filters).

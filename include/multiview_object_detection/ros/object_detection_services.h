@@ -25,10 +25,10 @@ namespace mvod {
 class ObjectDetectionServices {
  public:
   // Advertises the services in nh_private's namespace and starts their thread.
-  ObjectDetectionServices(const ros::NodeHandle& nh_private, const std::string& world_frame,
-                          const MapPathPolicy& map_paths, KeyframeWorker* worker,
-                          KeyframeBuffer* buffer, ObjectDetectionPublishers* publishers,
-                          SharedStatistics* stats, double timeout_s);
+  ObjectDetectionServices(const ros::NodeHandle& nh_private, const MapPathPolicy& map_paths,
+                          KeyframeWorker* worker, KeyframeBuffer* buffer,
+                          ObjectDetectionPublishers* publishers, SharedStatistics* stats,
+                          double timeout_s);
 
   ObjectDetectionServices(const ObjectDetectionServices&) = delete;
   ObjectDetectionServices& operator=(const ObjectDetectionServices&) = delete;
@@ -45,7 +45,6 @@ class ObjectDetectionServices {
   bool reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
   bool refine(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
 
-  const std::string world_frame_;
   const MapPathPolicy map_paths_;
   KeyframeWorker* worker_;
   KeyframeBuffer* buffer_;

@@ -8,11 +8,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/map_path.h"
+#include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 #include "test_files.h"
 
@@ -51,6 +53,7 @@ MapSummary makeSummary() {
   summary.removed_atypical = 3;
   summary.removed_intersecting = 2;
   summary.gravity_down_W = Eigen::Vector3d(-0.0089, 0.9044, 0.4265);
+  summary.floor_height_m = -1.375;
   summary.stage_ms_median.extraction_ms = 12.5;
   summary.stage_ms_median.filter_ms = 3.25;
   summary.stage_ms_median.lccp_ms = 40.125;
@@ -102,6 +105,8 @@ void expectSameSummary(const MapSummary& a, const MapSummary& b) {
   EXPECT_EQ(a.removed_atypical, b.removed_atypical);
   EXPECT_EQ(a.removed_intersecting, b.removed_intersecting);
   EXPECT_EQ(a.gravity_down_W, b.gravity_down_W);
+  EXPECT_EQ(std::isnan(a.floor_height_m), std::isnan(b.floor_height_m));
+  if (!std::isnan(a.floor_height_m)) EXPECT_EQ(a.floor_height_m, b.floor_height_m);
   EXPECT_EQ(a.stage_ms_median.extraction_ms, b.stage_ms_median.extraction_ms);
   EXPECT_EQ(a.stage_ms_median.filter_ms, b.stage_ms_median.filter_ms);
   EXPECT_EQ(a.stage_ms_median.lccp_ms, b.stage_ms_median.lccp_ms);
@@ -115,6 +120,76 @@ void expectSameSummary(const MapSummary& a, const MapSummary& b) {
   EXPECT_EQ(a.counts.inserted, b.counts.inserted);
   EXPECT_EQ(a.counts.fused, b.counts.fused);
   EXPECT_EQ(a.counts.before_refinement, b.counts.before_refinement);
+}
+
+// The floor (the output frame's origin) goes with the map; a map without one (no floor found, or a
+// map of 0.9.x) reads as unknown; a floor that is not a number or beyond the map is refused.
+TEST(JsonIoTest, TheFloorHeightIsKeptAndOptional) {
+  MapSummary summary = makeSummary();
+  std::vector<MapObject> loaded;
+  MapSummary read;
+  ASSERT_TRUE(objectsFromJson(objectsToJson({}, summary, false), &loaded, &read).ok());
+  EXPECT_EQ(read.floor_height_m, -1.375);
+
+  summary.floor_height_m = std::numeric_limits<double>::quiet_NaN();
+  const std::string without = objectsToJson({}, summary, false);
+  EXPECT_EQ(without.find("floor_height_m"), std::string::npos);
+  read.floor_height_m = 0.0;
+  ASSERT_TRUE(objectsFromJson(without, &loaded, &read).ok());
+  EXPECT_TRUE(std::isnan(read.floor_height_m));
+
+  for (const char* bad : {"\"low\"", "1e9"}) {
+    nlohmann::json doc = nlohmann::json::parse(without);
+    doc["floor_height_m"] = nlohmann::json::parse(bad);
+    const Status status = objectsFromJson(doc.dump(), &loaded, &read);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("floor_height_m"), std::string::npos) << status.message();
+  }
+}
+
+// The offline tools' files: written in the gravity-aligned frame with its pose alongside, read back
+// in the world frame; a file in that frame with evidence grids, or with a frame that is not a rigid
+// transform, is refused.
+TEST(JsonIoTest, AFileInTheGravityAlignedFrameReadsBackInTheWorld) {
+  MapSummary summary = makeSummary();
+  const GravityFrame gravity(summary.gravity_down_W);
+  summary.objects_in_gravity_frame = true;
+  summary.T_W_O = gravityAlignedPose(gravity, summary.floor_height_m);
+  MapObject object = makeObject(3, "chair", 0.2, 20);
+  object.box.rotation = gravity.rotationFromYaw(0.2);
+  object.observed_box = object.box;
+  const std::string text = objectsToJson({object}, summary, true);
+  const nlohmann::json raw = nlohmann::json::parse(text);
+  ASSERT_TRUE(raw.contains("frame"));
+  const Eigen::Vector3d in_file(raw["objects"][0]["center"][0].get<double>(),
+                                raw["objects"][0]["center"][1].get<double>(),
+                                raw["objects"][0]["center"][2].get<double>());
+  EXPECT_LT((summary.T_W_O.inverse() * object.box.center_m - in_file).norm(), 1e-9);
+  EXPECT_NEAR(raw["objects"][0]["rotation"][2][2].get<double>(), 1.0, 1e-9);  // upright in O
+
+  std::vector<MapObject> loaded;
+  MapSummary read;
+  ASSERT_TRUE(objectsFromJson(text, &loaded, &read).ok());
+  EXPECT_TRUE(read.objects_in_gravity_frame);
+  EXPECT_TRUE(read.T_W_O.isApprox(summary.T_W_O, 1e-12));
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_LT((loaded[0].box.center_m - object.box.center_m).norm(), 1e-9);
+  EXPECT_TRUE(loaded[0].box.rotation.isApprox(object.box.rotation, 1e-9));
+  ASSERT_EQ(loaded[0].points_W.size(), object.points_W.size());
+  // The file stores points on a 1 mm grid (in O here): back in W within half a cell diagonal.
+  EXPECT_LT((loaded[0].points_W[5] - object.points_W[5]).norm(), 0.9e-3f);
+
+  nlohmann::json sheared = raw;
+  sheared["frame"]["T_world_frame"][0][1] = 0.5;
+  EXPECT_FALSE(objectsFromJson(sheared.dump(), &loaded, &read).ok());
+  nlohmann::json with_evidence =
+      nlohmann::json::parse(objectsToJson({object}, makeSummary(), true));
+  with_evidence["frame"] = raw["frame"];
+  with_evidence["objects"][0]["evidence"] = {
+      {"voxel_size_m", 0.02}, {"voxels", nlohmann::json::parse("[[0, 0, 0, 1, 0]]")}};
+  const Status refused = objectsFromJson(with_evidence.dump(), &loaded, &read);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("cannot be rotated"), std::string::npos) << refused.message();
 }
 
 TEST(JsonIoTest, RoundTripWithClouds) {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -162,6 +163,21 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   EXPECT_GT(summary.stage_ms_median.total_ms, 0.0);
   // The dataset's gravity (z down) is used.
   EXPECT_GT(summary.gravity_down_W.dot(Eigen::Vector3d(0, 0, -1)), 0.999);
+  // The file is in the gravity-aligned frame (z up, on the floor: the room's is at z = 0), its
+  // pose alongside; the reader gave the objects back in the world frame.
+  ASSERT_TRUE(summary.objects_in_gravity_frame);
+  EXPECT_GT(summary.T_W_O.linear().col(2).z(), 0.999);
+  EXPECT_NEAR(summary.T_W_O.translation().z(), 0.0, 0.03);
+  {
+    const nlohmann::json raw = nlohmann::json::parse(test::readText(output));
+    ASSERT_EQ(raw["objects"].size(), objects.size());
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const Eigen::Vector3d in_file(raw["objects"][i]["center"][0].get<double>(),
+                                    raw["objects"][i]["center"][1].get<double>(),
+                                    raw["objects"][i]["center"][2].get<double>());
+      EXPECT_LT((summary.T_W_O * in_file - objects[i].box.center_m).norm(), 1e-6);
+    }
+  }
   // The table printed on stdout lists every object.
   for (const MapObject& object : objects) {
     EXPECT_NE(result.out.find(object.class_name), std::string::npos);
