@@ -137,7 +137,7 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
     label.pose.position.y = position.y();
     label.pose.position.z = position.z();
     label.pose.orientation.w = 1.0;
-    label.scale.z = 0.12;  // text height (m)
+    label.scale.z = 0.18;  // text height (m): legible from 5-10 m in rviz
     label.color = classColor(object.class_id);
     label.text = labelText(object);
     array.markers.push_back(label);
