@@ -76,7 +76,14 @@ class DemoReplayTest : public ::testing::Test {
   // demo_replay.py's exit status; its output in *log.
   static int replay(const std::string& name, const std::string& extra, std::string* log) {
     const fs::path out = dir_ / name;
-    const std::string command = "/usr/bin/python3 '" + std::string(MVOD_SOURCE_DIR) +
+    // Through the devel space's env.sh, as `make demo` sources its setup: the script imports this
+    // package's generated services, and the environment catkin cached for the tests at the first
+    // configure (before the devel space had a Python folder) has no PYTHONPATH for them.
+    const fs::path devel =
+        fs::path(MVOD_DATASET_TO_BAG_BIN).parent_path().parent_path().parent_path();
+    const std::string env =
+        fs::exists(devel / "env.sh") ? "'" + (devel / "env.sh").string() + "' " : "";
+    const std::string command = env + "/usr/bin/python3 '" + std::string(MVOD_SOURCE_DIR) +
                                 "/scripts/demo_replay.py' --bag '" + (dir_ / "demo.bag").string() +
                                 "' --output-dir '" + out.string() +
                                 "' --no-rviz --detector topic --keyframe-every 5 --gravity-down "
