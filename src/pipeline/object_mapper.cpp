@@ -162,6 +162,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.outline_cell_m = 0.0;
   box.normal_estimation = "radius";
   extractor.min_consistent_neighbours = 0;
+  extractor.near_sampling_leaf_m = 0.0;
   filter.outlier_removal = "statistical";
   lccp.implementation = "pcl";
   intersection_filter.duplicate_ratio = 0.0;
@@ -173,10 +174,14 @@ void ObjectMapper::Config::usePaperMethod() {
 
 namespace {
 
-// Table 3's -Filter switches the depth-edge test of the extraction off with the filters.
+// Table 3's -Filter switches the depth-edge test of the extraction off with the filters, and the
+// near sampling with the voxel grid that averages it.
 ObjectCloudExtractor::Config extractorConfig(const ObjectMapper::Config& config) {
   ObjectCloudExtractor::Config extractor = config.extractor;
-  if (!config.filter.enable) extractor.min_consistent_neighbours = 0;
+  if (!config.filter.enable) {
+    extractor.min_consistent_neighbours = 0;
+    extractor.near_sampling_leaf_m = 0.0;
+  }
   return extractor;
 }
 

@@ -70,6 +70,7 @@ ObjectCloudExtractor::Config getObjectCloudExtractorConfigFromRosParam(
   p.read("max_valid_depth_m", &c.max_valid_depth_m);
   p.read("mask_erosion_px", &c.mask_erosion_px);
   p.read("pixel_stride", &c.pixel_stride);
+  p.readNumber("near_sampling_leaf_m", &c.near_sampling_leaf_m);
   p.read("min_consistent_neighbours", &c.min_consistent_neighbours);
   p.readNumber("consistency_tolerance_m", &c.consistency_tolerance_m);
   p.readNumber("depth_step_per_m2", &c.depth_step_per_m2);

@@ -1,5 +1,5 @@
 // The rooms of SyntheticScene: the default scene (makeDefault) and the furnished living room,
-// bedroom and dining room of makeRoom, deterministic for the config's seed.
+// bedroom, dining room and close-up room of makeRoom, deterministic for the config's seed.
 #include <algorithm>
 #include <cmath>
 
@@ -188,6 +188,47 @@ void buildDiningRoom(RoomBuilder* room) {
   }
 }
 
+// Big furniture in the middle of a small room, the camera loop close around it: a couch, a table
+// with cups and books on it and a chair at each of its ends. Seen from about 1 m on the near side,
+// the furniture fills most of the view (issue 32's workload).
+void buildCloseRoom(RoomBuilder* room) {
+  Rng& rng = room->rng();
+  const Eigen::Vector2d c = room->center();
+  const double side = rng.uniform() < 0.5 ? 1.0 : -1.0;  // which half the couch takes
+  room->place(200, [&]() {
+    const Eigen::Vector3d origin(c.x() + room->jitter(0.25), c.y() - side * rng.uniform(0.5, 0.6),
+                                 0.0);
+    const double yaw = (side > 0 ? kPi : 0.0) + deg2rad(room->jitter(10.0));
+    return assemble(
+        "couch", origin, yaw,
+        couchParts(rng.uniform(1.6, 1.9), rng.uniform(0.85, 0.95), rng.uniform(0.8, 0.9)));
+  });
+  double table_w = 0.0, table_d = 0.0, table_h = 0.0, table_yaw = 0.0;
+  Eigen::Vector3d table_origin;
+  const bool have_table = room->place(200, [&]() {
+    table_w = rng.uniform(1.2, 1.4);
+    table_d = rng.uniform(0.7, 0.8);
+    table_h = rng.uniform(0.72, 0.76);
+    table_yaw = deg2rad(room->jitter(12.0));
+    table_origin =
+        Eigen::Vector3d(c.x() + room->jitter(0.2), c.y() + side * rng.uniform(0.5, 0.6), 0.0);
+    return assemble("dining table", table_origin, table_yaw, tableParts(table_w, table_d, table_h));
+  });
+  if (have_table) {
+    const Eigen::Matrix3d R = yawRotation(table_yaw);
+    for (const double sx : {-1.0, 1.0}) {
+      room->place(10, [&]() {
+        const Eigen::Vector3d local(sx * (0.5 * table_w + 0.36 + rng.uniform(0.0, 0.08)),
+                                    room->jitter(0.05), 0.0);
+        return makeChair(rng, table_origin + R * local,
+                         table_yaw + (sx < 0 ? -0.5 : 0.5) * kPi + deg2rad(room->jitter(12.0)));
+      });
+    }
+    room->scatterOnTop(table_origin, table_yaw, Eigen::Vector2d(0.5 * table_w, 0.5 * table_d),
+                       table_h, 1 + static_cast<int>(rng.next() % 2), 2);
+  }
+}
+
 }  // namespace
 
 RoomType roomTypeFromSeed(unsigned int seed) {
@@ -203,6 +244,8 @@ const char* roomTypeName(RoomType type) {
       return "bedroom";
     case RoomType::kDiningRoom:
       return "dining";
+    case RoomType::kCloseUp:
+      return "close";
   }
   return "?";
 }
@@ -222,6 +265,9 @@ SyntheticScene SyntheticScene::makeRoom(const SyntheticSceneConfig& base, RoomTy
     case RoomType::kDiningRoom:
       size_range << 5.2, 6.2, 4.6, 5.4;
       break;
+    case RoomType::kCloseUp:
+      size_range << 4.6, 5.0, 4.0, 4.4;
+      break;
   }
   config.room_size_x_m = rng.uniform(size_range[0], size_range[1]);
   config.room_size_y_m = rng.uniform(size_range[2], size_range[3]);
@@ -229,6 +275,11 @@ SyntheticScene SyntheticScene::makeRoom(const SyntheticSceneConfig& base, RoomTy
   config.camera_height_m = rng.uniform(1.0, 1.3);
   config.camera_pitch_deg = -rng.uniform(12.0, 18.0);
   config.camera_loop_inset_m = 0.8;
+  if (type == RoomType::kCloseUp) {
+    // The loop close to the walls, so the camera passes about 1 m from the furniture.
+    config.camera_loop_inset_m = 0.4;
+    config.camera_pitch_deg = -rng.uniform(20.0, 25.0);
+  }
   config.camera_wobble = true;
 
   RoomBuilder room(config, mixSeed(base.seed, 0xf00d0 + type_salt));
@@ -241,6 +292,9 @@ SyntheticScene SyntheticScene::makeRoom(const SyntheticSceneConfig& base, RoomTy
       break;
     case RoomType::kDiningRoom:
       buildDiningRoom(&room);
+      break;
+    case RoomType::kCloseUp:
+      buildCloseRoom(&room);
       break;
   }
   return SyntheticScene(config, std::move(room.objects()), std::move(room.clutter()));

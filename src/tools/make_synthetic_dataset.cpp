@@ -26,8 +26,11 @@ const char* const kUsage =
     "\n"
     "Renders a synthetic room to RGB-D frames with ground truth. The default room has a dining\n"
     "table with four chairs, a couch, a tv on a stand, cups and a book; --room living|bedroom|\n"
-    "dining|random builds a furnished room from multi-part furniture (chairs, tables, couch, bed,\n"
-    "tv, refrigerator, bookshelves with books, cups), varied by the seed.\n"
+    "dining|close|random builds a furnished room from multi-part furniture (chairs, tables, "
+    "couch,\n"
+    "bed, tv, refrigerator, bookshelves with books, cups), varied by the seed. close: a couch and\n"
+    "a table with chairs seen from about 1 m, filling the view (random: living, bedroom or\n"
+    "dining).\n"
     "\n"
     "--layout 7scenes (default): frame-NNNNNN.color.png, .depth.png, .pose.txt,\n"
     "  camera-intrinsics.txt, gravity-direction.txt (z-up world) and ground_truth.json with the\n"
@@ -40,7 +43,7 @@ const char* const kUsage =
     "options:\n"
     "  --output DIR         dataset folder to write (required)\n"
     "  --layout L           7scenes or scenenn (default: 7scenes)\n"
-    "  --room R             default, living, bedroom, dining or random (by the seed)\n"
+    "  --room R             default, living, bedroom, dining, close or random (by the seed)\n"
     "                       (default: default)\n"
     "  --id NAME            SceneNN sequence id, the ID of ID.xml/ID.ply\n"
     "                       (default: synthetic_<seed>)\n"
@@ -71,8 +74,8 @@ struct Options {
 // The scene's options: room, frames, seed, depth noise.
 void addSceneOptions(CLI::App* app, Options* options) {
   mvod::SyntheticSceneConfig* scene = &options->scene;
-  cli::addChoice(app, "--room", {"default", "living", "bedroom", "dining", "random"},
-                 &options->room, "--room needs default, living, bedroom, dining or random");
+  cli::addChoice(app, "--room", {"default", "living", "bedroom", "dining", "close", "random"},
+                 &options->room, "--room needs default, living, bedroom, dining, close or random");
   cli::addInteger(app, "--frames", 1, 1000000, &scene->num_frames,
                   "--frames needs an integer >= 1");
   cli::addInteger(app, "--seed", 0, std::numeric_limits<unsigned int>::max(), &scene->seed,
@@ -153,6 +156,7 @@ int main(int argc, char** argv) {
     if (options.room == "living") type = mvod::RoomType::kLivingRoom;
     if (options.room == "bedroom") type = mvod::RoomType::kBedroom;
     if (options.room == "dining") type = mvod::RoomType::kDiningRoom;
+    if (options.room == "close") type = mvod::RoomType::kCloseUp;
     scene = mvod::SyntheticScene::makeRoom(options.scene, type);
     room_name = mvod::roomTypeName(type);
   }

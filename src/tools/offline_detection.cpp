@@ -98,6 +98,8 @@ const char* const kUsage =
     "  --no-existence         keep every object once mapped (no existence evidence: objects\n"
     "                         whose place later views see through, or that are detected in\n"
     "                         few of the views that show them, are not removed)\n"
+    "  --every-pixel          no near sampling: every depth pixel of a mask, however close (the\n"
+    "                         default samples surfaces nearer than fx x 5 mm on a coarser grid)\n"
     "  --existence-remove-below L  remove an object once its existence log-odds fall below L\n"
     "                         (default -1; the log-odds lie in [-2, 2])\n"
     "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
@@ -140,6 +142,7 @@ struct Options {
   bool no_floor = false;
   bool no_amodal = false;
   bool no_existence = false;
+  bool every_pixel = false;
   double existence_remove_below = std::numeric_limits<double>::quiet_NaN();
   std::string selection;
   std::string fusion;
@@ -233,6 +236,7 @@ void addMethodOptions(CLI::App* app, Options* options) {
   cli::addFlag(app, "--no-floor", &options->no_floor);
   cli::addFlag(app, "--no-amodal", &options->no_amodal);
   cli::addFlag(app, "--no-existence", &options->no_existence);
+  cli::addFlag(app, "--every-pixel", &options->every_pixel);
   cli::addNumber(
       app, "--existence-remove-below", &options->existence_remove_below,
       [](double value) { return std::isfinite(value); },
@@ -467,6 +471,7 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   if (options.no_floor) config->floor.enable = false;
   if (options.no_amodal) config->database.amodal.enable = false;
   if (options.no_existence) config->database.existence.enable = false;
+  if (options.every_pixel) config->extractor.near_sampling_leaf_m = 0.0;
   if (std::isfinite(options.existence_remove_below)) {
     config->database.existence.remove_below = options.existence_remove_below;
   }

@@ -31,9 +31,10 @@ struct SyntheticObject {
 std::vector<OrientedBox> solidParts(const SyntheticObject& object);
 
 // The room kinds of SyntheticScene::makeRoom.
-enum class RoomType { kLivingRoom, kBedroom, kDiningRoom };
+enum class RoomType { kLivingRoom, kBedroom, kDiningRoom, kCloseUp };
+// One of the living room, bedroom and dining room (never kCloseUp: seeds keep their rooms).
 RoomType roomTypeFromSeed(unsigned int seed);
-const char* roomTypeName(RoomType type);  // "living", "bedroom", "dining"
+const char* roomTypeName(RoomType type);  // "living", "bedroom", "dining", "close"
 
 struct SyntheticSceneConfig {
   unsigned int seed = 1;
@@ -77,7 +78,10 @@ class SyntheticScene {
   //   bedroom:     a bed with a night stand (a book, a cup), a bookshelf with books, maybe a chair
   //                and a tv on a stand;
   //   dining room: a dining table with 4 to 6 chairs, cups and books on it, a refrigerator, a
-  //                bookshelf with books or a tv on a stand.
+  //                bookshelf with books or a tv on a stand;
+  //   close-up:    a couch and a table with chairs, cups and books in the middle of a 4.6-5.0 x
+  //                4.0-4.4 m room, the camera loop 0.4 m inside the walls and pitched 20-25 deg
+  //                down: the furniture, about 1 m away on the near side, fills the view.
   // Shelves, stands and night stands are clutter(). Nothing interpenetrates; every footprint keeps
   // >= 0.35 m from the camera loop. The config's room size, camera height, pitch, loop inset and
   // wobble are replaced by the room's (rooms of 5.0-6.4 x 4.4-5.4 m, camera at 1.0-1.3 m pitched

@@ -74,6 +74,11 @@ Status ObjectCloudExtractor::Config::isValid() const {
       !(std::isfinite(depth_step_per_m2) && depth_step_per_m2 >= 0.0 && depth_step_per_m2 < 0.1)) {
     return Status::Error("consistency_tolerance_m must be >= 0 and depth_step_per_m2 in [0, 0.1)");
   }
+  if (!(std::isfinite(near_sampling_leaf_m) && near_sampling_leaf_m >= 0.0 &&
+        near_sampling_leaf_m <= 0.1)) {
+    return Status::Error("near_sampling_leaf_m must be in [0, 0.1] m (got " +
+                         std::to_string(near_sampling_leaf_m) + ")");
+  }
   if (pixel_stride < 1 || pixel_stride > 64) {
     return Status::Error("pixel_stride must be in [1, 64] (got " + std::to_string(pixel_stride) +
                          ")");
@@ -87,6 +92,7 @@ std::string ObjectCloudExtractor::Config::print() const {
       << "max_valid_depth_m: " << max_valid_depth_m << "\n"
       << "mask_erosion_px: " << mask_erosion_px << "\n"
       << "pixel_stride: " << pixel_stride << "\n"
+      << "near_sampling_leaf_m: " << near_sampling_leaf_m << "\n"
       << "min_consistent_neighbours: " << min_consistent_neighbours << "\n"
       << "consistency_tolerance_m: " << consistency_tolerance_m << "\n"
       << "depth_step_per_m2: " << depth_step_per_m2 << "\n";
@@ -206,6 +212,15 @@ cv::Mat coveredByMasks(const std::vector<MaskLookup>& masks, const cv::Rect& any
   return covered;
 }
 
+// The near-sampling grid (Config::near_sampling_leaf_m): whether pixel (u, v) at depth z is on
+// the grid of its depth's stride, floor(px_per_m / z) with px_per_m = fx leaf / 2. Always true
+// when px_per_m is 0 (off) or the stride is 1 (beyond fx leaf / 2 metres).
+inline bool onNearSamplingGrid(int u, int v, double z, double px_per_m) {
+  if (!(px_per_m > 0.0)) return true;
+  const int stride = static_cast<int>(std::min(64.0, px_per_m / z));
+  return stride <= 1 || (u % stride == 0 && v % stride == 0);
+}
+
 // Depth-edge outliers: a pixel is kept when enough of its four neighbours (at the stride) have a
 // depth within a few of the sensor's depth steps of its own. A line of flying pixels between an
 // object and the background, or an isolated speckle, has at most two such neighbours; a
@@ -274,6 +289,7 @@ void extractRegistered(const RgbdFrame& frame, const std::vector<MaskLookup>& ma
   fillDepthRow(depth, v0, first_column, width, min_m, max_m, here);
   const double tolerance_base_m = config.consistency_tolerance_m;
   const double tolerance_per_m2 = 3.0 * config.depth_step_per_m2;
+  const double near_px_per_m = 0.5 * K_d.fx * config.near_sampling_leaf_m;
   std::vector<size_t> row_masks;  // the masks whose boxes hold row v
   for (int v = v0; v < any_box.br().y; v += stride) {
     fillDepthRow(depth, v + stride, first_column, width, min_m, max_m, below);
@@ -287,6 +303,7 @@ void extractRegistered(const RgbdFrame& frame, const std::vector<MaskLookup>& ma
       const int k = u - first_column;
       const double z = here[k];
       if (!std::isfinite(z)) continue;
+      if (!onNearSamplingGrid(u, v, z, near_px_per_m)) continue;
       if (min_neighbours > 0) {
         const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
         // false for NaN
@@ -338,10 +355,12 @@ void extractUnregistered(const RgbdFrame& frame, const std::vector<MaskLookup>& 
       }
     }
   };
+  const double near_px_per_m = 0.5 * K_d.fx * config.near_sampling_leaf_m;
   for (int v = 0; v < depth.rows; v += stride) {
     for (int u = 0; u < depth.cols; u += stride) {
       const double z = depthMetres(depth, u, v, config.min_valid_depth_m, config.max_valid_depth_m);
       if (!std::isfinite(z)) continue;
+      if (!onNearSamplingGrid(u, v, z, near_px_per_m)) continue;
       const Eigen::Vector3d p_D((u - K_d.cx) * z / K_d.fx, (v - K_d.cy) * z / K_d.fy, z);
       cv::Point pixel;
       // Behind the colour camera or outside its image: in no mask.

@@ -18,6 +18,12 @@ class ObjectCloudExtractor {
     int mask_erosion_px = 0;
     // Use every n-th depth pixel in u and v (1 = all).
     int pixel_stride = 1;
+    // Near surfaces on a coarser pixel grid: a pixel at depth z is used only where u and v are
+    // multiples of floor(fx near_sampling_leaf_m / (2 z)), so a square of this side still gets 2 x
+    // 2 pixels or more; the filter's voxel grid (of the same leaf) averages them anyway. A couch 1
+    // m away then gives a quarter of the points at the same voxels. 0 = every pixel (the paper's
+    // method). (m)
+    double near_sampling_leaf_m = 0.01;
     // Outliers at depth edges, in the image (the default's replacement for the filter's k-NN
     // statistics): a pixel needs this many of its 4 neighbours (at pixel_stride) with a depth
     // within consistency_tolerance_m + 3 depth_step_per_m2 z^2 of its own. 0 = off (the paper's
