@@ -320,6 +320,14 @@ geometry_msgs::Pose boxPoseToMsg(const OrientedBox& box) {
   return poseToMsg(T_B);
 }
 
+geometry_msgs::Vector3 boxSizeToMsg(const OrientedBox& box) {
+  geometry_msgs::Vector3 size;
+  size.x = box.size_m.x();
+  size.y = box.size_m.y();
+  size.z = box.size_m.z();
+  return size;
+}
+
 geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T) {
   Eigen::Isometry3d proper = T;
   proper.linear() = properRotation(T.linear());
@@ -528,9 +536,7 @@ multiview_object_detection::Object objectToMsg(const MapObject& object) {
   msg.probability = static_cast<float>(object.probability);
   msg.observations = object.observations;
   msg.pose = boxPoseToMsg(object.box);
-  msg.size.x = object.box.size_m.x();
-  msg.size.y = object.box.size_m.y();
-  msg.size.z = object.box.size_m.z();
+  msg.size = boxSizeToMsg(object.box);
   msg.yaw = static_cast<float>(object.yaw_rad);
   msg.box_completed = object.box_completed;
   msg.existence = static_cast<float>(object.existence.probability());

@@ -16,9 +16,7 @@ vision_msgs::Detection3DArray objectsToDetection3DArray(const std::vector<MapObj
     vision_msgs::Detection3D detection;
     detection.header = header;
     detection.bbox.center = boxPoseToMsg(object.box);
-    detection.bbox.size.x = object.box.size_m.x();
-    detection.bbox.size.y = object.box.size_m.y();
-    detection.bbox.size.z = object.box.size_m.z();
+    detection.bbox.size = boxSizeToMsg(object.box);
     vision_msgs::ObjectHypothesisWithPose hypothesis;
     hypothesis.id = object.class_id;
     hypothesis.score = object.probability;
@@ -41,9 +39,7 @@ jsk_recognition_msgs::BoundingBoxArray objectsToBoundingBoxArray(
     jsk_recognition_msgs::BoundingBox box;
     box.header = header;
     box.pose = boxPoseToMsg(object.box);
-    box.dimensions.x = object.box.size_m.x();
-    box.dimensions.y = object.box.size_m.y();
-    box.dimensions.z = object.box.size_m.z();
+    box.dimensions = boxSizeToMsg(object.box);
     box.value = static_cast<float>(object.probability);
     box.label = object.class_id < 0 ? 0u : static_cast<uint32_t>(object.class_id);
     array.boxes.push_back(std::move(box));

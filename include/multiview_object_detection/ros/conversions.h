@@ -6,6 +6,7 @@
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
+#include <geometry_msgs/Vector3.h>
 #include <multiview_object_detection/InstanceDetections.h>
 #include <multiview_object_detection/Object.h>
 #include <multiview_object_detection/ObjectArray.h>
@@ -72,6 +73,9 @@ Status transformFromMsg(const geometry_msgs::Transform& msg, Eigen::Isometry3d* 
 geometry_msgs::Pose poseToMsg(const Eigen::Isometry3d& T);
 // A box's centre and orientation (its axes).
 geometry_msgs::Pose boxPoseToMsg(const OrientedBox& box);
+// A box's full extents along its axes (m), as Object.size, BoundingBox3D.size and
+// BoundingBox.dimensions hold them.
+geometry_msgs::Vector3 boxSizeToMsg(const OrientedBox& box);
 geometry_msgs::Transform transformToMsg(const Eigen::Isometry3d& T);
 
 // ---- Detections -------------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/map/output_frame.h"
 
 namespace mvod {
@@ -87,6 +88,44 @@ TEST(OutputFrameTest, BoxesRoundTripBetweenTheFrames) {
   const OrientedBox back = transformBox(transformBox(box_W, T_W_O.inverse()), T_W_O);
   EXPECT_TRUE(back.center_m.isApprox(box_W.center_m, 1e-12));
   EXPECT_TRUE(back.rotation.isApprox(box_W.rotation, 1e-12));
+}
+
+// objectsInFrame copies MapObject field by field (to leave the evidence and free-space grids
+// behind): with the identity every field that a map file holds comes out as it went in, so a field
+// added to MapObject and to the files but not to the copy fails here.
+TEST(OutputFrameTest, TheIdentityKeepsEveryFieldOfTheFilesButTheGrids) {
+  MapObject object;
+  object.id = 12;
+  object.class_id = 57;
+  object.class_name = "couch";
+  object.probability = 0.81;
+  object.observations = 6;
+  object.points_W = {Eigen::Vector3f(1.f, 2.f, 0.5f), Eigen::Vector3f(1.1f, 2.f, 0.4f),
+                     Eigen::Vector3f(1.2f, 2.1f, 0.3f)};
+  object.segment_W = {Eigen::Vector3f(1.f, 2.f, 0.5f), Eigen::Vector3f(1.1f, 2.f, 0.4f)};
+  object.class_scores = {{"couch", 0.81}, {"bed", 0.12}};
+  object.box.center_m = Eigen::Vector3d(1.1, 2.05, 0.42);
+  object.box.size_m = Eigen::Vector3d(1.8, 0.9, 0.84);
+  object.box.rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  object.yaw_rad = 0.3;
+  object.box_completed = true;
+  object.observed_box = object.box;
+  object.observed_box.size_m.x() = 1.2;
+  object.first_keyframe = 3;
+  object.last_keyframe = 17;
+  object.first_seen_s = 1.5;
+  object.last_seen_s = 9.25;
+  object.existence.log_odds = 1.3;
+  object.existence.detected = 5;
+  object.existence.missed = 2;
+  object.existence.seen_through = 1;
+  const std::vector<MapObject> copies =
+      objectsInFrame({object}, Eigen::Isometry3d::Identity(), /*with_clouds=*/true);
+  ASSERT_EQ(copies.size(), 1u);
+  const MapSummary summary;
+  EXPECT_EQ(objectsToJson(copies, summary, true), objectsToJson({object}, summary, true));
+  EXPECT_TRUE(copies[0].evidence.empty());
+  EXPECT_TRUE(copies[0].free_space.empty());
 }
 
 }  // namespace
