@@ -10,15 +10,12 @@
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/pipeline/types/map_limits.h"
+#include "multiview_object_detection/pipeline/utils/stopwatch.h"
 
 namespace mvod {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = StopwatchClock;
 
 bool isRigid(const PoseCorrection& correction) {
   return std::isfinite(correction.stamp_s) && isValidPose(correction.T_W_C, 1e-3);

@@ -8,16 +8,13 @@
 #include <utility>
 
 #include "multiview_object_detection/pipeline/map/output_frame.h"
+#include "multiview_object_detection/pipeline/utils/stopwatch.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = StopwatchClock;
 
 std::string idList(const std::vector<int>& ids) {
   std::ostringstream out;

@@ -1,0 +1,27 @@
+// Helpers shared by ObjectMapper's source files (object_mapper.cpp, object_mapper_fusion.cpp).
+#pragma once
+
+#include <sstream>
+#include <string>
+
+#include "multiview_object_detection/pipeline/object_mapper.h"
+
+namespace mvod {
+namespace object_mapper_detail {
+
+inline std::string detectionLabel(size_t index, const Detection2D& detection) {
+  std::ostringstream out;
+  out << "detection " << index << " ('" << detection.class_name << "' " << detection.score << ")";
+  return out.str();
+}
+
+// The single-view stages' times (filter, LCCP, box) of `from` added to *to: summed over
+// detections (CPU time where they ran in parallel).
+inline void addStageTimes(const StageTimes& from, StageTimes* to) {
+  to->filter_ms += from.filter_ms;
+  to->lccp_ms += from.lccp_ms;
+  to->manhattan_ms += from.manhattan_ms;
+}
+
+}  // namespace object_mapper_detail
+}  // namespace mvod
