@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "lccp_voxel_grid.h"
 #include "multiview_object_detection/pipeline/stages/lccp_segmenter.h"
 #include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/point_moments.h"
@@ -19,161 +20,18 @@
 namespace mvod {
 namespace {
 
-constexpr int kKeyBits = 21;  // per axis; LccpSegmenter refuses extents over 1e6 voxels
-constexpr std::int64_t kKeyMax = (std::int64_t{1} << kKeyBits) - 1;
-
-std::uint64_t packKey(std::int64_t x, std::int64_t y, std::int64_t z) {
-  return (static_cast<std::uint64_t>(x) << (2 * kKeyBits)) |
-         (static_cast<std::uint64_t>(y) << kKeyBits) | static_cast<std::uint64_t>(z);
-}
-std::int64_t keyX(std::uint64_t key) { return static_cast<std::int64_t>(key >> (2 * kKeyBits)); }
-std::int64_t keyY(std::uint64_t key) {
-  return static_cast<std::int64_t>((key >> kKeyBits) & static_cast<std::uint64_t>(kKeyMax));
-}
-std::int64_t keyZ(std::uint64_t key) {
-  return static_cast<std::int64_t>(key & static_cast<std::uint64_t>(kKeyMax));
-}
-
-// Morton code (x, y, z bits interleaved from the top, x first): an octree's depth-first order.
-// Bit b of x goes to bit 3b + 2 of the code, of y to 3b + 1, of z to 3b (the low 21 bits of each),
-// spread and gathered with shifts and masks rather than bit by bit.
-std::uint64_t spreadBits(std::int64_t value) {
-  std::uint64_t v = static_cast<std::uint64_t>(value) & 0x1fffffULL;
-  v = (v | (v << 32)) & 0x1f00000000ffffULL;
-  v = (v | (v << 16)) & 0x1f0000ff0000ffULL;
-  v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
-  v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
-  v = (v | (v << 2)) & 0x1249249249249249ULL;
-  return v;
-}
-std::int64_t gatherBits(std::uint64_t code) {
-  std::uint64_t v = code & 0x1249249249249249ULL;
-  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3ULL;
-  v = (v ^ (v >> 4)) & 0x100f00f00f00f00fULL;
-  v = (v ^ (v >> 8)) & 0x1f0000ff0000ffULL;
-  v = (v ^ (v >> 16)) & 0x1f00000000ffffULL;
-  v = (v ^ (v >> 32)) & 0x1fffffULL;
-  return static_cast<std::int64_t>(v);
-}
-std::uint64_t morton(std::int64_t x, std::int64_t y, std::int64_t z) {
-  return (spreadBits(x) << 2) | (spreadBits(y) << 1) | spreadBits(z);
-}
-std::uint64_t unMorton(std::uint64_t code) {
-  return packKey(gatherBits(code >> 2), gatherBits(code >> 1), gatherBits(code));
-}
-
-// The origin of an octree of leaf size `resolution` over [lower, upper] whose bounds are given
-// up front: the bounds centred in a cube of a power-of-two number of leaves (PCL's rule).
-Eigen::Vector3d centredOctreeOrigin(const Eigen::Vector3d& lower, const Eigen::Vector3d& upper,
-                                    double resolution) {
-  const double epsilon = std::numeric_limits<float>::epsilon();
-  double max_keys = 2.0;
-  for (int axis = 0; axis < 3; ++axis) {
-    max_keys = std::max(max_keys, std::ceil((upper[axis] - lower[axis] - epsilon) / resolution));
-  }
-  const int depth = static_cast<int>(std::ceil(std::log2(max_keys) - epsilon));
-  const double side = static_cast<double>(std::int64_t{1} << depth) * resolution;
-  Eigen::Vector3d origin = lower;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double oversize = (side - (upper[axis] - lower[axis])) / 2.0;
-    if (oversize > epsilon) origin[axis] -= oversize;
-  }
-  return origin;
-}
-
-// The origin of an octree of leaf size `resolution` that grows to take points one at a time: it
-// starts as two leaves around the first point and doubles towards each point outside (PCL's rule).
-// Only the origin's lattice and the resulting order of cells matter here.
-Eigen::Vector3d growingOctreeOrigin(const std::vector<Eigen::Vector3f>& points, double resolution) {
-  const double epsilon = std::numeric_limits<float>::epsilon();
-  Eigen::Vector3d lower = points.front().cast<double>() - Eigen::Vector3d::Constant(resolution);
-  Eigen::Vector3d upper = points.front().cast<double>() + Eigen::Vector3d::Constant(resolution);
-  int depth = 1;
-  for (const Eigen::Vector3f& p : points) {
-    for (;;) {
-      bool outside = false;
-      Eigen::Vector3i above = Eigen::Vector3i::Zero();
-      for (int axis = 0; axis < 3; ++axis) {
-        if (p[axis] < lower[axis]) outside = true;
-        if (p[axis] >= upper[axis]) {
-          outside = true;
-          above[axis] = 1;
-        }
-      }
-      if (!outside) break;
-      const double side = static_cast<double>(std::int64_t{1} << depth) * resolution;
-      for (int axis = 0; axis < 3; ++axis) {
-        if (!above[axis]) lower[axis] -= side;
-      }
-      ++depth;
-      upper = lower + Eigen::Vector3d::Constant(
-                          static_cast<double>(std::int64_t{1} << depth) * resolution - epsilon);
-    }
-  }
-  return lower;
-}
-
-// Open addressing from packed keys (< 2^63) to indices; each key is inserted once.
-class KeyIndex {
- public:
-  explicit KeyIndex(std::size_t count) {
-    int bits = 4;
-    while ((std::size_t{1} << bits) < 2 * count) ++bits;
-    shift_ = 64 - bits;
-    mask_ = (std::size_t{1} << bits) - 1;
-    keys_.assign(mask_ + 1, kEmpty);
-    values_.assign(mask_ + 1, -1);
-  }
-  void insert(std::uint64_t key, int value) {
-    std::size_t slot = slotOf(key);
-    while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
-    keys_[slot] = key;
-    values_[slot] = value;
-  }
-  int find(std::uint64_t key) const {
-    for (std::size_t slot = slotOf(key);; slot = (slot + 1) & mask_) {
-      if (keys_[slot] == key) return values_[slot];
-      if (keys_[slot] == kEmpty) return -1;
-    }
-  }
-
- private:
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
-  std::size_t slotOf(std::uint64_t key) const {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
-  }
-  int shift_ = 60;
-  std::size_t mask_ = 15;
-  std::vector<std::uint64_t> keys_;
-  std::vector<int> values_;
-};
-
-// The occupied cells among the 27 around `key` (itself included), as indices, in offset order.
-template <typename Visit>
-void forEachNeighbourKey(std::uint64_t key, const KeyIndex& index, Visit visit) {
-  const std::int64_t x = keyX(key), y = keyY(key), z = keyZ(key);
-  for (std::int64_t dx = -1; dx <= 1; ++dx) {
-    if (x + dx < 0 || x + dx > kKeyMax) continue;
-    for (std::int64_t dy = -1; dy <= 1; ++dy) {
-      if (y + dy < 0 || y + dy > kKeyMax) continue;
-      for (std::int64_t dz = -1; dz <= 1; ++dz) {
-        if (z + dz < 0 || z + dz > kKeyMax) continue;
-        const int found = index.find(packKey(x + dx, y + dy, z + dz));
-        if (found >= 0) visit(found);
-      }
-    }
-  }
-}
-
-// The plane normal of a multiset: the covariance's eigenvector of the smallest eigenvalue; zero
-// when the points do not span a plane's worth of directions (one point, repeated).
-Eigen::Vector3f planeNormal(const PointMoments& moments) {
-  const Eigen::Matrix3d covariance = moments.covariance();
-  if (!(covariance.trace() > 1e-12)) return Eigen::Vector3f::Zero();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-  solver.computeDirect(covariance);
-  return solver.eigenvectors().col(0).normalized().cast<float>();
-}
+using lccp_grid::buildVoxelGrid;
+using lccp_grid::forEachNeighbourKey;
+using lccp_grid::growingOctreeOrigin;
+using lccp_grid::KeyIndex;
+using lccp_grid::keyX;
+using lccp_grid::keyY;
+using lccp_grid::keyZ;
+using lccp_grid::kKeyMax;
+using lccp_grid::morton;
+using lccp_grid::packKey;
+using lccp_grid::VoxelGrid;
+using lccp_grid::voxelNormals;
 
 double angleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
   const double cosine =
@@ -199,124 +57,6 @@ struct Buckets {
   }
   int size(int g) const { return begin[g + 1] - begin[g]; }
 };
-
-// 1. The voxels of the (log-depth) grid, placed as PCL's adjacency octree places them, in its
-// leaf order (Morton order), with their centroids and their occupied 27-neighbourhoods.
-struct VoxelGrid {
-  std::vector<std::uint64_t> key;
-  std::vector<Eigen::Vector3f> centroid;
-  std::vector<int> voxel_of_point;   // per input point; -1: none
-  std::vector<int> neighbour_begin;  // voxel v's neighbours: neighbours[begin[v] .. begin[v + 1])
-  std::vector<int> neighbours;       // itself included (as PCL's adjacency octree)
-  int size() const { return static_cast<int>(key.size()); }
-};
-
-// The cloud's points on the grid of `resolution` (in the log-depth space when log_transform):
-// the cloud's bounds centred in a power-of-two box of voxels.
-Status voxelKeys(const PointCloud& points, bool log_transform, double resolution,
-                 std::vector<std::pair<std::uint64_t, int>>* keyed) {
-  const auto transformed = [log_transform](const Eigen::Vector3f& p) {
-    return log_transform ? Eigen::Vector3f(p.x() / p.z(), p.y() / p.z(), std::log(p.z())) : p;
-  };
-  Eigen::Vector3d lower = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d upper = -lower;
-  std::vector<char> usable(points.size(), 0);
-  std::vector<Eigen::Vector3f> transformed_points(points.size());  // each transformed once
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite() || (log_transform && !(points[i].z() > 0.0f))) continue;
-    transformed_points[i] = transformed(points[i]);
-    const Eigen::Vector3d q = transformed_points[i].cast<double>();
-    if (!q.allFinite()) continue;
-    usable[i] = 1;
-    lower = lower.cwiseMin(q);
-    upper = upper.cwiseMax(q);
-  }
-  if (!lower.allFinite()) return Status::Error("no finite points to cluster");
-  if (((upper - lower) / resolution).maxCoeff() >= static_cast<double>(kKeyMax)) {
-    return Status::Error("cloud extent too large for voxel_resolution_m " +
-                         std::to_string(resolution));
-  }
-  lower = centredOctreeOrigin(lower, upper, resolution);
-  keyed->reserve(points.size());  // (Morton code, point)
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!usable[i]) continue;
-    const Eigen::Vector3d cell =
-        ((transformed_points[i].cast<double>() - lower) / resolution).array().floor();
-    keyed->emplace_back(
-        morton(static_cast<std::int64_t>(cell.x()), static_cast<std::int64_t>(cell.y()),
-               static_cast<std::int64_t>(cell.z())),
-        static_cast<int>(i));
-  }
-  radixSortByKey(keyed);
-  return Status::Ok();
-}
-
-Status buildVoxelGrid(const PointCloud& points, bool log_transform, double resolution,
-                      VoxelGrid* grid) {
-  std::vector<std::pair<std::uint64_t, int>> keyed;
-  const Status keyed_ok = voxelKeys(points, log_transform, resolution, &keyed);
-  if (!keyed_ok) return keyed_ok;
-  grid->voxel_of_point.assign(points.size(), -1);
-  for (std::size_t begin = 0; begin < keyed.size();) {
-    std::size_t end = begin;
-    Eigen::Vector3f sum = Eigen::Vector3f::Zero();  // float, in input order, as PCL's leaves
-    while (end < keyed.size() && keyed[end].first == keyed[begin].first) {
-      sum += points[keyed[end].second];
-      grid->voxel_of_point[keyed[end].second] = static_cast<int>(grid->key.size());
-      ++end;
-    }
-    grid->key.push_back(unMorton(keyed[begin].first));
-    grid->centroid.push_back(sum / static_cast<float>(end - begin));
-    begin = end;
-  }
-  const int num_voxels = grid->size();
-  KeyIndex voxel_index(grid->key.size());
-  for (int v = 0; v < num_voxels; ++v) voxel_index.insert(grid->key[v], v);
-  grid->neighbour_begin.assign(num_voxels + 1, 0);
-  grid->neighbours.reserve(static_cast<std::size_t>(num_voxels) * 12);
-  for (int v = 0; v < num_voxels; ++v) {
-    forEachNeighbourKey(grid->key[v], voxel_index,
-                        [grid](int n) { grid->neighbours.push_back(n); });
-    grid->neighbour_begin[v + 1] = static_cast<int>(grid->neighbours.size());
-  }
-  return Status::Ok();
-}
-
-// 2. Voxel normals. PCL fits each to its voxel, its neighbours and their neighbours, counted with
-// multiplicity: moments(v) + sum over neighbours n of (moments(n) + neighbourhood moments(n)).
-// Each voxel's moments depend on its own neighbourhood only: split over the threads (the same
-// result). Turned towards the frame's origin.
-std::vector<Eigen::Vector3f> voxelNormals(const VoxelGrid& grid, int threads) {
-  constexpr std::size_t kMinVoxelsPerThread = 2048;
-  const int num_voxels = grid.size();
-  const std::size_t voxel_count = static_cast<std::size_t>(num_voxels);
-  const std::vector<int>& begin = grid.neighbour_begin;
-  const std::vector<int>& neighbours = grid.neighbours;
-  const Eigen::Vector3d origin = grid.centroid.front().cast<double>();  // for the precision
-  std::vector<PointMoments> own(num_voxels), around(num_voxels);
-  for (int v = 0; v < num_voxels; ++v) own[v].add(grid.centroid[v].cast<double>() - origin);
-  parallelRanges(voxel_count, threads, kMinVoxelsPerThread,
-                 [&](std::size_t first, std::size_t last) {
-                   for (std::size_t v = first; v < last; ++v) {
-                     for (int k = begin[v]; k < begin[v + 1]; ++k)
-                       around[v].add(own[neighbours[k]]);
-                   }
-                 });
-  std::vector<Eigen::Vector3f> normal(num_voxels);
-  parallelRanges(voxel_count, threads, kMinVoxelsPerThread,
-                 [&](std::size_t first, std::size_t last) {
-                   for (std::size_t v = first; v < last; ++v) {
-                     PointMoments total = own[v];
-                     for (int k = begin[v]; k < begin[v + 1]; ++k) {
-                       total.add(own[neighbours[k]]);
-                       total.add(around[neighbours[k]]);
-                     }
-                     normal[v] = planeNormal(total);
-                     if (grid.centroid[v].dot(normal[v]) > 0.0f) normal[v] = -normal[v];
-                   }
-                 });
-  return normal;
-}
 
 // 3. Seeds: per occupied cell of a seed_m grid over the voxel centroids (real space), the voxel
 // nearest to the cell's centre; kept where enough voxels lie within half a seed. The cells and
