@@ -1,9 +1,9 @@
 // Writes the seed corpora of the fuzz harnesses (test/fuzz/<harness>_corpus/): small files in the
 // real formats, made here rather than copied from data. Run once when a format changes:
 //   clang++ -std=c++17 -Iinclude -I/usr/include/eigen3 $(pkg-config --cflags opencv4) \
-//     test/fuzz/make_seed_corpus.cpp src/io/json_io.cpp src/io/history_json.cpp src/io/image_io.cpp
-//     \
-//     src/pipeline/types/common.cpp -lopencv_imgcodecs -lopencv_imgproc -lopencv_core \
+//     test/fuzz/make_seed_corpus.cpp src/io/json_io.cpp src/io/object_json.cpp \
+//     src/io/history_json.cpp src/io/image_io.cpp src/pipeline/types/common.cpp \
+//     -lopencv_imgcodecs -lopencv_imgproc -lopencv_core \
 //     -o /tmp/make_seed_corpus && /tmp/make_seed_corpus test/fuzz
 #include <cstdint>
 #include <cstdio>

@@ -95,7 +95,9 @@ TEST(HistoryJson, RoundTripsExactly) {
     EXPECT_EQ(a.K_depth.cy, b.K_depth.cy);
     EXPECT_EQ(a.K_depth.width, b.K_depth.width);
     EXPECT_EQ(a.has_floor, b.has_floor);
-    if (a.has_floor) EXPECT_EQ(a.floor_point_D, b.floor_point_D);
+    if (a.has_floor) {
+      EXPECT_EQ(a.floor_point_D, b.floor_point_D);
+    }
     ASSERT_EQ(a.depth.type(), b.depth.type());
     ASSERT_EQ(a.depth.size(), b.depth.size());
     EXPECT_EQ(std::memcmp(a.depth.data, b.depth.data, a.depth.total() * a.depth.elemSize()), 0);

@@ -106,7 +106,9 @@ void expectSameSummary(const MapSummary& a, const MapSummary& b) {
   EXPECT_EQ(a.removed_intersecting, b.removed_intersecting);
   EXPECT_EQ(a.gravity_down_W, b.gravity_down_W);
   EXPECT_EQ(std::isnan(a.floor_height_m), std::isnan(b.floor_height_m));
-  if (!std::isnan(a.floor_height_m)) EXPECT_EQ(a.floor_height_m, b.floor_height_m);
+  if (!std::isnan(a.floor_height_m)) {
+    EXPECT_EQ(a.floor_height_m, b.floor_height_m);
+  }
   EXPECT_EQ(a.stage_ms_median.extraction_ms, b.stage_ms_median.extraction_ms);
   EXPECT_EQ(a.stage_ms_median.filter_ms, b.stage_ms_median.filter_ms);
   EXPECT_EQ(a.stage_ms_median.lccp_ms, b.stage_ms_median.lccp_ms);
