@@ -1,0 +1,150 @@
+#include "offline_detection_report.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <utility>
+
+#include "multiview_object_detection/io/file_io.h"
+#include "multiview_object_detection/io/ply_writer.h"
+
+namespace offline_detection {
+namespace {
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  double m = values[mid];
+  if (values.size() % 2 == 0) {
+    m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
+  }
+  return m;
+}
+
+std::string fileSafe(std::string name) {
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  }
+  return name;
+}
+
+}  // namespace
+
+mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
+                           const mvod::ObjectMapper& mapper,
+                           const mvod::ObjectMapper::RefinementReport& refinement) {
+  mvod::MapSummary summary;
+  summary.frames = static_cast<int>(num_frames);
+  summary.keyframes = stats.keyframes;
+  summary.removed_atypical = static_cast<int>(refinement.atypical_ids.size());
+  summary.removed_intersecting = static_cast<int>(refinement.intersecting_ids.size());
+  summary.removed_gone = stats.removed_gone;
+  summary.gravity_down_W = -mapper.gravity().up;
+  summary.floor_height_m = mapper.floorHeight_m();
+  summary.counts = stats.counts;
+  auto stage_median = [&](double mvod::StageTimes::*field) {
+    std::vector<double> values;
+    for (const mvod::StageTimes& t : stats.stage_times) values.push_back(t.*field);
+    return median(values);
+  };
+  mvod::StageTimes& med = summary.stage_ms_median;
+  med.extraction_ms = stage_median(&mvod::StageTimes::extraction_ms);
+  med.filter_ms = stage_median(&mvod::StageTimes::filter_ms);
+  med.lccp_ms = stage_median(&mvod::StageTimes::lccp_ms);
+  med.manhattan_ms = stage_median(&mvod::StageTimes::manhattan_ms);
+  med.fusion_ms = stage_median(&mvod::StageTimes::fusion_ms);
+  med.existence_ms = stage_median(&mvod::StageTimes::existence_ms);
+  med.total_ms = stage_median(&mvod::StageTimes::total_ms);
+  med.refinement_ms = refinement.time_ms;
+  return summary;
+}
+
+void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times) {
+  if (stage_times.size() < 40) return;
+  std::vector<double> first, last;
+  for (size_t k = 0; k < 20; ++k) {
+    first.push_back(stage_times[k].total_ms);
+    last.push_back(stage_times[stage_times.size() - 20 + k].total_ms);
+  }
+  std::fprintf(stderr,
+               "offline_detection: time per keyframe, median of the first 20: %.1f ms, of the "
+               "last 20: %.1f ms\n",
+               median(first), median(last));
+}
+
+bool writeTimings(const std::string& path, const RunStats& stats) {
+  std::ofstream csv(path);
+  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms,existence_ms\n";
+  for (size_t k = 0; k < stats.stage_times.size(); ++k) {
+    const mvod::StageTimes& t = stats.stage_times[k];
+    csv << stats.stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
+        << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "," << t.existence_ms
+        << "\n";
+  }
+  if (!csv) {
+    std::cerr << "offline_detection: cannot write " << path << "\n";
+    return false;
+  }
+  return true;
+}
+
+bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& objects) {
+  bool all_saved = true;
+  for (const mvod::MapObject& object : objects) {
+    const std::string stem =
+        dir + "/object_" + std::to_string(object.id) + "_" + fileSafe(object.class_name);
+    for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
+                             std::make_pair("_segment.ply", &object.segment_W)}) {
+      const mvod::Status saved =
+          mvod::writeFileAtomic(stem + part.first, mvod::plyAsciiXyz(*part.second));
+      if (!saved) {
+        std::cerr << "offline_detection: " << saved.message() << "\n";
+        all_saved = false;
+      }
+    }
+  }
+  return all_saved;
+}
+
+void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,
+                    const mvod::ObjectMapper::RefinementReport& refinement,
+                    const mvod::MapSummary& summary) {
+  const mvod::StageTimes& med = summary.stage_ms_median;
+  const mvod::MapSummary::Counts& counts = summary.counts;
+  std::fprintf(stderr,
+               "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
+               "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
+               "%d gone by the existence evidence)\n"
+               "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
+               "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f  refinement %.1f\n"
+               "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
+               "%d objects before refinement\n",
+               num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
+               refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
+               refinement.merged_ids.size(), stats.removed_gone, median(stats.detection_ms),
+               med.extraction_ms, med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms,
+               med.existence_ms, med.total_ms, med.refinement_ms, counts.detections,
+               counts.above_threshold, counts.with_box, counts.inserted, counts.fused,
+               counts.before_refinement);
+}
+
+void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame) {
+  std::printf("objects in the %s frame%s\n", frame.c_str(),
+              frame == "gravity_aligned" ? " (z up, the floor at z = 0)" : "");
+  std::printf("%4s  %-16s %5s %4s  %-26s %-22s %8s\n", "id", "class", "prob", "obs", "centre (m)",
+              "size (m)", "yaw (deg)");
+  for (const mvod::MapObject& o : objects) {
+    const Eigen::Vector3d& c = o.box.center_m;
+    const Eigen::Vector3d& s = o.box.size_m;
+    std::printf("%4d  %-16s %5.2f %4d  (%6.2f, %6.2f, %6.2f)   (%5.2f, %5.2f, %5.2f)  %8.1f\n",
+                o.id, o.class_name.c_str(), o.probability, o.observations, c.x(), c.y(), c.z(),
+                s.x(), s.y(), s.z(), o.yaw_rad * 180.0 / M_PI);
+  }
+  std::fflush(stdout);
+}
+
+}  // namespace offline_detection
