@@ -57,47 +57,76 @@ void ObjectDetectionRos::fail(const std::string& message) {
 
 void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   const Config config = config_->get();
+  ClassPriors priors;
+  bool segmenter_injected = false;
+  if (!checkAndLoad(config, &priors, &segmenter, &segmenter_injected)) return;
+  ok_ = true;
+  logStart(config, segmenter.get());
+  createStages(config, priors, std::move(segmenter), segmenter_injected);
+  const MapPathPolicy map_paths{config.map_directory, config.allow_any_map_path};
+  if (!setUpMapFiles(config, map_paths)) return;
+  if (!config.load_map_on_start.empty()) loadMapOnStart(config, map_paths);
+  // Advertised once the map is loaded: their threads answer at once, and ~get_objects must not
+  // answer an empty map while load_map_on_start is still reading the file.
+  services_ = std::make_unique<ObjectDetectionServices>(nh_private_, map_paths, worker_.get(),
+                                                        buffer_.get(), publishers_.get(), &stats_,
+                                                        config.service_timeout_s);
+  // The output frame's TF from the start (a loaded map's, or that of the configured gravity).
+  publishers_->publishOutputFrame(worker_->snapshot()->T_W_O);
+  startReconfigure();
+  startThreads(config);
+}
+
+bool ObjectDetectionRos::checkAndLoad(const Config& config, ClassPriors* priors,
+                                      std::unique_ptr<InstanceSegmenter>* segmenter,
+                                      bool* segmenter_injected) {
   const Status valid = config.isValid();
   if (!valid) {
     fail("invalid parameter in " + nh_private_.getNamespace() + ": " + valid.message());
-    return;
+    return false;
   }
   if (config.priors_file.empty()) {
     fail("priors_file is not set and the package's config/class_priors.yaml was not found");
-    return;
+    return false;
   }
-  ClassPriors priors;
-  const Status loaded = ClassPriors::loadYaml(config.priors_file, &priors);
+  const Status loaded = ClassPriors::loadYaml(config.priors_file, priors);
   if (!loaded) {
     fail("cannot load the class priors (priors_file): " + loaded.message());
-    return;
+    return false;
   }
-  bool segmenter_injected = false;
+  *segmenter_injected = false;
   if (config.detector != "topic") {
-    if (segmenter) {
-      segmenter_injected = true;
+    if (*segmenter) {
+      *segmenter_injected = true;
     } else {
-      const Status created = createInstanceSegmenter(config.segmenterOptions(), &segmenter);
+      const Status created = createInstanceSegmenter(config.segmenterOptions(), segmenter);
       if (!created) {
         fail("detector '" + config.detector + "': " + created.message());
-        return;
+        return false;
       }
     }
   } else {
-    segmenter.reset();  // detections come from the topic
+    segmenter->reset();  // detections come from the topic
   }
-  ok_ = true;
-  ROS_INFO_STREAM("object detection: " << (segmenter ? segmenter->name() : "detections topic")
-                                       << ", priors " << config.priors_file << "\n"
-                                       << config.print() << "standard messages: "
-                                       << (publishesVisionMsgs() ? "~detections_3d" : "")
-                                       << (publishesJskRecognitionMsgs() ? " ~bounding_boxes" : "")
-                                       << (publishesVisionMsgs() || publishesJskRecognitionMsgs()
-                                               ? ""
-                                               : "none (built without vision_msgs and "
-                                                 "jsk_recognition_msgs)"));
+  return true;
+}
 
-  // The stages, each told only about the ones it hands work to.
+void ObjectDetectionRos::logStart(const Config& config, const InstanceSegmenter* segmenter) const {
+  ROS_INFO_STREAM("object detection: "
+                  << (segmenter != nullptr ? segmenter->name() : "detections topic") << ", priors "
+                  << config.priors_file << "\n"
+                  << config.print()
+                  << "standard messages: " << (publishesVisionMsgs() ? "~detections_3d" : "")
+                  << (publishesJskRecognitionMsgs() ? " ~bounding_boxes" : "")
+                  << (publishesVisionMsgs() || publishesJskRecognitionMsgs()
+                          ? ""
+                          : "none (built without vision_msgs and "
+                            "jsk_recognition_msgs)"));
+}
+
+void ObjectDetectionRos::createStages(const Config& config, const ClassPriors& priors,
+                                      std::unique_ptr<InstanceSegmenter> segmenter,
+                                      bool segmenter_injected) {
   input_ = std::make_unique<RgbdInput>(nh_, nh_private_, config, &stats_, shut_down_);
   publishers_ = std::make_unique<ObjectDetectionPublishers>(nh_, nh_private_, config, &stats_);
   diagnostics_ =
@@ -119,12 +148,14 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   if (detections_) {
     buffer_->setTimeJumpCallback([this](const ros::Time& stamp) { detections_->dropAfter(stamp); });
   }
-  const MapPathPolicy map_paths{config.map_directory, config.allow_any_map_path};
+}
+
+bool ObjectDetectionRos::setUpMapFiles(const Config& config, const MapPathPolicy& map_paths) {
   const Status writable = prepareMapDirectory(map_paths);
   if (!writable && config.autosave_period_s > 0.0) {
     fail(writable.message() +
          " (set map_directory to a writable folder, or autosave_period_s 0 to run without saving)");
-    return;
+    return false;
   }
   if (!writable) ROS_WARN("%s: ~save_map will fail", writable.message().c_str());
   if (config.autosave_period_s > 0.0) {
@@ -135,21 +166,15 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
     const Status resolved = resolveMapPath(name, map_paths, true, &autosave_path);
     if (!resolved) {
       fail("autosave_path: " + resolved.message() + " (autosave_period_s 0 turns autosave off)");
-      return;
+      return false;
     }
     autosaver_ = std::make_unique<MapAutosaver>(autosave_path, config.autosave_period_s,
                                                 worker_.get(), &stats_);
   }
-  if (!config.load_map_on_start.empty()) loadMapOnStart(config, map_paths);
-  // Advertised once the map is loaded: their threads answer at once, and ~get_objects must not
-  // answer an empty map while load_map_on_start is still reading the file.
-  services_ = std::make_unique<ObjectDetectionServices>(nh_private_, map_paths, worker_.get(),
-                                                        buffer_.get(), publishers_.get(), &stats_,
-                                                        config.service_timeout_s);
-  // The output frame's TF from the start (a loaded map's, or that of the configured gravity).
-  publishers_->publishOutputFrame(worker_->snapshot()->T_W_O);
+  return true;
+}
 
-  // Dynamic reconfigure starts from the values in effect, not from the .cfg defaults.
+void ObjectDetectionRos::startReconfigure() {
   reconfigure_server_ = std::make_unique<ReconfigureServer>(reconfigure_mutex_, nh_private_);
   {
     multiview_object_detection::ObjectDetectionConfig rc = config_->reconfigureValues();
@@ -158,7 +183,9 @@ void ObjectDetectionRos::start(std::unique_ptr<InstanceSegmenter> segmenter) {
   }
   reconfigure_server_->setCallback(boost::bind(&ObjectDetectionRos::reconfigureCallback, this,
                                                boost::placeholders::_1, boost::placeholders::_2));
+}
 
+void ObjectDetectionRos::startThreads(const Config& config) {
   worker_->start();
   if (autosaver_) {
     autosaver_->start();

@@ -78,6 +78,20 @@ class ObjectDetectionRos {
       dynamic_reconfigure::Server<multiview_object_detection::ObjectDetectionConfig>;
 
   void start(std::unique_ptr<InstanceSegmenter> segmenter);
+  // start()'s steps. The parameters' check, the class priors and the detector (false: failed,
+  // fail() called); an injected segmenter is kept.
+  bool checkAndLoad(const Config& config, ClassPriors* priors,
+                    std::unique_ptr<InstanceSegmenter>* segmenter, bool* segmenter_injected);
+  void logStart(const Config& config, const InstanceSegmenter* segmenter) const;
+  // The stages, each told only about the ones it hands work to.
+  void createStages(const Config& config, const ClassPriors& priors,
+                    std::unique_ptr<InstanceSegmenter> segmenter, bool segmenter_injected);
+  // map_directory and the autosaver (false: failed, fail() called).
+  bool setUpMapFiles(const Config& config, const MapPathPolicy& map_paths);
+  // Dynamic reconfigure, from the values in effect (not the .cfg defaults).
+  void startReconfigure();
+  // The worker, the autosaver, the TF listener, the subscriptions and the diagnostics.
+  void startThreads(const Config& config);
   void fail(const std::string& message);
   // load_map_on_start: the map file into the worker (a missing one is a first run, an unreadable
   // one is moved aside; neither stops the node).
