@@ -1,11 +1,29 @@
 #!/usr/bin/python3
 """Counts test cases in catkin's JUnit XML results and prints 'N passed, N failed, N skipped'.
 
-Exit status 1 when a test failed or errored, or when no result file exists (a build or runner problem)."""
+Each failed test is named with the first lines of its failure message, so that a CI log that keeps only the
+end of the output still says why it failed. Exit status 1 when a test failed or errored, or when no result
+file exists (a build or runner problem)."""
 import glob
 import os
 import sys
 import xml.etree.ElementTree as ET
+
+
+MAX_FAILURE_LINES = 25
+
+
+def failure_text(element):
+    """The first MAX_FAILURE_LINES non-empty lines of a <failure> or <error>: its message, then its text."""
+    lines = []
+    for part in (element.get('message', ''), element.text or ''):
+        for line in part.splitlines():
+            if line.strip() and line not in lines:
+                lines.append(line.rstrip())
+    if len(lines) > MAX_FAILURE_LINES:
+        more = len(lines) - MAX_FAILURE_LINES
+        lines = lines[:MAX_FAILURE_LINES] + ['... (%d more lines in the result file)' % more]
+    return lines
 
 
 def main():
@@ -13,6 +31,7 @@ def main():
     files = sorted(glob.glob(os.path.join(results_dir, '**', '*.xml'), recursive=True))
     passed = failed = skipped = 0
     failed_names = []
+    failure_texts = []
     for path in files:
         try:
             root = ET.parse(path).getroot()
@@ -20,18 +39,25 @@ def main():
             print('unreadable result file %s: %s' % (path, err))
             failed += 1
             failed_names.append(os.path.basename(path))
+            failure_texts.append([])
             continue
         for case in root.iter('testcase'):
             name = '%s.%s' % (case.get('classname', ''), case.get('name', ''))
-            if case.find('failure') is not None or case.find('error') is not None:
+            problem = case.find('failure')
+            if problem is None:
+                problem = case.find('error')
+            if problem is not None:
                 failed += 1
                 failed_names.append(name)
+                failure_texts.append(failure_text(problem))
             elif case.find('skipped') is not None or case.get('status') == 'notrun':
                 skipped += 1
             else:
                 passed += 1
-    for name in failed_names:
+    for index, name in enumerate(failed_names):
         print('FAILED: %s' % name)
+        for line in failure_texts[index]:
+            print('    %s' % line)
     if not files:
         print('no test result files under %s' % results_dir)
         failed += 1
