@@ -82,13 +82,6 @@ std::string formatFraction(double value) {
   return text;
 }
 
-std::string fileSafe(std::string name) {
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-  }
-  return name;
-}
-
 }  // namespace
 
 // ---- Metrics ----
@@ -358,7 +351,7 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
       for (const char* suffix : {"_segment.ply", "_fused.ply"}) {
         const fs::path cloud_path =
             fs::path(clouds_dir) /
-            ("object_" + std::to_string(object.id) + "_" + fileSafe(object.class_name) + suffix);
+            (objectCloudFileStem(object.id, object.class_name) + suffix);
         std::error_code error;
         if (!fs::is_regular_file(cloud_path, error)) continue;
         if (!(status = readPlyVertices(cloud_path.string(), &prediction.points_W, nullptr))) {
@@ -378,6 +371,14 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
   *predictions = std::move(parsed);
   if (num_with_clouds != nullptr) *num_with_clouds = with_clouds;
   return Status::Ok();
+}
+
+std::string objectCloudFileStem(int id, const std::string& class_name) {
+  std::string safe = class_name;
+  for (char& c : safe) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  }
+  return "object_" + std::to_string(id) + "_" + safe;
 }
 
 }  // namespace mvod

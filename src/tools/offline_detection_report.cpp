@@ -1,13 +1,13 @@
 #include "offline_detection_report.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <utility>
 
+#include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/ply_writer.h"
 
@@ -23,13 +23,6 @@ double median(std::vector<double> values) {
     m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
   }
   return m;
-}
-
-std::string fileSafe(std::string name) {
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-  }
-  return name;
 }
 
 }  // namespace
@@ -96,7 +89,7 @@ bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& obje
   bool all_saved = true;
   for (const mvod::MapObject& object : objects) {
     const std::string stem =
-        dir + "/object_" + std::to_string(object.id) + "_" + fileSafe(object.class_name);
+        dir + "/" + mvod::objectCloudFileStem(object.id, object.class_name);
     for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
                              std::make_pair("_segment.ply", &object.segment_W)}) {
       const mvod::Status saved =

@@ -545,6 +545,9 @@ TEST_F(EvaluationFiles, LoadsPredictionsWithCloudsFromJsonOrFolder) {
   EXPECT_DOUBLE_EQ(predictions[1].probability, 0.6);
 
   // Without: the --save-clouds folder supplies object 7's cloud, object 1 falls back to its box.
+  // The file name that offline_detection --save-clouds gives it (class made file-safe):
+  EXPECT_EQ(objectCloudFileStem(7, "dining table"), "object_7_dining_table");
+  EXPECT_EQ(objectCloudFileStem(12, "a/b.c-d_e"), "object_12_a_b_c-d_e");
   const std::string without = write("without.json", objectsToJson(objects, MapSummary(), false));
   write("clouds/object_7_dining_table_fused.ply",
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
