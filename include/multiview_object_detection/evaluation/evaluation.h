@@ -101,8 +101,8 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
                        std::vector<EvaluatedPrediction>* predictions, int* num_with_clouds);
 // Points: segment_W, or points_W where the segment is empty.
 std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObject>& objects);
-// "object_<id>_<class>", the class with characters other than letters, digits, '-' and '_' as '_':
-// the stem of the cloud files that offline_detection --save-clouds writes and loadPredictions reads.
+// "object_<id>_<class>", in the class every character but letters, digits, '-' and '_' as '_':
+// the stem of the cloud files offline_detection --save-clouds writes and loadPredictions reads.
 std::string objectCloudFileStem(int id, const std::string& class_name);
 
 }  // namespace mvod
