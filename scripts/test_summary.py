@@ -13,13 +13,16 @@ import xml.etree.ElementTree as ET
 MAX_FAILURE_LINES = 25
 
 
-def failure_text(element):
-    """The first MAX_FAILURE_LINES non-empty lines of a <failure> or <error>: its message, then its text."""
+def failure_text(problems):
+    """The first MAX_FAILURE_LINES lines of a test case's <failure> and <error> elements (gtest writes one per
+    failed assertion, its message twice: as the attribute and as the text; a text that repeats its message is
+    printed once)."""
     lines = []
-    for part in (element.get('message', ''), element.text or ''):
-        for line in part.splitlines():
-            if line.strip() and line not in lines:
-                lines.append(line.rstrip())
+    for element in problems:
+        message = element.get('message', '').strip()
+        text = (element.text or '').strip()
+        for block in [message] + ([text] if text and text != message else []):
+            lines.extend(line.rstrip() for line in block.splitlines() if line.strip())
     if len(lines) > MAX_FAILURE_LINES:
         more = len(lines) - MAX_FAILURE_LINES
         lines = lines[:MAX_FAILURE_LINES] + ['... (%d more lines in the result file)' % more]
@@ -43,13 +46,11 @@ def main():
             continue
         for case in root.iter('testcase'):
             name = '%s.%s' % (case.get('classname', ''), case.get('name', ''))
-            problem = case.find('failure')
-            if problem is None:
-                problem = case.find('error')
-            if problem is not None:
+            problems = case.findall('failure') + case.findall('error')
+            if problems:
                 failed += 1
                 failed_names.append(name)
-                failure_texts.append(failure_text(problem))
+                failure_texts.append(failure_text(problems))
             elif case.find('skipped') is not None or case.get('status') == 'notrun':
                 skipped += 1
             else:
