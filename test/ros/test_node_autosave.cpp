@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <random>
@@ -34,7 +35,6 @@ namespace fs = std::filesystem;
 
 constexpr char kNode[] = "/autosave_node";
 constexpr char kAutosaveName[] = "autosave_node.autosave.json";
-constexpr double kPeriodS = 1.0;
 
 std::string nodeBinary() {
   // Beside this test's binary in the devel space.
@@ -94,6 +94,17 @@ std::vector<std::string> temporariesIn(const std::string& directory) {
   return found;
 }
 
+// SIGKILLs the node when a cycle ends early (a failed ASSERT): a node left running would keep the
+// test run's output pipe open and hold make test up. `pid` -1 once the node has been reaped.
+struct KillOnExit {
+  pid_t pid = -1;
+  ~KillOnExit() {
+    if (pid <= 0) return;
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+  }
+};
+
 // The file's modification time in seconds since the epoch; 0 when it does not exist.
 double modificationTimeS(const std::string& path) {
   struct stat info {};
@@ -122,20 +133,19 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     const ros::Time stamp(static_cast<double>(++second));
     inputs.publish(stream.make(frame++ % stream.options().num_frames, stamp), true, true);
   };
-  // Frames for `duration_s`; the wall time of the last map change seen (objects published).
-  const auto publishFor = [&](double duration_s, double* last_change_s) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(duration_s);
-    size_t published = outputs.objectsReceived();
+  // A frame every 0.25 s until `end`, calling `poll` every 50 ms; true as soon as `poll` is.
+  const auto publishUntil = [&](const ros::WallTime& end, const std::function<bool()>& poll) {
     while (ros::WallTime::now() < end) {
       publishFrame();
       for (int i = 0; i < 5; ++i) {
         ros::WallDuration(0.05).sleep();
-        if (outputs.objectsReceived() != published) {
-          published = outputs.objectsReceived();
-          *last_change_s = ros::WallTime::now().toSec();
-        }
+        if (poll()) return true;
       }
     }
+    return false;
+  };
+  const auto after = [](double duration_s) {
+    return ros::WallTime::now() + ros::WallDuration(duration_s);
   };
   size_t objects_before_kill = 0;
   double held_mtime_s = 0.0;  // the autosave can only get newer than this
@@ -143,6 +153,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     SCOPED_TRACE("cycle " + std::to_string(cycle));
     const pid_t pid = startNode(directory);
     ASSERT_GT(pid, 0);
+    KillOnExit node{pid};
     ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/get_objects", 30000))
         << "the node did not start";
     ASSERT_TRUE(
@@ -164,6 +175,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
       ::kill(pid, SIGINT);
       int status = 0;
       ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+      node.pid = -1;
       EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
       std::vector<mvod::MapObject> saved;
       std::string error;
@@ -173,11 +185,17 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
       EXPECT_TRUE(temporariesIn(directory).empty());
       break;
     }
-    // Frames for a random 1.5 - 4 s.
-    const double run_s = std::uniform_real_distribution<double>(1.5, 4.0)(rng);
+    // Frames for a random 1.5 - 4 s; the wall time of the last map change seen (objects published).
     const double frames_from_s = ros::WallTime::now().toSec();
     double change_s = frames_from_s;
-    publishFor(run_s, &change_s);
+    size_t published = outputs.objectsReceived();
+    publishUntil(after(std::uniform_real_distribution<double>(1.5, 4.0)(rng)), [&] {
+      if (outputs.objectsReceived() != published) {
+        published = outputs.objectsReceived();
+        change_s = ros::WallTime::now().toSec();
+      }
+      return false;
+    });
     // Every other cycle (the first among them, so that there is a file to resume from): this node
     // saves periodically, frames on until the file holds a change seen now, that is two saves end
     // after it (the second one's snapshot is taken after the first ended). Not timed: a sanitizer
@@ -187,28 +205,26 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     if (cycle % 2 == 0) {
       int saves_after_change = 0;
       double last_mtime_s = modificationTimeS(autosave);
-      const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(120.0);
-      while (saves_after_change < 2 && ros::WallTime::now() < give_up) {
-        publishFrame();
-        for (int i = 0; i < 5; ++i) {
-          ros::WallDuration(0.05).sleep();
-          const double mtime_s = modificationTimeS(autosave);
-          if (mtime_s <= last_mtime_s) continue;
-          last_mtime_s = mtime_s;
-          if (mtime_s > change_s && ++saves_after_change == 2) held_mtime_s = mtime_s;
-        }
-      }
-      ASSERT_EQ(saves_after_change, 2) << "the node did not autosave the change seen "
-                                       << ros::WallTime::now().toSec() - change_s << " s ago\n"
-                                       << outputs.allLogs();
+      const bool held = publishUntil(after(120.0), [&] {
+        const double mtime_s = modificationTimeS(autosave);
+        if (mtime_s <= last_mtime_s) return false;
+        last_mtime_s = mtime_s;
+        if (mtime_s > change_s) ++saves_after_change;
+        return saves_after_change == 2;
+      });
+      ASSERT_TRUE(held) << "the node did not autosave the change seen "
+                        << ros::WallTime::now().toSec() - change_s << " s ago\n"
+                        << outputs.allLogs();
+      held_mtime_s = last_mtime_s;
     }
     // Then SIGKILL at a random moment of a save, a keyframe or neither.
-    double ignored_s = 0.0;
-    publishFor(std::uniform_real_distribution<double>(0.0, 2.0)(rng), &ignored_s);
+    publishUntil(after(std::uniform_real_distribution<double>(0.0, 2.0)(rng)),
+                 [] { return false; });
     const ros::WallTime killed_at = ros::WallTime::now();
     ASSERT_EQ(::kill(pid, SIGKILL), 0);
     int status = 0;
     ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    node.pid = -1;
     // Whole, loadable, and no older than the save that held the change.
     std::vector<mvod::MapObject> saved;
     std::string error;
