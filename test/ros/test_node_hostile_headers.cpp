@@ -1,8 +1,9 @@
 // rostest (node_hostile_headers.test): no header can kill object_detection_node. Stamps past 2038
 // (where ROS 1 time arithmetic throws) on every input are refused with a report naming the input,
-// then a minute of randomised headers (stamps, frame ids) on every input between good frames. Two
-// nodes: /object_detection (pose topic) and /object_detection_tf (TF). After each part, both nodes
-// answer services and map good frames.
+// then randomised headers (stamps, frame ids) on every input between good frames for ~fuzz_seconds
+// (20 s in make test, 60 s in make test-sanitize: MVOD_FUZZ_SECONDS, node_hostile_headers.test).
+// Two nodes: /object_detection (pose topic) and /object_detection_tf (TF). After each part, both
+// nodes answer services and map good frames.
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 
@@ -210,8 +211,8 @@ std::string randomFrameId(std::mt19937* rng) {
   return ids[std::uniform_int_distribution<std::size_t>(0, ids.size() - 1)(*rng)];
 }
 
-TEST_F(NodeHostileHeadersTest, RandomisedHeadersOnEveryInputForAMinute) {
-  double seconds = 60.0;
+TEST_F(NodeHostileHeadersTest, RandomisedHeadersOnEveryInput) {
+  double seconds = 20.0;
   ros::param::get("~fuzz_seconds", seconds);
   const unsigned seed = 20261127u;
   std::mt19937 rng(seed);
@@ -271,7 +272,7 @@ TEST_F(NodeHostileHeadersTest, RandomisedHeadersOnEveryInputForAMinute) {
   // The fuzzer's plausible stamps (a second or a day ahead) legitimately make the next good frames
   // look like a jump back in time, which drops what waits; most good frames are still mapped.
   EXPECT_GT(mapped, good / 4) << pose_node_->allLogs();
-  expectBothMapAGoodFrame("after a minute of randomised headers");
+  expectBothMapAGoodFrame("after the randomised headers");
 }
 
 }  // namespace
