@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "dataset_file_checks.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/io/image_io.h"
 
@@ -17,27 +18,13 @@ namespace mvod {
 namespace {
 
 namespace fs = std::filesystem;
+using dataset_files::isFile;
+using dataset_files::kMaxNamedFrames;
+using dataset_files::kSizeProbeFrames;
+using dataset_files::sizeText;
 
 constexpr double kFrameRateHz = 30.0;  // 7-Scenes (Kinect v1)
 constexpr double kMaxGravityComponent = 1e6;
-// Frames whose headers are read at open() to learn the cameras' image sizes.
-constexpr size_t kSizeProbeFrames = 10;
-// Missing files listed by name in a warning; the rest are counted.
-constexpr size_t kMaxNamedFrames = 5;
-
-std::string matTypeName(const cv::Mat& m) {
-  static const char* const kDepthNames[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
-  return std::string(kDepthNames[m.depth()]) + "C" + std::to_string(m.channels());
-}
-
-std::string sizeText(const cv::Mat& m) {
-  return std::to_string(m.cols) + "x" + std::to_string(m.rows);
-}
-
-bool isFile(const fs::path& path) {
-  std::error_code error;
-  return fs::is_regular_file(path, error);  // follows symbolic links
-}
 
 // Reads exactly `count` whitespace-separated finite numbers; anything else is an error naming the
 // file.

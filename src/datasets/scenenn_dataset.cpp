@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "dataset_file_checks.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/io/image_io.h"
 
@@ -20,15 +21,10 @@ namespace mvod {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool isFile(const fs::path& path) {
-  std::error_code error;
-  return fs::is_regular_file(path, error);  // follows symbolic links
-}
-
-std::string sizeText(const cv::Mat& m) {
-  return std::to_string(m.cols) + "x" + std::to_string(m.rows);
-}
+using dataset_files::isFile;
+using dataset_files::kMaxNamedFrames;
+using dataset_files::kSizeProbeFrames;
+using dataset_files::sizeText;
 
 bool parseFiniteDouble(const std::string& token, double* value) {
   char* end = nullptr;
@@ -68,7 +64,7 @@ bool toRigid(const Eigen::Matrix4d& M, Eigen::Isometry3d* T_out) {
 }
 
 // "depth00012.png" -> 12 when the name is exactly "depth%05d.png".
-bool parseDepthFileName(const std::string& file_name, int* index) {
+bool parseSceneNNDepthFileName(const std::string& file_name, int* index) {
   static const std::string kPrefix = "depth";
   static const std::string kSuffix = ".png";
   if (file_name.size() != kPrefix.size() + 5 + kSuffix.size()) return false;
@@ -90,15 +86,10 @@ std::string fileNumber(int index) {
   return buffer;
 }
 
-// Frames whose headers are read at open() to learn the camera's image size.
-constexpr size_t kSizeProbeFrames = 10;
-// Missing files listed by name in a warning; the rest are counted.
-constexpr size_t kMaxNamedFrames = 5;
-
 // Colour images image/imageNNNNN.png without depth/depthNNNNN.png are not frames (a frame is its
 // depth image): say so, naming the missing files, instead of dropping them silently.
-std::vector<std::string> missingDepthWarnings(const fs::path& dir,
-                                              const std::vector<int>& frame_indices) {
+std::vector<std::string> missingSceneNNDepthWarnings(const fs::path& dir,
+                                                     const std::vector<int>& frame_indices) {
   const std::set<int> listed(frame_indices.begin(), frame_indices.end());
   std::set<int> without_depth;
   std::error_code error;
@@ -108,7 +99,7 @@ std::vector<std::string> missingDepthWarnings(const fs::path& dir,
     int index = 0;
     // "image00012.png" has the shape of "depth00012.png".
     if (file_name.compare(0, 5, "image") == 0 &&
-        parseDepthFileName("depth" + file_name.substr(5), &index) && !listed.count(index)) {
+        parseSceneNNDepthFileName("depth" + file_name.substr(5), &index) && !listed.count(index)) {
       without_depth.insert(index);
     }
   }
@@ -301,7 +292,7 @@ Status SceneNNDataset::open(const std::string& directory, SceneNNDataset* datase
   }
   for (fs::directory_iterator it(depth_dir, error), end; !error && it != end; it.increment(error)) {
     int index = 0;
-    if (parseDepthFileName(it->path().filename().string(), &index)) {
+    if (parseSceneNNDepthFileName(it->path().filename().string(), &index)) {
       result.frame_indices_.push_back(index);
     }
   }
@@ -310,7 +301,7 @@ Status SceneNNDataset::open(const std::string& directory, SceneNNDataset* datase
     return Status::Error(depth_dir.string() + ": no depthNNNNN.png files");
   }
   std::sort(result.frame_indices_.begin(), result.frame_indices_.end());
-  result.warnings_ = missingDepthWarnings(dir, result.frame_indices_);
+  result.warnings_ = missingSceneNNDepthWarnings(dir, result.frame_indices_);
   // The camera's image size from the first readable depth header (no decoding).
   for (size_t k = 0; k < result.frame_indices_.size() && k < kSizeProbeFrames; ++k) {
     const fs::path depth_path =

@@ -17,6 +17,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/intrinsics_check.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
+#include "multiview_object_detection/ros/input_guard.h"
 
 namespace mvod {
 namespace {
@@ -27,12 +28,6 @@ constexpr double kQuaternionNormTolerance = 1e-3;
 
 std::string sizeText(uint32_t width, uint32_t height) {
   return std::to_string(width) + "x" + std::to_string(height);
-}
-
-std::string stampText(const ros::Time& stamp) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%u.%09u", stamp.sec, stamp.nsec);
-  return text;
 }
 
 // ros::Time throws outside [0, 2^32) s; a bad value becomes 0 (unknown).

@@ -15,9 +15,6 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxBufferedDetections = 300;
 // Detections are matched to a keyframe by the colour image's stamp, which a detector copies.
 constexpr double kDetectionStampToleranceS = 1e-3;
-// As in the keyframe buffer: a stamp this much older than the newest buffered one means time
-// jumped back, and the newer ones belong to an abandoned timeline.
-constexpr double kTimeJumpBackS = 1.0;
 
 }  // namespace
 

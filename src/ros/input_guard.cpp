@@ -4,6 +4,12 @@
 
 namespace mvod {
 
+std::string stampText(const ros::Time& stamp) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%u.%09u", stamp.sec, stamp.nsec);
+  return text;
+}
+
 Status checkInputStamp(const ros::Time& stamp, const ros::Time& now, const std::string& what) {
   if (stamp.sec > kMaxInputStampSec) {
     return Status::Error(what + " is stamped " + std::to_string(stamp.sec) +

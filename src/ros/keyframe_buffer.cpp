@@ -18,19 +18,9 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxPendingFrames = 100;
 constexpr size_t kMaxBufferedPoses = 2000;
 constexpr size_t kMaxPathPoses = 100000;
-// A stamp this much older than the newest seen means time jumped back (a bag restarted, a clock
-// reset, or the newest was a bogus future stamp): what was buffered for the abandoned timeline is
-// dropped. Smaller steps back are out-of-order input and are refused.
-constexpr double kTimeJumpBackS = 1.0;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-std::string stampText(const ros::Time& stamp) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%u.%09u", stamp.sec, stamp.nsec);
-  return text;
 }
 
 }  // namespace

@@ -16,7 +16,6 @@ using simulation::bedParts;
 using simulation::couchParts;
 using simulation::deg2rad;
 using simulation::fridgeParts;
-using simulation::kPi;
 using simulation::makeChair;
 using simulation::part;
 using simulation::Rng;

@@ -16,7 +16,6 @@
 namespace mvod {
 
 using simulation::deg2rad;
-using simulation::kPi;
 
 namespace {
 

@@ -31,7 +31,6 @@ namespace mvod {
 namespace {
 
 namespace enc = sensor_msgs::image_encodings;
-constexpr double kPi = 3.14159265358979323846;
 
 std_msgs::Header makeHeader(const std::string& frame, double stamp_s) {
   std_msgs::Header header;

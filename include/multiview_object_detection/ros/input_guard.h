@@ -24,6 +24,14 @@ constexpr std::uint32_t kMaxInputStampSec = 2147483647u - 86400u;
 // A stamp this far ahead of the node's clock (ros::Time::now(), wall or sim time) is a broken
 // clock, not a frame: accepted, it would make every later frame look like a jump back in time.
 constexpr double kMaxStampAheadOfClockS = 3600.0;
+// A stamp this much older than the newest seen on an input means time jumped back (a bag
+// restarted, a clock reset, or the newest was a bogus future stamp): what was buffered for the
+// abandoned timeline is dropped (keyframe and detections buffers). Smaller steps back are
+// out-of-order input and are refused.
+constexpr double kTimeJumpBackS = 1.0;
+
+// "sec.nsec" with nine decimals, as a log line names a stamp.
+std::string stampText(const ros::Time& stamp);
 
 // Ok, or why `stamp` is refused; `what` names the input (topic as remapped, or TF frames). `now` is
 // the node's clock; zero (sim time before the first /clock) skips the clock check.

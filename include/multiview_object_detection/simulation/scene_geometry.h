@@ -3,10 +3,12 @@
 
 #include <Eigen/Geometry>
 
+#include "multiview_object_detection/pipeline/types/common.h"
+
 namespace mvod {
 namespace simulation {
 
-constexpr double kPi = 3.14159265358979323846;
+using mvod::kPi;  // pipeline/types/common.h
 
 inline double deg2rad(double deg) { return deg * kPi / 180.0; }
 

@@ -11,7 +11,7 @@ namespace {
 // Full (Eq. 11 case 4) is η_B = 1; the polygon clipping is exact up to rounding.
 constexpr double kFullTolerance = 1e-6;
 
-std::string number(double value) {
+std::string streamNumber(double value) {
   std::ostringstream out;
   out << value;
   return out.str();
@@ -50,17 +50,17 @@ void volumeRatios(const OrientedBox& a, double volume_a, const OrientedBox& b, d
 Status PriorSizeFilter::Config::isValid() const {
   if (!(std::isfinite(volume_min_ratio) && volume_min_ratio >= 0.0)) {
     return Status::Error("volume_min_ratio must be a finite value >= 0 (got " +
-                         number(volume_min_ratio) + ")");
+                         streamNumber(volume_min_ratio) + ")");
   }
   // An infinite volume_max_ratio is allowed: it means no upper volume limit.
   if (!(volume_max_ratio > 0.0 && volume_max_ratio >= volume_min_ratio)) {
     return Status::Error("volume_max_ratio must be > 0 and >= volume_min_ratio (got " +
-                         number(volume_max_ratio) + ", volume_min_ratio " +
-                         number(volume_min_ratio) + ")");
+                         streamNumber(volume_max_ratio) + ", volume_min_ratio " +
+                         streamNumber(volume_min_ratio) + ")");
   }
   if (!(std::isfinite(edge_min_ratio) && edge_min_ratio >= 0.0)) {
     return Status::Error("edge_min_ratio must be a finite value >= 0 (got " +
-                         number(edge_min_ratio) + ")");
+                         streamNumber(edge_min_ratio) + ")");
   }
   return Status::Ok();
 }
@@ -110,7 +110,7 @@ std::vector<int> PriorSizeFilter::atypicalObjects(const ObjectDatabase& database
 Status IntersectionFilter::Config::isValid() const {
   if (!(volume_ratio_threshold >= 0.0 && volume_ratio_threshold <= 1.0)) {
     return Status::Error("volume_ratio_threshold must be in [0, 1] (got " +
-                         number(volume_ratio_threshold) + ")");
+                         streamNumber(volume_ratio_threshold) + ")");
   }
   if (!(duplicate_ratio >= 0.0 && duplicate_ratio <= 1.0)) {
     return Status::Error("duplicate_ratio must be in [0, 1] (got " +
@@ -119,7 +119,7 @@ Status IntersectionFilter::Config::isValid() const {
   if (!(container_support_ratio == 0.0 ||
         (std::isfinite(container_support_ratio) && container_support_ratio >= 1.0))) {
     return Status::Error("container_support_ratio must be 0 (off) or a finite value >= 1 (got " +
-                         number(container_support_ratio) + ")");
+                         streamNumber(container_support_ratio) + ")");
   }
   return Status::Ok();
 }

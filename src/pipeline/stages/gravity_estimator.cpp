@@ -14,7 +14,6 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Fewer supporting voxels than this is never a floor, whatever the fraction.
 constexpr int kMinPlanePoints = 10;
 // RANSAC draws its 2nd and 3rd points near the 1st (within about this many voxels, in the
@@ -39,13 +38,13 @@ CellKey cellOf(const Eigen::Vector3f& p, double cell_size_m) {
           static_cast<std::int64_t>(std::floor(p.z() / cell_size_m))};
 }
 
-struct Plane {
+struct CandidatePlane {
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit
   float offset = 0.0f;                               // normal . p + offset = 0
   int inliers = 0;
 };
 
-int countInliers(const PointCloud& points, const Plane& plane, float threshold_m,
+int countInliers(const PointCloud& points, const CandidatePlane& plane, float threshold_m,
                  std::vector<int>* inlier_indices) {
   if (inlier_indices != nullptr) inlier_indices->clear();
   int count = 0;
@@ -59,7 +58,7 @@ int countInliers(const PointCloud& points, const Plane& plane, float threshold_m
 }
 
 // Least-squares plane (smallest principal axis) through the given points.
-bool fitPlane(const PointCloud& points, const std::vector<int>& indices, Plane* plane) {
+bool fitPlane(const PointCloud& points, const std::vector<int>& indices, CandidatePlane* plane) {
   if (indices.size() < 3) return false;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const int i : indices) mean += points[i].cast<double>();
@@ -134,7 +133,7 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
   std::mt19937 rng(kRandomSeed);
   std::uniform_int_distribution<int> pick_first(0, num_points - 1);
   std::vector<int> candidates;
-  Plane best;
+  CandidatePlane best;
   for (int iteration = 0; iteration < config_.ransac_iterations; ++iteration) {
     const int first = pick_first(rng);
     const Eigen::Vector3f& p0 = voxels_D[first];
@@ -161,7 +160,7 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
     const Eigen::Vector3f cross = e1.cross(e2);
     // Nearly collinear samples give no reliable normal.
     if (!(cross.norm() > 0.1f * e1.norm() * e2.norm())) continue;
-    Plane plane;
+    CandidatePlane plane;
     plane.normal = cross.normalized();
     if (!isHorizontal(plane.normal)) continue;
     plane.offset = -plane.normal.dot(p0);
@@ -176,7 +175,7 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
   std::vector<int> inliers;
   countInliers(voxels_D, best, threshold_m, &inliers);
   for (int round = 0; round < kRefineRounds; ++round) {
-    Plane refined;
+    CandidatePlane refined;
     if (!fitPlane(voxels_D, inliers, &refined)) break;
     if (!isHorizontal(refined.normal)) return has_estimate_;
     std::vector<int> refined_inliers;

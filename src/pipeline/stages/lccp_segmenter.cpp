@@ -20,7 +20,6 @@ namespace {
 
 constexpr double kMaxVoxelsPerAxis = 1.0e6;
 
-bool finitePositive(double value) { return std::isfinite(value) && value > 0.0; }
 bool finiteNonNegative(double value) { return std::isfinite(value) && value >= 0.0; }
 
 // The "pcl" implementation: PCL's supervoxels and LCCP's edge classification.

@@ -21,7 +21,6 @@ using manhattan::YawSweepResult;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kHalfPi = 0.5 * kPi;
 constexpr double kQuarterPi = 0.25 * kPi;
 

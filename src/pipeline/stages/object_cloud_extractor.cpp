@@ -36,11 +36,6 @@ bool supportedDepth(const cv::Mat& depth) {
   return !depth.empty() && (depth.type() == CV_16UC1 || depth.type() == CV_32FC1);
 }
 
-std::string matTypeName(const cv::Mat& m) {
-  static const char* const kDepthNames[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
-  return std::string(kDepthNames[m.depth()]) + "C" + std::to_string(m.channels());
-}
-
 // One detection's mask, prepared for per-pixel lookups: its bounding box of non-zero pixels lets
 // most pixels skip the mask read.
 struct MaskLookup {

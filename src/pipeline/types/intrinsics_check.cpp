@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <string>
 
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
+
 namespace mvod {
 namespace {
 
@@ -11,10 +13,6 @@ std::string number(double value) {
   char text[32];
   std::snprintf(text, sizeof(text), "%g", value);
   return text;
-}
-
-std::string sizeText(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height);
 }
 
 // The angle (degrees) that pixels [0, size] span, seen through focal length f and principal point

@@ -9,7 +9,7 @@
 namespace mvod {
 namespace {
 
-std::string number(double value) {
+std::string preciseNumber(double value) {
   std::ostringstream out;
   out << std::setprecision(10) << value;
   return out.str();
@@ -17,7 +17,7 @@ std::string number(double value) {
 
 // "[MIN, MAX] UNIT", or "0 (off) or in [MIN, MAX] UNIT".
 std::string rangeText(const ParameterRange& range) {
-  std::string text = "[" + number(range.min) + ", " + number(range.max) + "]";
+  std::string text = "[" + preciseNumber(range.min) + ", " + preciseNumber(range.max) + "]";
   if (range.unit[0] != '\0') text += std::string(" ") + range.unit;
   return range.zero_is_off ? "0 (off) or in " + text : text;
 }
@@ -81,7 +81,7 @@ Status checkParameterRange(const std::string& name, double value) {
     return Status::Ok();
   }
   return Status::Error(name + " must be " + (range->zero_is_off ? "" : "in ") + rangeText(*range) +
-                       " (got " + number(value) + "): " + range->why);
+                       " (got " + preciseNumber(value) + "): " + range->why);
 }
 
 std::string parameterRangesMarkdown() {

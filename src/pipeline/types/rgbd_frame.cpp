@@ -5,9 +5,7 @@
 #include "multiview_object_detection/pipeline/types/map_limits.h"
 
 namespace mvod {
-namespace {
 
-// "8UC1", "16UC1", "32FC3", ...: short enough for a one-line message.
 std::string matTypeName(const cv::Mat& m) {
   static const char* const kDepthNames[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
   return std::string(kDepthNames[m.depth()]) + "C" + std::to_string(m.channels());
@@ -16,6 +14,8 @@ std::string matTypeName(const cv::Mat& m) {
 std::string sizeText(int width, int height) {
   return std::to_string(width) + "x" + std::to_string(height);
 }
+
+namespace {
 
 // Intrinsics must be usable and, when they say which image size they belong to, agree with the
 // image.

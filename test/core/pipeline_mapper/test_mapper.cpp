@@ -16,7 +16,6 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kRows = 480;
 constexpr int kCols = 640;
 

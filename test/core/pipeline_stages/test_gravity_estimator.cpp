@@ -11,8 +11,6 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double degToRad(double deg) { return deg * kPi / 180.0; }
 
 double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {

@@ -15,8 +15,6 @@
 namespace mvod {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // Mask R-CNN-like bleeding: the mask grown by `pixels` into the background.
 Detection2D bledDetection(const cv::Mat& mask, int pixels) {
   cv::Mat bled;

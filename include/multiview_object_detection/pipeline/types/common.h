@@ -13,6 +13,9 @@
 
 namespace mvod {
 
+// pi (M_PI is not standard C++).
+constexpr double kPi = 3.14159265358979323846;
+
 // A point cloud is a plain vector of 3D points; the frame is carried by the variable name
 // (points_C: camera optical frame, points_W: world frame). Eigen::Vector3f is not a vectorisable
 // fixed-size type, so no aligned allocator is needed.

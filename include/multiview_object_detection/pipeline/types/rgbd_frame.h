@@ -27,6 +27,11 @@ struct RgbdFrame {
   Status validate() const;
 };
 
+// "8UC1", "16UC1", "32FC3", ...: an image type short enough for a one-line message.
+std::string matTypeName(const cv::Mat& m);
+// "640x480".
+std::string sizeText(int width, int height);
+
 // The colour pixel (nearest, pixel centres at integer coordinates) that a point of the depth
 // camera frame projects to through T_C_D and K_color. False behind the colour camera or outside
 // the colour image. The one place where depth points meet colour masks (Eq. 1 for two cameras).
