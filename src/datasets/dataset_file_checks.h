@@ -8,6 +8,8 @@
 #include <string>
 #include <system_error>
 
+#include "multiview_object_detection/pipeline/types/rgbd_frame.h"
+
 namespace mvod {
 namespace dataset_files {
 
@@ -21,9 +23,8 @@ inline bool isFile(const std::filesystem::path& path) {
   return std::filesystem::is_regular_file(path, error);  // follows symbolic links
 }
 
-inline std::string sizeText(const cv::Mat& m) {
-  return std::to_string(m.cols) + "x" + std::to_string(m.rows);
-}
+// "640x480" of an image (rgbd_frame.h's sizeText).
+inline std::string sizeText(const cv::Mat& m) { return mvod::sizeText(m.cols, m.rows); }
 
 }  // namespace dataset_files
 }  // namespace mvod
