@@ -3,13 +3,16 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <utility>
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/pipeline/types/map_limits.h"
+#include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/stopwatch.h"
 
 namespace mvod {
@@ -109,28 +112,23 @@ Status ObjectMapper::correctPoses(const std::vector<PoseCorrection>& corrections
   return Status::Ok();
 }
 
-ObjectObservation ObjectMapper::replayView(const KeyframeRecord& record,
-                                           const RecordedView& view) const {
-  ObjectObservation observation =
-      replayedObservation(view, record.correction(), config_.database.fusion_voxel_size_m);
-  observation.keyframe = record.keyframe;
-  observation.stamp_s = record.stamp_s;
-  if (!record.corrected()) return observation;
+void ObjectMapper::alignReplayedBox(const KeyframeRecord& record,
+                                    ObjectObservation* observation) const {
+  if (!record.corrected()) return;
   // A correction that tilts the keyframe tilts its boxes: the box is estimated again from the
   // moved cut and its normals, as the single view would have with this pose.
   const GravityFrame gravity_frame = gravity();
-  if (observation.box.rotation.col(2).dot(gravity_frame.up) < 0.999) {
+  if (observation->box.rotation.col(2).dot(gravity_frame.up) < 0.999) {
     OrientedBox box;
     if (box_estimator_
-            .estimateFromNormals(observation.segment_W, observation.segment_normals_W,
+            .estimateFromNormals(observation->segment_W, observation->segment_normals_W,
                                  gravity_frame, &box)
             .ok()) {
-      groundBox(observation.class_name, &box);
-      observation.box = box;
+      groundBox(observation->class_name, &box);
+      observation->box = box;
     }
   }
-  observation.yaw_rad = gravity_frame.yawOf(observation.box.rotation.col(0));
-  return observation;
+  observation->yaw_rad = gravity_frame.yawOf(observation->box.rotation.col(0));
 }
 
 void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
@@ -141,8 +139,19 @@ void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
   floor_.reset();
   // The rebuilt object of each view, in history order.
   std::vector<int> rebuilt_ids;
-  for (const KeyframeRecord& record : history_.records()) {
-    replayRecord(record, &rebuilt_ids, report);
+  // The replay is sequential (each record fuses into the map the records before it made); what
+  // the next record's replay needs of that record alone is prepared beside it.
+  const std::deque<KeyframeRecord>& records = history_.records();
+  ReplayInput next;
+  if (!records.empty()) next = prepareReplay(records.front());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    ReplayInput input = std::move(next);
+    next = ReplayInput();
+    parallelInvoke(
+        threadCount(), [&] { replayRecord(records[i], &input, &rebuilt_ids, report); },
+        [&] {
+          if (i + 1 < records.size()) next = prepareReplay(records[i + 1]);
+        });
   }
   if (refined_) {
     const RefinementReport refinement = refineDatabase();
@@ -153,27 +162,38 @@ void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
   adoptRebuiltIds(&previous, rebuilt_ids, report);
 }
 
-void ObjectMapper::replayRecord(const KeyframeRecord& record, std::vector<int>* rebuilt_ids,
-                                CorrectionReport* report) {
+ObjectMapper::ReplayInput ObjectMapper::prepareReplay(const KeyframeRecord& record) const {
+  ReplayInput input;
+  const bool measure = (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
+                       !record.views.empty();
+  if ((measure || existenceActive()) && !record.depth.empty()) {
+    input.depth_view = makeDepthView(record.depth, record.K_depth, record.T_W_D);
+  }
+  input.observations.reserve(record.views.size());
+  for (const RecordedView& view : record.views) {
+    input.observations.push_back(
+        replayedObservation(view, record.correction(), config_.database.fusion_voxel_size_m));
+    input.observations.back().keyframe = record.keyframe;
+    input.observations.back().stamp_s = record.stamp_s;
+    input.observations.back().depth_view = input.depth_view;
+  }
+  return input;
+}
+
+void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input,
+                                std::vector<int>* rebuilt_ids, CorrectionReport* report) {
   if (config_.floor.enable && record.has_floor) {
     const Eigen::Vector3d up = gravity().up;
     const double height_m = up.dot(record.T_W_D * record.floor_point_D);
     if (!floor_.hasFloor() || height_m < floor_.floorHeight_m()) floor_.setFloor(height_m, up);
   }
-  const bool measure = (config_.database.surface_band_m > 0.0 || config_.database.amodal.enable) &&
-                       !record.views.empty();
   if (record.views.empty() && !existenceActive()) return;
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
-  std::shared_ptr<const DepthView> depth_view;
-  if ((measure || existenceActive()) && !record.depth.empty()) {
-    depth_view = makeDepthView(record.depth, record.K_depth, record.T_W_D);
-  }
   StageTimes times;
   std::vector<int> detected_ids;
-  for (const RecordedView& view : record.views) {
-    ObjectObservation observation = replayView(record, view);
-    observation.depth_view = depth_view;
+  for (ObjectObservation& observation : input->observations) {
+    alignReplayedBox(record, &observation);  // the floor as the records before it left it
     detected_ids.push_back(fuseObservation(observation, true, &times).object_id);
     rebuilt_ids->push_back(detected_ids.back());
     ++report->views_replayed;
@@ -181,7 +201,7 @@ void ObjectMapper::replayRecord(const KeyframeRecord& record, std::vector<int>* 
   if (!database_.pendingRebox().empty()) reboxPending(&times);
   if (existenceActive()) {
     std::vector<MapObject> gone;
-    updateExistence(depth_view.get(), detected_ids, &gone);
+    updateExistence(input->depth_view.get(), detected_ids, &gone);
     report->objects_gone += static_cast<int>(gone.size());
   }
 }

@@ -246,11 +246,20 @@ class ObjectMapper {
   void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
                       std::vector<SingleView>* views);
   void rebuildFromHistory(CorrectionReport* report);
-  // One history record fused again (its views at its keyframe's current pose); the rebuilt object
-  // of each view appended to rebuilt_ids.
-  void replayRecord(const KeyframeRecord& record, std::vector<int>* rebuilt_ids,
+  // What a record's replay needs that depends on that record alone: its depth view and its views
+  // moved to the keyframe's current pose (built beside the replay of the record before it).
+  struct ReplayInput {
+    std::shared_ptr<const DepthView> depth_view;  // null where the replay needs none
+    std::vector<ObjectObservation> observations;  // one per recorded view
+  };
+  ReplayInput prepareReplay(const KeyframeRecord& record) const;
+  // One history record fused again from its prepared input; the rebuilt object of each view
+  // appended to rebuilt_ids.
+  void replayRecord(const KeyframeRecord& record, ReplayInput* input, std::vector<int>* rebuilt_ids,
                     CorrectionReport* report);
-  ObjectObservation replayView(const KeyframeRecord& record, const RecordedView& view) const;
+  // A replayed view's box estimated again where the correction tilted it off gravity (grounded on
+  // the floor as the replay has it so far), and its yaw.
+  void alignReplayedBox(const KeyframeRecord& record, ObjectObservation* observation) const;
   // The ids of the rebuilt objects: each takes the id most of its views had before (the better
   // supported objects choose first), else a new one; objects of the old map that no view made are
   // kept as they were.

@@ -49,6 +49,18 @@ bool DepthView::signedDistance(const Eigen::Vector3f& p_W, float* sdf_m) const {
   return true;
 }
 
+namespace {
+
+// 3 x 3 minimum and maximum of `valid` (invalid depths 0); the border replicated, as
+// signedDistance clamps its pixels.
+void neighbourhoodRanges(const cv::Mat& valid, cv::Mat* lowest, cv::Mat* highest) {
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+  cv::erode(valid, *lowest, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  cv::dilate(valid, *highest, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+}
+
+}  // namespace
+
 void DepthView::prepareNeighbourhoods() {
   lowest_3x3_m.release();
   highest_3x3_m.release();
@@ -64,10 +76,7 @@ void DepthView::prepareNeighbourhoods() {
       out[u] = in[u] > 0.f && in[u] <= std::numeric_limits<float>::max() ? in[u] : 0.f;
     }
   }
-  // 3 x 3 minimum and maximum; the border replicated, as signedDistance clamps its pixels.
-  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
-  cv::erode(valid, lowest_3x3_m, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
-  cv::dilate(valid, highest_3x3_m, kernel, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  neighbourhoodRanges(valid, &lowest_3x3_m, &highest_3x3_m);
 }
 
 DepthView::Visibility DepthView::visibility(const Eigen::Vector3f& p_W, double margin_m) const {
@@ -95,16 +104,21 @@ std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntri
   auto view = std::make_shared<DepthView>();
   // Metres, 0 where invalid (NaN, or outside the valid range: 0 and 65535 mm too).
   depth.convertTo(view->depth_m, CV_32FC1, depth.type() == CV_16UC1 ? 0.001 : 1.0);
-  const float min_m = static_cast<float>(min_valid_m);
-  const float max_m = static_cast<float>(max_valid_m);
+  // Valid depths are finite and positive: the image is its own validity image, and its 3 x 3
+  // ranges need no copy of it (a second pass over the image; the same values as
+  // prepareNeighbourhoods). Every voxel of every object seen here is tested against them.
+  const float min_m =
+      std::max(static_cast<float>(min_valid_m), std::numeric_limits<float>::denorm_min());
+  const float max_m = std::min(static_cast<float>(max_valid_m), std::numeric_limits<float>::max());
   for (int v = 0; v < view->depth_m.rows; ++v) {
     float* row = view->depth_m.ptr<float>(v);
     for (int u = 0; u < view->depth_m.cols; ++u) {
       row[u] = row[u] >= min_m && row[u] <= max_m ? row[u] : 0.f;
     }
   }
-  // Every voxel of every object seen here is tested against it: its 3 x 3 ranges once.
-  view->prepareNeighbourhoods();
+  if (view->depth_m.type() == CV_32FC1 && !view->depth_m.empty()) {
+    neighbourhoodRanges(view->depth_m, &view->lowest_3x3_m, &view->highest_3x3_m);
+  }
   view->K = K_depth;
   view->T_D_W = T_W_D.inverse();
   view->truncation_m = truncation_m;

@@ -107,6 +107,52 @@ TEST(DepthViewTest, VisibilitySaysWhetherTheViewSawThroughAPoint) {
   EXPECT_EQ(view.visibility(Eigen::Vector3f(0.1f, 0.f, 5.f), 0.05), V::kNotInView);  // NaN
 }
 
+// makeDepthView computes the 3 x 3 ranges on its own cleaned depth (no copy of it): the same
+// images as prepareNeighbourhoods on that depth, for 16-bit depth (0, 65535, beyond the range) and
+// for float depth with NaN, infinities, negatives and values outside [min, max].
+TEST(DepthViewTest, MakeDepthViewPreparesTheNeighbourhoodsOfPrepareNeighbourhoods) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> millimetres(0, 12000);
+  cv::Mat depth_mm(48, 64, CV_16UC1);
+  cv::Mat depth_m(48, 64, CV_32FC1);
+  const float specials[] = {std::numeric_limits<float>::quiet_NaN(),
+                            std::numeric_limits<float>::infinity(),
+                            -std::numeric_limits<float>::infinity(),
+                            -1.f,
+                            0.f,
+                            0.05f,
+                            11.f};
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      const int mm = (u * 7 + v * 3) % 29 == 0 ? 65535 : millimetres(rng);
+      depth_mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(mm);
+      depth_m.at<float>(v, u) = (u * 5 + v * 11) % 13 == 0 ? specials[(u + v) % 7] : mm * 0.001f;
+    }
+  }
+  const CameraIntrinsics K{50.0, 50.0, 31.5, 23.5, 64, 48};
+  for (const cv::Mat& depth : {depth_mm, depth_m}) {
+    const std::shared_ptr<DepthView> view =
+        makeDepthView(depth, K, Eigen::Isometry3d::Identity(), 0.1, 10.0, 0.02, 8.55e-3);
+    DepthView reference = *view;
+    reference.depth_m = view->depth_m.clone();
+    reference.prepareNeighbourhoods();
+    ASSERT_EQ(view->lowest_3x3_m.size(), depth.size());
+    ASSERT_EQ(view->highest_3x3_m.size(), depth.size());
+    EXPECT_EQ(cv::countNonZero(view->lowest_3x3_m != reference.lowest_3x3_m), 0);
+    EXPECT_EQ(cv::countNonZero(view->highest_3x3_m != reference.highest_3x3_m), 0);
+    // Every depth it keeps is valid and within the range; the rest are 0.
+    int kept = 0;
+    for (int v = 0; v < 48; ++v) {
+      for (int u = 0; u < 64; ++u) {
+        const float z = view->depth_m.at<float>(v, u);
+        EXPECT_TRUE(z == 0.f || (z >= 0.1f && z <= 10.f)) << u << "," << v << ": " << z;
+        kept += z > 0.f ? 1 : 0;
+      }
+    }
+    EXPECT_GT(kept, 48 * 64 / 2);
+  }
+}
+
 // The 3 x 3 depth ranges computed once per view (prepareNeighbourhoods) give the signed distances
 // of the nine-pixel test, bit for bit: at depth edges, beside invalid and NaN pixels, at the image
 // border, and after depth_m changes size (the stale ranges are then ignored).

@@ -141,6 +141,39 @@ TEST_F(PoseCorrectionTest, CorrectionAfterTheLastKeyframe) {
   EXPECT_LE(d.size_m, 0.02);
 }
 
+// The replay builds the next record's depth view beside the current record's fusion: on two
+// threads the corrected map must be the one thread's, bit for bit (ids, boxes, evidence, votes).
+TEST_F(PoseCorrectionTest, TheCorrectionOnTwoThreadsGivesTheOneThreadMap) {
+  std::vector<std::vector<MapObject>> maps;
+  for (const int threads : {1, 2}) {
+    config_.num_threads = threads;
+    ObjectMapper::CorrectionReport report;
+    maps.push_back(run(true, [&](int k, ObjectMapper* mapper) {
+      if (k != test::kFramesPerLap * kLaps) return;
+      ASSERT_TRUE(mapper->correctPoses(truths(0, test::kFramesPerLap - 1), &report).ok());
+    }));
+    EXPECT_GT(report.views_replayed, 0);
+  }
+  ASSERT_EQ(maps[0].size(), maps[1].size());
+  ASSERT_GE(maps[0].size(), 6u);
+  for (std::size_t i = 0; i < maps[0].size(); ++i) {
+    const MapObject& a = maps[0][i];
+    const MapObject& b = maps[1][i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.class_name, b.class_name) << "object " << a.id;
+    EXPECT_EQ(a.observations, b.observations) << "object " << a.id;
+    EXPECT_EQ(a.probability, b.probability) << "object " << a.id;
+    EXPECT_EQ(a.box.center_m, b.box.center_m) << "object " << a.id;
+    EXPECT_EQ(a.box.size_m, b.box.size_m) << "object " << a.id;
+    EXPECT_EQ(a.box.rotation, b.box.rotation) << "object " << a.id;
+    EXPECT_EQ(a.evidence.size(), b.evidence.size()) << "object " << a.id;
+    EXPECT_EQ(a.free_space.size(), b.free_space.size()) << "object " << a.id;
+    EXPECT_EQ(a.existence.log_odds, b.existence.log_odds) << "object " << a.id;
+    EXPECT_EQ(a.existence.detected, b.existence.detected) << "object " << a.id;
+    EXPECT_EQ(a.existence.seen_through, b.existence.seen_through) << "object " << a.id;
+  }
+}
+
 TEST_F(PoseCorrectionTest, PartialThenSecondCorrection) {
   const std::vector<MapObject> truth = run(false);
   std::vector<MapObject> after_first;
