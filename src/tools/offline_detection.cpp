@@ -207,6 +207,7 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   if (options.no_floor) config->floor.enable = false;
   if (options.no_amodal) config->database.amodal.enable = false;
   if (options.no_existence) config->database.existence.enable = false;
+  if (options.no_history) config->corrections.enable = false;
   if (options.every_pixel) config->extractor.near_sampling_leaf_m = 0.0;
   if (std::isfinite(options.existence_remove_below)) {
     config->database.existence.remove_below = options.existence_remove_below;
@@ -328,7 +329,9 @@ class KeyframeLoop {
     }
     std::ostringstream line;
     if (correction.ignored) {
-      line << "corrections " << when << " ignored: the paper's method keeps no keyframe history";
+      line << "corrections " << when
+           << " ignored: " << (options_.no_history ? "--no-history" : "the paper's method")
+           << " keeps no keyframe history";
     } else {
       line << "corrections " << when << ": " << corrections.size() << " pose files, "
            << correction.keyframes_moved << " keyframes moved, " << correction.views_replayed

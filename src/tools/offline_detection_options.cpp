@@ -70,6 +70,8 @@ const char* const kUsage =
     "  --no-existence         keep every object once mapped (no existence evidence: objects\n"
     "                         whose place later views see through, or that are detected in\n"
     "                         few of the views that show them, are not removed)\n"
+    "  --no-history           keep no keyframe history (the map cannot follow SLAM corrections;\n"
+    "                         --corrected-poses is then ignored, as with --paper)\n"
     "  --every-pixel          no near sampling: every depth pixel of a mask, however close (the\n"
     "                         default samples surfaces nearer than fx x 5 mm on a coarser grid)\n"
     "  --existence-remove-below L  remove an object once its existence log-odds fall below L\n"
@@ -166,6 +168,7 @@ void addMethodOptions(CLI::App* app, Options* options) {
   cli::addFlag(app, "--no-floor", &options->no_floor);
   cli::addFlag(app, "--no-amodal", &options->no_amodal);
   cli::addFlag(app, "--no-existence", &options->no_existence);
+  cli::addFlag(app, "--no-history", &options->no_history);
   cli::addFlag(app, "--every-pixel", &options->every_pixel);
   cli::addNumber(
       app, "--existence-remove-below", &options->existence_remove_below,

@@ -39,6 +39,7 @@ struct Options {
   bool no_floor = false;
   bool no_amodal = false;
   bool no_existence = false;
+  bool no_history = false;
   bool every_pixel = false;
   double existence_remove_below = std::numeric_limits<double>::quiet_NaN();
   std::string selection;

@@ -245,6 +245,71 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
 // 7-Scenes redkitchen, hand-written box detections (test/data): the dining table's top lies ~0.73 m
 // above the floor (data README). The floor comes from the depth data: the lowest large horizontal
 // plane.
+// --corrected-poses moves the map of the default; with --no-history (no keyframe history kept)
+// the same corrections are ignored and the map is the uncorrected one.
+TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
+  SyntheticSceneConfig scene_config;
+  scene_config.num_frames = 20;
+  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  const fs::path dataset = work_ / "dataset";
+  const fs::path detections = work_ / "detections";
+  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
+  // The corrections: every pose moved 0.2 m along x.
+  const fs::path corrected = work_ / "corrected";
+  fs::create_directories(corrected);
+  for (int i = 0; i < scene_config.num_frames; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", i);
+    Eigen::Isometry3d T_W_D;
+    ASSERT_TRUE(SevenScenesDataset::readPose((dataset / name).string(), &T_W_D).ok());
+    T_W_D.translation().x() += 0.2;
+    std::ofstream pose(corrected / name);
+    pose << T_W_D.matrix() << "\n";
+  }
+  const auto run = [&](const std::string& tag, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"--dataset",      dataset.string(),
+                                     "--detections",   detections.string(),
+                                     "--every",        "5",
+                                     "--priors",       priorsPath(),
+                                     "--output",       (work_ / (tag + ".json")).string(),
+                                     "--output-frame", "world"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return runTool(args, work_);
+  };
+  const std::vector<std::string> correct = {"--corrected-poses", corrected.string()};
+  const RunResult plain = run("plain", {});
+  const RunResult with_history = run("history", correct);
+  const RunResult without =
+      run("no_history", {"--no-history", "--corrected-poses", corrected.string()});
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  ASSERT_EQ(with_history.exit_code, 0) << with_history.err;
+  ASSERT_EQ(without.exit_code, 0) << without.err;
+  EXPECT_NE(with_history.err.find("keyframes moved"), std::string::npos) << with_history.err;
+  EXPECT_NE(without.err.find("ignored: --no-history keeps no keyframe history"), std::string::npos)
+      << without.err;
+  std::vector<MapObject> a, b, c;
+  MapSummary summary;
+  ASSERT_TRUE(loadObjects(work_ / "plain.json", &a, &summary).ok());
+  ASSERT_TRUE(loadObjects(work_ / "history.json", &b, &summary).ok());
+  ASSERT_TRUE(loadObjects(work_ / "no_history.json", &c, &summary).ok());
+  ASSERT_FALSE(a.empty());
+  ASSERT_EQ(a.size(), c.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].box.center_m, c[i].box.center_m) << a[i].class_name;
+  }
+  // The corrected map moved with the poses.
+  double moved_m = 0.0;
+  for (const MapObject& object : b) {
+    double nearest = 1e9;
+    for (const MapObject& other : a) {
+      if (other.class_name != object.class_name) continue;
+      nearest = std::min(nearest, (other.box.center_m - object.box.center_m).norm());
+    }
+    moved_m = std::max(moved_m, nearest);
+  }
+  EXPECT_GT(moved_m, 0.1);
+}
+
 TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
   const std::string shared = sharedDir();
   const fs::path source = fs::path(shared) / "data" / "7scenes_redkitchen" / "data";
