@@ -242,9 +242,6 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   for (const MapObject& object : single_objects) EXPECT_EQ(object.observations, 1);
 }
 
-// 7-Scenes redkitchen, hand-written box detections (test/data): the dining table's top lies ~0.73 m
-// above the floor (data README). The floor comes from the depth data: the lowest large horizontal
-// plane.
 // --corrected-poses moves the map of the default; with --no-history (no keyframe history kept)
 // the same corrections are ignored and the map is the uncorrected one.
 TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
@@ -310,6 +307,9 @@ TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
   EXPECT_GT(moved_m, 0.1);
 }
 
+// 7-Scenes redkitchen, hand-written box detections (test/data): the dining table's top lies ~0.73 m
+// above the floor (data README). The floor comes from the depth data: the lowest large horizontal
+// plane.
 TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
   const std::string shared = sharedDir();
   const fs::path source = fs::path(shared) / "data" / "7scenes_redkitchen" / "data";
