@@ -424,8 +424,10 @@ std::vector<ObjectMapper::SingleView> ObjectMapper::runSingleViews(
     context.frame = &frame;
     context.detection = &kept.detections[k];
     context.view = clouds.has_view ? &clouds.view : nullptr;
+    const Clock::time_point start = Clock::now();
     views[k].status =
         runSingleView(clouds_D[k], frame.T_W_D, context, &views[k].observation, &views[k].times);
+    views[k].wall_ms = msSince(start);
   };
   // Largest clouds first: the pool then ends with small jobs instead of waiting on one big one.
   std::vector<size_t> by_size(views.size());

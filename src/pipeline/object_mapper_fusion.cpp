@@ -38,6 +38,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     SingleView& view = (*views)[k];
     // Stage times are summed over detections (CPU time when they ran in parallel).
     addStageTimes(view.times, &out->times);
+    out->times.largest_view_ms = std::max(out->times.largest_view_ms, view.wall_ms);
     if (!view.status) {
       out->warnings.push_back(label + ": " + detectionLabel(kept.index[k], detection) + ": " +
                               view.status.message());

@@ -71,12 +71,13 @@ void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times) {
 
 bool writeTimings(const std::string& path, const RunStats& stats) {
   std::ofstream csv(path);
-  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms,existence_ms\n";
+  csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms,existence_ms,"
+         "largest_view_ms\n";
   for (size_t k = 0; k < stats.stage_times.size(); ++k) {
     const mvod::StageTimes& t = stats.stage_times[k];
     csv << stats.stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
         << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "," << t.existence_ms
-        << "\n";
+        << "," << t.largest_view_ms << "\n";
   }
   if (!csv) {
     std::cerr << "offline_detection: cannot write " << path << "\n";
@@ -88,8 +89,7 @@ bool writeTimings(const std::string& path, const RunStats& stats) {
 bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& objects) {
   bool all_saved = true;
   for (const mvod::MapObject& object : objects) {
-    const std::string stem =
-        dir + "/" + mvod::objectCloudFileStem(object.id, object.class_name);
+    const std::string stem = dir + "/" + mvod::objectCloudFileStem(object.id, object.class_name);
     for (const auto& part : {std::make_pair("_fused.ply", &object.points_W),
                              std::make_pair("_segment.ply", &object.segment_W)}) {
       const mvod::Status saved =

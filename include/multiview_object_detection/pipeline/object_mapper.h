@@ -33,6 +33,10 @@ struct StageTimes {
   double manhattan_ms = 0.0;
   double fusion_ms = 0.0;
   double existence_ms = 0.0;  // every object's existence vote from the keyframe's depth
+  // Not a sum: the wall time of the keyframe's slowest single view (one detection's floor cut,
+  // filter, LCCP, selection, box and evidence keys). With more than one thread the detections run
+  // side by side, and this one is the keyframe's critical path between extraction and fusion.
+  double largest_view_ms = 0.0;
   double refinement_ms = 0.0;
   double total_ms = 0.0;
 };
@@ -191,7 +195,8 @@ class ObjectMapper {
     Status status;
     ObjectObservation observation;
     StageTimes times;
-    int object_id = -1;  // the object it was fused into or inserted as
+    double wall_ms = 0.0;  // runSingleView's wall time
+    int object_id = -1;    // the object it was fused into or inserted as
   };
 
   // processKeyframe's phases, in order.

@@ -92,6 +92,10 @@ TEST_F(ObjectMapperTest, OneDetectionGivesOneObjectNearTheTruth) {
   EXPECT_EQ(report.fused, 0);
   EXPECT_GT(report.times.total_ms, 0.0);
   EXPECT_GE(report.times.total_ms, report.times.extraction_ms);
+  // The one detection's single view, between extraction and fusion.
+  EXPECT_GT(report.times.largest_view_ms, 0.0);
+  EXPECT_LE(report.times.largest_view_ms,
+            report.times.total_ms - report.times.extraction_ms - report.times.fusion_ms);
   ASSERT_EQ(mapper.database().size(), 1u);
   const MapObject& object = mapper.database().objects().begin()->second;
   EXPECT_EQ(object.class_name, "chair");

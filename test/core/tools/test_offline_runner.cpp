@@ -134,6 +134,39 @@ Eigen::Vector3d canonicalSize(const OrientedBox& box,
   return Eigen::Vector3d(box.size_m[vertical], horizontal[0], horizontal[1]);
 }
 
+// --timings: a row per keyframe with detections, each with the wall time of its slowest single
+// view, which lies within the keyframe's total.
+void expectTimingsWithLargestView(const fs::path& path) {
+  std::ifstream csv(path);
+  ASSERT_TRUE(csv.good()) << path;
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  std::vector<std::string> header;
+  std::stringstream names(line);
+  for (std::string name; std::getline(names, name, ',');) header.push_back(name);
+  const auto column = [&header](const std::string& name) {
+    return static_cast<size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const size_t total = column("total_ms");
+  const size_t largest = column("largest_view_ms");
+  ASSERT_LT(total, header.size()) << line;
+  ASSERT_LT(largest, header.size()) << line;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::vector<double> values;
+    std::stringstream fields(line);
+    std::string field;
+    std::getline(fields, field, ',');  // the frame's name
+    values.push_back(0.0);
+    while (std::getline(fields, field, ',')) values.push_back(std::stod(field));
+    ASSERT_EQ(values.size(), header.size()) << line;
+    EXPECT_GT(values[largest], 0.0) << line;
+    EXPECT_LE(values[largest], values[total]) << line;
+    ++rows;
+  }
+  EXPECT_GT(rows, 0);
+}
+
 TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   SyntheticSceneConfig scene_config;
   scene_config.num_frames = 60;
@@ -147,7 +180,8 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   const RunResult result =
       runTool({"--dataset", dataset.string(), "--detections", detections.string(), "--every", "5",
                "--priors", priorsPath(), "--output", output.string(), "--save-clouds",
-               (work_ / "clouds").string(), "--overlays", (work_ / "overlays").string()},
+               (work_ / "clouds").string(), "--overlays", (work_ / "overlays").string(),
+               "--timings", (work_ / "timings.csv").string()},
               work_);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   // A 7-Scenes-layout folder without color-intrinsics.txt is taken as registered, and says so.
@@ -161,6 +195,7 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
   EXPECT_EQ(summary.frames, scene_config.num_frames);
   EXPECT_EQ(summary.keyframes, (scene_config.num_frames + 4) / 5);
   EXPECT_GT(summary.stage_ms_median.total_ms, 0.0);
+  expectTimingsWithLargestView(work_ / "timings.csv");
   // The dataset's gravity (z down) is used.
   EXPECT_GT(summary.gravity_down_W.dot(Eigen::Vector3d(0, 0, -1)), 0.999);
   // The file is in the gravity-aligned frame (z up, on the floor: the room's is at z = 0), its
