@@ -115,6 +115,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"manhattan ms", stats.stage_times.manhattan_ms},
       {"fusion ms", stats.stage_times.fusion_ms},
       {"existence ms", stats.stage_times.existence_ms},
+      {"largest view ms", stats.stage_times.largest_view_ms},
       {"refinement ms", stats.stage_times.refinement_ms},
       {"keyframe total ms", stats.stage_times.total_ms},
       {"latency ms", stats.latency_ms},

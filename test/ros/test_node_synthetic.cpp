@@ -490,16 +490,21 @@ TEST_F(NodeSyntheticTest, DetectionsImageCloudAndDiagnostics) {
         << "object point " << x << " " << y << " " << z << " outside the furniture's space";
   }
 
-  // /diagnostics: the node reports its queue and drops.
+  // /diagnostics: the node reports its queue and drops, and the time of a keyframe's slowest
+  // detection.
   bool reported = false;
+  bool largest_view = false;
   for (const diagnostic_msgs::DiagnosticStatus& status : diagnostics_) {
     const std::string name = NodeOutputs::lower(status.name + " " + status.hardware_id);
     if (name.find("object_detection") == std::string::npos) continue;
     for (const diagnostic_msgs::KeyValue& value : status.values) {
       reported = reported || NodeOutputs::lower(value.key).find("drop") != std::string::npos;
+      largest_view =
+          largest_view || (value.key == "largest view ms" && std::stod(value.value) > 0.0);
     }
   }
   EXPECT_TRUE(reported) << "no /diagnostics status of object_detection with a drop count";
+  EXPECT_TRUE(largest_view) << "no /diagnostics status with a positive \"largest view ms\"";
 }
 
 TEST_F(NodeSyntheticTest, GetObjectsFiltersByClassAndId) {
