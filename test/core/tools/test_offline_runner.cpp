@@ -382,11 +382,13 @@ TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
   }
   std::ofstream(dataset / "color-intrinsics.txt") << "525 0 320\n0 525 240\n0 0 1\n";
 
+  // The clouds in the world frame, where `up` below is the dataset's (the default writes them in
+  // the gravity-aligned frame).
   const fs::path output = work_ / "objects.json";
   const RunResult result =
       runTool({"--dataset", dataset.string(), "--detections", detections.string(), "--every", "1",
                "--priors", priorsPath(), "--output", output.string(), "--save-clouds",
-               (work_ / "clouds").string()},
+               (work_ / "clouds").string(), "--output-frame", "world"},
               work_);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(result.err.find("no color-intrinsics.txt"), std::string::npos) << result.err;
