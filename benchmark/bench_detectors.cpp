@@ -32,9 +32,11 @@ cv::Mat testImage() {
   return image;
 }
 
-void runDetector(benchmark::State& state, const std::string& detector) {
+void runDetector(benchmark::State& state, const std::string& detector,
+                 const std::string& yolo_seg_model = "") {
   mvod::SegmenterOptions options;
   options.detector = detector;
+  if (!yolo_seg_model.empty()) options.yolo_seg_model = yolo_seg_model;
   options.model_dir = modelDir();
   std::unique_ptr<mvod::InstanceSegmenter> segmenter;
   const mvod::Status created = mvod::createInstanceSegmenter(options, &segmenter);
@@ -57,9 +59,17 @@ void runDetector(benchmark::State& state, const std::string& detector) {
 }
 
 void BM_FastestDet640x480(benchmark::State& state) { runDetector(state, "fastestdet"); }
+void BM_YoloSeg640Input640x480(benchmark::State& state) {
+  runDetector(state, "yolo_seg", "yolov5n-seg.onnx");
+}
+void BM_YoloSeg320Input640x480(benchmark::State& state) {
+  runDetector(state, "yolo_seg", "yolov5n-seg-320.onnx");
+}
 void BM_MaskRcnn640x480(benchmark::State& state) { runDetector(state, "maskrcnn"); }
 
 BENCHMARK(BM_FastestDet640x480)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_YoloSeg640Input640x480)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_YoloSeg320Input640x480)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 BENCHMARK(BM_MaskRcnn640x480)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace

@@ -5,9 +5,9 @@
 #   3. scripts/demo_replay.py: roslaunch replay.launch (object_detection_node with detector:=topic, rviz on a
 #      virtual display), rosbag play, ~refine, ~save_map, the objects as a table, an rviz screenshot;
 #   4. evaluate: AP against the ground truth, and a bird's-eye plot of the boxes over the ground truth.
-# `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with Mask R-CNN (when
-# its weights are in the model folder) or else FastestDet in the
-# node (models in $MVOD_MODEL_DIR, else ~/.ros/multiview_object_detection/models: scripts/download_models.sh),
+# `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with YOLOv5n-seg (when
+# yolov5n-seg.onnx is in the model folder), else Mask R-CNN (its weights there), else FastestDet in the
+# node (models in $MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models: scripts/download_models.sh),
 # without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames.
 #   usage: scripts/demo.sh WORKSPACE [DATASET]
 # Output: build/demo/ (objects.json, accuracy.md/.csv, map.png, rviz.png, roslaunch.log).
@@ -67,12 +67,15 @@ if [[ -z "$dataset_arg" ]]; then
   node_detector=topic
   rate=1.0
 else
-  # ---- a real dataset, Mask R-CNN or FastestDet in the node --------------------------------------------------
+  # ---- a real dataset, YOLOv5n-seg, Mask R-CNN or FastestDet in the node -----------------------------------
   [[ -d "$dataset_arg" ]] || { echo "demo: DATASET=$dataset_arg is not a folder" >&2; exit 1; }
   dataset=$(cd "$dataset_arg" && pwd)
   dataset_name=$dataset
-  model_dir=${MVOD_MODEL_DIR:-$HOME/.ros/multiview_object_detection/models}
-  if [[ -f "$model_dir/frozen_inference_graph.pb" &&
+  model_dir=${MVOD_MODEL_DIR:-${ROS_HOME:-$HOME/.ros}/multiview_object_detection/models}
+  if [[ -f "$model_dir/yolov5n-seg.onnx" ]]; then
+    node_detector=yolo_seg
+    detector_name="YOLOv5n-seg"
+  elif [[ -f "$model_dir/frozen_inference_graph.pb" &&
     -f "$model_dir/mask_rcnn_inception_v2_coco_2018_01_28.pbtxt" &&
     -f "$model_dir/object_detection_classes_coco.txt" ]]; then
     node_detector=maskrcnn
@@ -81,7 +84,7 @@ else
     node_detector=fastestdet
     detector_name=FastestDet
   else
-    echo "demo: no Mask R-CNN or FastestDet model in $model_dir: run scripts/download_models.sh" \
+    echo "demo: no YOLOv5n-seg, Mask R-CNN or FastestDet model in $model_dir: run scripts/download_models.sh" \
       "(or set MVOD_MODEL_DIR)" >&2
     exit 1
   fi

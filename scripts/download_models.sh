@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Downloads the detector models this package runs through OpenCV DNN into a folder (default:
-# ~/.ros/multiview_object_detection/models) and checks their sha256. Needs internet, curl or wget, tar.
-#   scripts/download_models.sh [DIR]
-# Then point the node / offline runner at DIR: model_dir parameter, --model-dir DIR, or MVOD_MODEL_DIR=DIR.
+# $ROS_HOME/multiview_object_detection/models, ~/.ros/... without ROS_HOME: where the node and the tools
+# look when no model folder is given) and checks their sha256. Needs internet, curl or wget, tar.
+#   scripts/download_models.sh [DIR]          (installed: rosrun multiview_object_detection download_models.sh)
+# With another DIR, point the node / offline tools at it: model_dir parameter, --model-dir DIR, or
+# MVOD_MODEL_DIR=DIR. YOLOv5-seg has no ONNX download upstream: the script says how to export it.
 set -euo pipefail
-dir=${1:-$HOME/.ros/multiview_object_detection/models}
+dir=${1:-${ROS_HOME:-$HOME/.ros}/multiview_object_detection/models}
 mkdir -p "$dir"
 cd "$dir"
 
@@ -49,4 +51,18 @@ check "" mask_rcnn_inception_v2_coco_2018_01_28.tar.gz
 tar -xzf mask_rcnn_inception_v2_coco_2018_01_28.tar.gz --strip-components=1 \
   mask_rcnn_inception_v2_coco_2018_01_28/frozen_inference_graph.pb
 check "" frozen_inference_graph.pb
+# YOLOv5n-seg (GPL-3.0 at v7.0, AGPL-3.0 now): Ultralytics publishes PyTorch weights only; the ONNX
+# file is exported once, on any machine with Python (no Python is needed where the node runs).
+if [[ ! -f yolov5n-seg.onnx ]]; then
+  cat <<TEXT
+  yolov5n-seg.onnx (the default detector, an instance segmenter) is not downloadable as ONNX. Export it
+  once with Python 3.8+ (any machine), then copy it here ($dir):
+    git clone --branch v7.0 https://github.com/ultralytics/yolov5 && cd yolov5
+    pip install -r requirements.txt onnx
+    python export.py --weights yolov5n-seg.pt --include onnx --opset 12            # 640 x 640
+    python export.py --weights yolov5n-seg.pt --include onnx --opset 12 --imgsz 320  # faster, coarser
+  (yolov5s-seg.pt and larger export the same way; give the file with yolo_seg_model / --yolo-seg-model.)
+  Until then the node's detector "auto" falls back to FastestDet.
+TEXT
+fi
 echo "models in $dir"

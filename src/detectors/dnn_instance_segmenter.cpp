@@ -8,12 +8,21 @@
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "detector_common.h"
+#include "multiview_object_detection/detectors/onnx_input_shape.h"
+#include "multiview_object_detection/detectors/yolo_seg_decoder.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 namespace {
 
+using detector_common::clippedBox;
+using detector_common::setClass;
+
 constexpr int kFastestDetInputPx = 352;
+// YOLOv5-seg: the input side of a dynamic export (the official default), and its strides' largest.
+constexpr int kYoloSegDefaultInputPx = 640;
+constexpr int kYoloSegStridePx = 32;
 // The blank image of Mask R-CNN's forward pass at load time (the graph resizes it internally).
 constexpr int kMaskRcnnProbePx = 64;
 
@@ -47,39 +56,84 @@ std::vector<Detection2D> suppressNonMaxima(std::vector<Detection2D> candidates, 
   return kept;
 }
 
-cv::Rect clippedBox(double x1, double y1, double x2, double y2, const cv::Size& image_size) {
-  const int left = std::clamp(static_cast<int>(std::floor(x1)), 0, image_size.width);
-  const int top = std::clamp(static_cast<int>(std::floor(y1)), 0, image_size.height);
-  const int right = std::clamp(static_cast<int>(std::ceil(x2)), 0, image_size.width);
-  const int bottom = std::clamp(static_cast<int>(std::ceil(y2)), 0, image_size.height);
-  return cv::Rect(left, top, std::max(0, right - left), std::max(0, bottom - top));
-}
-
-// Label files spell some classes differently (darknet's coco.names: "diningtable", "tvmonitor");
-// outputs always carry this package's COCO spelling, or the label as it is when it is no COCO
-// class.
-void setClass(const std::string& label, Detection2D* detection) {
-  detection->class_id = cocoClassId(label);
-  detection->class_name = detection->class_id >= 0 ? cocoClassNames()[detection->class_id] : label;
-}
-
 std::string missingModelHelp(const std::string& what) {
   return what +
          ". Model files are looked up by name in the model folder (the model_dir parameter, the "
          "--model-dir option or $MVOD_MODEL_DIR); scripts/download_models.sh fetches them and "
          "checks "
-         "their sha256 (see README, 'Detector models').";
+         "their sha256 (README, 'Models and data').";
 }
 
 // The Mask R-CNN outputs decodeMaskRcnn reads.
 std::vector<std::string> maskRcnnOutputs() { return {"detection_out_final", "detection_masks"}; }
+// The YOLOv5-seg outputs decodeYoloSeg reads (the official export's names).
+std::vector<std::string> yoloSegOutputs() { return {"output0", "output1"}; }
+
+YoloSegDecodeConfig yoloSegConfig(const DnnDecodeConfig& decode) {
+  YoloSegDecodeConfig config;
+  config.score_threshold = decode.score_threshold;
+  config.nms_threshold = decode.nms_threshold;
+  config.mask_threshold = decode.mask_threshold;
+  return config;
+}
+
+const char* const kYoloSegLayout =
+    "the official YOLOv5-seg export (ultralytics/yolov5 v7.0 `export.py --include onnx`): input "
+    "'images' [1, 3, S, S], outputs 'output0' [1, N, 5 + 80 + 32] and 'output1' [1, 32, S/4, S/4]";
+
+// The input side S of a YOLOv5-seg ONNX file: its declared input, or `requested` (0: 640) where it
+// declares none. An error names the layout expected.
+Status yoloSegInputPx(const std::string& path, int requested, int* input_px) {
+  std::vector<OnnxInput> inputs;
+  const Status read = readOnnxInputs(path, &inputs);
+  if (!read) return Status::Error(read.message() + "; expected " + kYoloSegLayout);
+  const auto images = std::find_if(inputs.begin(), inputs.end(),
+                                   [](const OnnxInput& input) { return input.name == "images"; });
+  if (images == inputs.end() || images->dims.size() != 4 ||
+      (images->dims[1] != 3 && images->dims[1] != -1)) {
+    std::string found;
+    for (const OnnxInput& input : inputs) found += (found.empty() ? "'" : ", '") + input.name + "'";
+    return Status::Error("'" + path + "' has inputs " + (found.empty() ? "none" : found) +
+                         ", not " + kYoloSegLayout);
+  }
+  const int64_t declared_h = images->dims[2];
+  const int64_t declared_w = images->dims[3];
+  if (declared_h != declared_w) {
+    return Status::Error("'" + path + "' declares a non-square input; expected " + kYoloSegLayout);
+  }
+  if (declared_h > 0 && requested > 0 && declared_h != requested) {
+    return Status::Error("'" + path + "' was exported for " + std::to_string(declared_h) + " x " +
+                         std::to_string(declared_h) + " input, not the " +
+                         std::to_string(requested) + " asked for (export it again at that size)");
+  }
+  const int64_t side =
+      declared_h > 0 ? declared_h : (requested > 0 ? requested : kYoloSegDefaultInputPx);
+  if (side % kYoloSegStridePx != 0 || side > 4096) {
+    return Status::Error("'" + path + "': input side " + std::to_string(side) +
+                         " is not a multiple of 32 up to 4096");
+  }
+  *input_px = static_cast<int>(side);
+  return Status::Ok();
+}
 
 // The number of classes the network scores, from a forward pass on a blank image (the ONNX and
 // TensorFlow importers know the output shapes only after one): FastestDet's output has 5 + classes
 // channels, Mask R-CNN's detection_masks one mask per class.
-Status networkClassCount(DnnInstanceSegmenter::Model model, cv::dnn::Net* net, int* classes) {
+Status networkClassCount(DnnInstanceSegmenter::Model model, int input_px, cv::dnn::Net* net,
+                         int* classes) {
   try {
-    if (model == DnnInstanceSegmenter::Model::kFastestDet) {
+    if (model == DnnInstanceSegmenter::Model::kYoloSeg) {
+      const Letterbox letterbox = Letterbox::fit(cv::Size(input_px, input_px), input_px);
+      net->setInput(letterbox.blob(cv::Mat(input_px, input_px, CV_8UC3, cv::Scalar::all(0))));
+      std::vector<cv::Mat> outputs;
+      net->forward(outputs, yoloSegOutputs());
+      std::vector<Detection2D> none;
+      const std::vector<std::string> any_labels(outputs[0].dims == 3 ? outputs[0].size[2] : 0);
+      const Status layout = decodeYoloSeg(outputs[0], outputs[1], letterbox, any_labels,
+                                          YoloSegDecodeConfig(), &none);
+      if (!layout) return Status::Error(layout.message() + "; expected " + kYoloSegLayout);
+      *classes = outputs[0].size[2] - 5 - 32;
+    } else if (model == DnnInstanceSegmenter::Model::kFastestDet) {
       const cv::Mat blank(kFastestDetInputPx, kFastestDetInputPx, CV_8UC3, cv::Scalar::all(0));
       net->setInput(
           cv::dnn::blobFromImage(blank, 1.0 / 255.0, blank.size(), cv::Scalar(), false, false));
@@ -99,7 +153,11 @@ Status networkClassCount(DnnInstanceSegmenter::Model model, cv::dnn::Net* net, i
       *classes = outputs[1].size[1];
     }
   } catch (const cv::Exception& e) {
-    return Status::Error(std::string("a forward pass on a blank image failed: ") + e.what());
+    return Status::Error(std::string("a forward pass on a blank image failed (") +
+                         (model == DnnInstanceSegmenter::Model::kYoloSeg
+                              ? std::string("expected ") + kYoloSegLayout + "): "
+                              : "): ") +
+                         e.what());
   }
   return Status::Ok();
 }
@@ -248,35 +306,55 @@ DnnInstanceSegmenter::DnnInstanceSegmenter(Model model, const DnnModelOptions& o
 DnnInstanceSegmenter::~DnnInstanceSegmenter() = default;
 
 std::string DnnInstanceSegmenter::name() const {
-  return model_ == Model::kFastestDet ? "fastestdet" : "maskrcnn";
+  switch (model_) {
+    case Model::kFastestDet:
+      return "fastestdet";
+    case Model::kYoloSeg:
+      return "yolo_seg";
+    case Model::kMaskRcnn:
+      break;
+  }
+  return "maskrcnn";
 }
 
 Status DnnInstanceSegmenter::create(Model model, const DnnModelOptions& options,
                                     std::unique_ptr<DnnInstanceSegmenter>* segmenter) {
   segmenter->reset();
-  const std::string model_name = model == Model::kFastestDet ? "FastestDet" : "Mask R-CNN";
+  const std::string model_name = model == Model::kFastestDet ? "FastestDet"
+                                 : model == Model::kYoloSeg  ? "YOLOv5-seg"
+                                                             : "Mask R-CNN";
   long size_bytes = 0;
   if (!isReadableFile(options.model_path, &size_bytes)) {
+    const std::string how =
+        model == Model::kYoloSeg
+            ? "; or export it yourself from the v7.0 release weights with `python export.py "
+              "--weights yolov5n-seg.pt --include onnx --opset 12` in ultralytics/yolov5 "
+              "(--imgsz 320 for the faster 320 export; yolov5s/m-seg the same way)"
+            : "";
     return Status::Error(
-        missingModelHelp(model_name + " weights not found: '" + options.model_path + "'"));
+        missingModelHelp(model_name + " weights not found: '" + options.model_path + "'") + how);
   }
   if (model == Model::kMaskRcnn && !isReadableFile(options.config_path, &size_bytes)) {
     return Status::Error(
         missingModelHelp("Mask R-CNN text graph not found: '" + options.config_path + "'"));
   }
   std::unique_ptr<DnnInstanceSegmenter> result(new DnnInstanceSegmenter(model, options));
+  if (model == Model::kYoloSeg) {
+    const Status sized = yoloSegInputPx(options.model_path, options.input_px, &result->input_px_);
+    if (!sized) return Status::Error(model_name + ": " + sized.message());
+  }
   Status labels_read = readLabelFile(options.labels_path, &result->labels_);
   if (!labels_read) {
     // The class names are part of the model: without the file use the built-in COCO list of the
     // same length when there is one.
-    if (model == Model::kFastestDet) {
+    if (model != Model::kMaskRcnn) {
       result->labels_ = cocoClassNames();
     } else {
       return Status::Error(missingModelHelp(labels_read.message()));
     }
   }
   try {
-    if (model == Model::kFastestDet) {
+    if (model != Model::kMaskRcnn) {
       result->network_->net = cv::dnn::readNetFromONNX(options.model_path);
     } else {
       result->network_->net =
@@ -301,7 +379,8 @@ Status DnnInstanceSegmenter::create(Model model, const DnnModelOptions& options,
   // The label file must name every class the network scores, no more: a file of another model
   // would fail every keyframe (too few names) or misname every detection.
   int classes = 0;
-  const Status counted = networkClassCount(model, &result->network_->net, &classes);
+  const Status counted =
+      networkClassCount(model, result->input_px_, &result->network_->net, &classes);
   if (!counted) {
     return Status::Error(model_name + " model '" + options.model_path + "': " + counted.message());
   }
@@ -329,7 +408,15 @@ Status DnnInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string&
   std::vector<Detection2D> decoded;
   try {
     cv::dnn::Net& net = network_->net;
-    if (model_ == Model::kFastestDet) {
+    if (model_ == Model::kYoloSeg) {
+      const Letterbox letterbox = Letterbox::fit(image_bgr.size(), input_px_);
+      net.setInput(letterbox.blob(image_bgr));
+      std::vector<cv::Mat> outputs;
+      net.forward(outputs, yoloSegOutputs());
+      const Status status = decodeYoloSeg(outputs[0], outputs[1], letterbox, labels_,
+                                          yoloSegConfig(options_.decode), &decoded);
+      if (!status) return Status::Error(frame_name + ": " + status.message());
+    } else if (model_ == Model::kFastestDet) {
       net.setInput(cv::dnn::blobFromImage(image_bgr, 1.0 / 255.0,
                                           cv::Size(kFastestDetInputPx, kFastestDetInputPx),
                                           cv::Scalar(), false, false));

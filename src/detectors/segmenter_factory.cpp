@@ -1,5 +1,7 @@
 #include "multiview_object_detection/detectors/segmenter_factory.h"
 
+#include <sys/stat.h>
+
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
 
@@ -7,17 +9,48 @@
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
 
 namespace mvod {
+namespace {
+
+// yolo_seg's score threshold and λ (detectorThresholds).
+constexpr float kYoloSegScoreThreshold = 0.15f;
+
+}  // namespace
+
+DetectorThresholds detectorThresholds(const std::string& detector) {
+  // score, NMS IoU, mask, λ. fastestdet and maskrcnn: the values these detectors have had since
+  // the start (FastestDet upstream uses 0.65-0.8). yolo_seg: measured on the redkitchen
+  // (benchmark/redkitchen_benchmark, docs/benchmarks.md): at 0.5 its map has no table and two of
+  // five chairs; the NMS IoU and mask threshold are YOLOv5's own.
+  if (detector == "yolo_seg") return {kYoloSegScoreThreshold, 0.45f, 0.5f, kYoloSegScoreThreshold};
+  if (detector == "fastestdet") return {0.5f, 0.4f, 0.5f, 0.5};
+  if (detector == "maskrcnn") return {0.5f, 0.4f, 0.3f, 0.5};
+  return {0.5f, 0.4f, 0.5f, 0.5};
+}
+
+SegmenterOptions SegmenterOptions::withDetectorDefaults() const {
+  SegmenterOptions resolved = *this;
+  const DetectorThresholds defaults = detectorThresholds(detector);
+  if (resolved.score_threshold == kDetectorDefault) {
+    resolved.score_threshold = defaults.score_threshold;
+  }
+  if (resolved.nms_threshold == kDetectorDefault) resolved.nms_threshold = defaults.nms_threshold;
+  if (resolved.mask_threshold == kDetectorDefault) {
+    resolved.mask_threshold = defaults.mask_threshold;
+  }
+  return resolved;
+}
 
 Status SegmenterOptions::isValid() const {
   if (detector == "simulated") {
     return Status::Error(
         "detector 'simulated' is the benchmark's ground-truth detector: offline_detection, "
-        "dataset_to_bag and ablation offer it, the node does not (use files, fastestdet, "
-        "maskrcnn)");
+        "dataset_to_bag and ablation offer it, the node does not (use files, yolo_seg, "
+        "fastestdet, maskrcnn)");
   }
-  if (detector != "files" && detector != "fastestdet" && detector != "maskrcnn") {
+  if (detector != "files" && detector != "yolo_seg" && detector != "fastestdet" &&
+      detector != "maskrcnn") {
     return Status::Error("detector '" + detector +
-                         "' is unknown (use files, fastestdet or maskrcnn)");
+                         "' is unknown (use files, yolo_seg, fastestdet or maskrcnn)");
   }
   if (detector == "files" && detections_dir.empty()) {
     return Status::Error("detector 'files' needs a detections folder");
@@ -26,38 +59,71 @@ Status SegmenterOptions::isValid() const {
 }
 
 Status SegmenterOptions::isValidExceptDetector() const {
-  if (!(score_threshold >= 0.f && score_threshold <= 1.f)) {
-    return Status::Error("score_threshold must be in [0, 1]");
+  const auto own = [](float value) { return value == kDetectorDefault; };
+  if (!own(score_threshold) && !(score_threshold >= 0.f && score_threshold <= 1.f)) {
+    return Status::Error("score_threshold must be in [0, 1] (or unset: the detector's own)");
   }
-  if (!(nms_threshold > 0.f && nms_threshold <= 1.f)) {
-    return Status::Error("nms_threshold must be in (0, 1]");
+  if (!own(nms_threshold) && !(nms_threshold > 0.f && nms_threshold <= 1.f)) {
+    return Status::Error("nms_threshold must be in (0, 1] (or unset: the detector's own)");
   }
-  if (!(mask_threshold > 0.f && mask_threshold < 1.f)) {
-    return Status::Error("mask_threshold must be in (0, 1)");
+  if (!own(mask_threshold) && !(mask_threshold > 0.f && mask_threshold < 1.f)) {
+    return Status::Error("mask_threshold must be in (0, 1) (or unset: the detector's own)");
   }
   if (max_detections < 1) return Status::Error("max_detections must be >= 1");
+  if (yolo_seg_input_px != 0 &&
+      (yolo_seg_input_px < 32 || yolo_seg_input_px % 32 != 0 || yolo_seg_input_px > 4096)) {
+    return Status::Error(
+        "yolo_seg input size must be 0 (the file's) or a multiple of 32 up to "
+        "4096");
+  }
   if (backend != "cpu" && backend != "cuda") {
     return Status::Error("backend '" + backend + "' is unknown (use cpu or cuda)");
   }
   return Status::Ok();
 }
 
+std::string resolveAutoDetector(const SegmenterOptions& options) {
+  if (options.detector != "auto") return options.detector;
+  struct stat info;
+  const std::string yolo = resolveModelPath(options, options.yolo_seg_model);
+  if (::stat(yolo.c_str(), &info) == 0 && S_ISREG(info.st_mode)) return "yolo_seg";
+  return "fastestdet";
+}
+
+std::string defaultModelDirectory() {
+  const char* ros_home = std::getenv("ROS_HOME");
+  const char* home = std::getenv("HOME");
+  std::string base;
+  if (ros_home != nullptr && *ros_home != '\0') {
+    base = ros_home;
+  } else if (home != nullptr && *home != '\0') {
+    base = std::string(home) + "/.ros";
+  } else {
+    return "";
+  }
+  return base + "/multiview_object_detection/models";
+}
+
+std::string modelDirectory(const SegmenterOptions& options) {
+  if (!options.model_dir.empty()) return options.model_dir;
+  const char* env = std::getenv("MVOD_MODEL_DIR");
+  if (env != nullptr && *env != '\0') return env;
+  return defaultModelDirectory();
+}
+
 std::string resolveModelPath(const SegmenterOptions& options, const std::string& file) {
   if (file.empty() || file.front() == '/') return file;
-  std::string dir = options.model_dir;
-  if (dir.empty()) {
-    const char* env = std::getenv("MVOD_MODEL_DIR");
-    if (env != nullptr) dir = env;
-  }
+  const std::string dir = modelDirectory(options);
   if (dir.empty()) return file;
   return dir + "/" + file;
 }
 
-Status createInstanceSegmenter(const SegmenterOptions& options,
+Status createInstanceSegmenter(const SegmenterOptions& given,
                                std::unique_ptr<InstanceSegmenter>* segmenter) {
   segmenter->reset();
-  const Status valid = options.isValid();
+  const Status valid = given.isValid();
   if (!valid) return valid;
+  const SegmenterOptions options = given.withDetectorDefaults();
   if (options.detector == "files") {
     FileInstanceSegmenter::Config config;
     config.max_detections = options.max_detections;
@@ -73,6 +139,11 @@ Status createInstanceSegmenter(const SegmenterOptions& options,
   if (options.detector == "fastestdet") {
     dnn.model_path = resolveModelPath(options, options.fastestdet_model);
     dnn.labels_path = resolveModelPath(options, options.fastestdet_labels);
+  } else if (options.detector == "yolo_seg") {
+    model = DnnInstanceSegmenter::Model::kYoloSeg;
+    dnn.model_path = resolveModelPath(options, options.yolo_seg_model);
+    dnn.labels_path = resolveModelPath(options, options.yolo_seg_labels);
+    dnn.input_px = options.yolo_seg_input_px;
   } else {
     model = DnnInstanceSegmenter::Model::kMaskRcnn;
     dnn.model_path = resolveModelPath(options, options.maskrcnn_weights);
@@ -97,11 +168,15 @@ cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>&
     cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
     const cv::Vec3b c = bgr.at<cv::Vec3b>(0, 0);
     const cv::Scalar colour(c[0], c[1], c[2]);
-    if (!det.mask.empty() && det.mask.size() == canvas.size() && det.mask.type() == CV_8UC1) {
-      cv::Mat tint(canvas.size(), CV_8UC3, colour);
+    // Box-sized masks (the DNN detectors') and image-sized ones (files) alike.
+    cv::Point mask_origin;
+    if (maskOrigin(det, canvas.size(), &mask_origin)) {
+      const cv::Rect region =
+          cv::Rect(mask_origin, det.mask.size()) & cv::Rect(cv::Point(), canvas.size());
+      cv::Mat tint(region.size(), CV_8UC3, colour);
       cv::Mat blended;
-      cv::addWeighted(canvas, 0.55, tint, 0.45, 0.0, blended);
-      blended.copyTo(canvas, det.mask);
+      cv::addWeighted(canvas(region), 0.55, tint, 0.45, 0.0, blended);
+      blended.copyTo(canvas(region), maskInRegion(det, canvas.size(), region));
     }
     cv::rectangle(canvas, det.box_px, colour, 2);
     char text[128];

@@ -7,9 +7,10 @@ namespace mvod {
 Status BenchmarkSegmenterOptions::isValid() const {
   if (detector != "simulated") {
     const Status valid = SegmenterOptions::isValid();
-    if (!valid && detector != "files" && detector != "fastestdet" && detector != "maskrcnn") {
+    if (!valid && detector != "files" && detector != "yolo_seg" && detector != "fastestdet" &&
+        detector != "maskrcnn") {
       return Status::Error("detector '" + detector +
-                           "' is unknown (use files, fastestdet, maskrcnn or simulated)");
+                           "' is unknown (use files, yolo_seg, fastestdet, maskrcnn or simulated)");
     }
     return valid;
   }

@@ -246,7 +246,8 @@ void KeyframeWorker::applyPendingReconfigure() {
     const Status created = createInstanceSegmenter(config.segmenterOptions(), &segmenter);
     if (created) {
       segmenter_ = std::move(segmenter);
-      ROS_INFO("detector reloaded with score_threshold %.3f", config.segmenter.score_threshold);
+      ROS_INFO("detector reloaded with score_threshold %.3f",
+               config.segmenterOptions().score_threshold);
     } else {
       ROS_ERROR("detector reload failed, the previous one is kept: %s", created.message().c_str());
     }
@@ -358,9 +359,10 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     }
   }
   // score_threshold may have been raised at run time; external detectors are held to it too.
+  const float score_threshold = config.segmenterOptions().score_threshold;
   detections.erase(std::remove_if(detections.begin(), detections.end(),
-                                  [&config](const Detection2D& d) {
-                                    return !(d.score >= config.segmenter.score_threshold);
+                                  [score_threshold](const Detection2D& d) {
+                                    return !(d.score >= score_threshold);
                                   }),
                    detections.end());
   capDetections(config.max_detections_per_frame, what, &detections);

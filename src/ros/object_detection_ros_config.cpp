@@ -22,7 +22,7 @@ ObjectMapper::Config ObjectDetectionRosConfig::mapperConfig() const {
 SegmenterOptions ObjectDetectionRosConfig::segmenterOptions() const {
   SegmenterOptions options = segmenter;
   options.detector = detector;
-  return options;
+  return options.withDetectorDefaults();
 }
 
 Status ObjectDetectionRosConfig::isValid() const {
@@ -51,13 +51,15 @@ Status ObjectDetectionRosConfig::isValid() const {
   if (Status s = checkParameterRange("autosave_period_s", autosave_period_s); !s) return s;
   Status status = keyframes.isValid();
   if (!status) return status;
-  if (detector != "fastestdet" && detector != "maskrcnn" && detector != "topic") {
+  if (detector != "yolo_seg" && detector != "fastestdet" && detector != "maskrcnn" &&
+      detector != "topic") {
     return Status::Error("detector '" + detector +
-                         "' is unknown (use fastestdet, maskrcnn or topic)");
+                         "' is unknown (use auto, yolo_seg, fastestdet, maskrcnn or topic)");
   }
   if (detector != "topic") {
     if (!(status = segmenterOptions().isValid())) return status;
-  } else if (!(segmenter.score_threshold >= 0.f && segmenter.score_threshold <= 1.f)) {
+  } else if (const float score = segmenterOptions().score_threshold;
+             !(score >= 0.f && score <= 1.f)) {
     return Status::Error("score_threshold must be in [0, 1]");
   }
   if (Status s = checkParameterRange("detections_max_age_s", detections_max_age_s); !s) return s;
@@ -101,6 +103,8 @@ std::string ObjectDetectionRosConfig::print() const {
       << "model_dir: " << (segmenter.model_dir.empty() ? "($MVOD_MODEL_DIR)" : segmenter.model_dir)
       << "\n"
       << "score_threshold: " << segmenter.score_threshold << "\n"
+      << "nms_threshold: " << segmenter.nms_threshold << "\n"
+      << "mask_threshold: " << segmenter.mask_threshold << "\n"
       << "detector_backend: " << segmenter.backend << "\n"
       << "detections_max_age_s: " << detections_max_age_s << "\n"
       << "max_detections_per_frame: " << max_detections_per_frame << "\n"

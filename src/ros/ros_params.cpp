@@ -268,6 +268,7 @@ IntersectionFilter::Config getIntersectionFilterConfigFromRosParam(
   p.readNumber("duplicate_ratio", &c.duplicate_ratio);
   p.read("merge_duplicates", &c.merge_duplicates);
   p.readNumber("container_support_ratio", &c.container_support_ratio);
+  p.readNumber("flat_top_clearance_m", &c.flat_top_clearance_m);
   return c;
 }
 
@@ -346,6 +347,9 @@ SegmenterOptions getSegmenterOptionsFromRosParam(const ros::NodeHandle& nh_priva
   p.read("detector_backend", &c.backend);
   p.readNumber("nms_threshold", &c.nms_threshold);
   p.readNumber("mask_threshold", &c.mask_threshold);
+  p.read("yolo_seg_model", &c.yolo_seg_model);
+  p.read("yolo_seg_labels", &c.yolo_seg_labels);
+  p.read("yolo_seg_input_px", &c.yolo_seg_input_px);
   p.read("fastestdet_model", &c.fastestdet_model);
   p.read("fastestdet_labels", &c.fastestdet_labels);
   p.read("maskrcnn_weights", &c.maskrcnn_weights);
@@ -384,8 +388,14 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("gravity_frame", &cfg.gravity_frame);
   cfg.keyframes = getKeyframeSelectorConfigFromRosParam(nh_private, errors);
 
-  p.read("detector", &cfg.detector);
+  std::string detector = "auto";
+  p.read("detector", &detector);
   cfg.segmenter = getSegmenterOptionsFromRosParam(nh_private, errors);
+  cfg.segmenter.detector = detector;
+  cfg.detector = resolveAutoDetector(cfg.segmenter);
+  // Thresholds not given: the detector's own (detectorThresholds).
+  cfg.segmenter.detector = cfg.detector;
+  cfg.segmenter = cfg.segmenter.withDetectorDefaults();
   p.read("detections_max_age_s", &cfg.detections_max_age_s);
   p.read("max_detections_per_frame", &cfg.max_detections_per_frame);
   p.read("map_directory", &cfg.map_directory);
@@ -406,6 +416,9 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("publish_object_cloud", &cfg.publish_object_cloud);
 
   cfg.mapper = getObjectMapperConfigFromRosParam(nh_private, errors);
+  if (!nh_private.hasParam("min_probability")) {
+    cfg.mapper.min_probability = detectorThresholds(cfg.detector).min_probability;
+  }
   cfg.mapper.gravity_down_W = cfg.mapperConfig().gravity_down_W;
   return cfg;
 }

@@ -1,6 +1,8 @@
 // OpenCV DNN detector backends of InstanceSegmenter (Sec. 3.1): Mask R-CNN (TensorFlow Inception v2
-// COCO through OpenCV's text graph) and FastestDet (a 1 MB COCO box detector whose box becomes the
-// mask; LCCP then cuts the object from the background). No Python or TensorFlow at run time.
+// COCO through OpenCV's text graph), YOLOv5-seg (Ultralytics' ONNX export, an instance segmenter of
+// the same class; yolo_seg_decoder.h) and FastestDet (a 1 MB COCO box detector whose box becomes
+// the mask; LCCP then cuts the object from the background). No Python, PyTorch or TensorFlow at
+// run time.
 #pragma once
 
 #include <memory>
@@ -38,16 +40,19 @@ Status decodeMaskRcnn(const cv::Mat& detection_out, const cv::Mat& detection_mas
                       const DnnDecodeConfig& config, std::vector<Detection2D>* detections);
 
 struct DnnModelOptions {
-  std::string model_path;       // FastestDet: .onnx; Mask R-CNN: frozen_inference_graph.pb
-  std::string config_path;      // Mask R-CNN: the OpenCV text graph (.pbtxt); unused for FastestDet
-  std::string labels_path;      // label file
+  std::string model_path;   // FastestDet, YOLOv5-seg: .onnx; Mask R-CNN: frozen_inference_graph.pb
+  std::string config_path;  // Mask R-CNN: the OpenCV text graph (.pbtxt); unused for FastestDet
+  std::string labels_path;  // label file
   std::string backend = "cpu";  // cpu | cuda
   DnnDecodeConfig decode;
+  // YOLOv5-seg: the network's input side S; 0 = the one the ONNX file declares (640 where it
+  // declares none, a dynamic export). A file exported for one size fails on any other.
+  int input_px = 0;
 };
 
 class DnnInstanceSegmenter : public InstanceSegmenter {
  public:
-  enum class Model { kFastestDet, kMaskRcnn };
+  enum class Model { kFastestDet, kMaskRcnn, kYoloSeg };
   // Loads the network; a missing or corrupt file gives an error that says which file and how to get
   // it. *segmenter stays empty on failure.
   static Status create(Model model, const DnnModelOptions& options,
@@ -59,12 +64,15 @@ class DnnInstanceSegmenter : public InstanceSegmenter {
                 std::vector<std::string>* warnings = nullptr) override;
   std::string name() const override;
   const std::vector<std::string>& labels() const { return labels_; }
+  // YOLOv5-seg: the input side S in use (0 for the other models).
+  int inputPx() const { return input_px_; }
 
  private:
   DnnInstanceSegmenter(Model model, const DnnModelOptions& options);
   Model model_;
   DnnModelOptions options_;
   std::vector<std::string> labels_;
+  int input_px_ = 0;
   struct Network;  // the cv::dnn::Net, kept out of this header
   std::unique_ptr<Network> network_;
 };

@@ -52,8 +52,10 @@ struct ObjectDetectionRosConfig {
 
   KeyframeSelector::Config keyframes;
 
-  // "fastestdet" | "maskrcnn" (OpenCV DNN in this node, options in `segmenter`) | "topic"
-  // (InstanceDetections on `detections`, matched by stamp).
+  // "yolo_seg" | "fastestdet" | "maskrcnn" (OpenCV DNN in this node, options in `segmenter`) |
+  // "topic" (InstanceDetections on `detections`, matched by stamp). The parameter's "auto"
+  // (its default) is resolved by ros_params: yolo_seg where its model file is found, else
+  // fastestdet.
   std::string detector = "fastestdet";
   SegmenterOptions segmenter;
   double detections_max_age_s =
