@@ -172,7 +172,8 @@ Status SevenScenesDataset::readPose(const std::string& path, Eigen::Isometry3d* 
   return Status::Ok();
 }
 
-Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset* dataset) {
+Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset* dataset,
+                                const ColorCameraFiles& camera) {
   if (dataset == nullptr) return Status::Error("open: dataset is null");
   std::error_code error;
   if (!fs::exists(directory, error)) {
@@ -194,9 +195,19 @@ Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset
   if (!status) return status;
 
   // color-intrinsics.txt present: two cameras, masks (colour pixels) go through T_C_D and K_color.
-  const fs::path color_k_path = dir / "color-intrinsics.txt";
-  const fs::path depth_to_color_path = dir / "depth-to-color.txt";
-  if (fs::exists(color_k_path, error)) {
+  const fs::path color_k_path = camera.color_intrinsics.empty() ? dir / "color-intrinsics.txt"
+                                                                : fs::path(camera.color_intrinsics);
+  const fs::path depth_to_color_path =
+      camera.depth_to_color.empty() ? dir / "depth-to-color.txt" : fs::path(camera.depth_to_color);
+  if (camera.registered && !camera.color_intrinsics.empty()) {
+    return Status::Error("a registered camera has no colour intrinsics of its own: give either");
+  }
+  for (const std::string& given : {camera.color_intrinsics, camera.depth_to_color}) {
+    if (!given.empty() && !fs::is_regular_file(given, error)) {
+      return Status::Error(given + ": no such file");
+    }
+  }
+  if (!camera.registered && fs::exists(color_k_path, error)) {
     status = readMatrix3(color_k_path.string(), &K);
     if (!status) return status;
     status = intrinsicsFromMatrix(color_k_path.string(), K, &result.K_color_);
@@ -208,7 +219,7 @@ Status SevenScenesDataset::open(const std::string& directory, SevenScenesDataset
       if (!status) return status;
     }
   } else {
-    if (fs::exists(depth_to_color_path, error)) {
+    if (!camera.registered && fs::exists(depth_to_color_path, error)) {
       return Status::Error(depth_to_color_path.string() +
                            ": given without color-intrinsics.txt (a registered dataset has one "
                            "camera)");

@@ -72,14 +72,17 @@ Status datasetLayout(const fs::path& dir, const std::string& format, std::string
 
 // A 7-Scenes-layout folder: its frames with their intrinsics checked, the stated gravity, and
 // whether colour and depth are one camera.
-Status openSevenScenes(const std::string& directory, DatasetSource* source) {
+Status openSevenScenes(const std::string& directory, const ColorCameraFiles& camera,
+                       DatasetSource* source) {
   auto dataset = std::make_shared<SevenScenesDataset>();
-  const Status status = SevenScenesDataset::open(directory, dataset.get());
+  const Status status = SevenScenesDataset::open(directory, dataset.get(), camera);
   if (!status) return status;
   source->indices = dataset->frameIndices();
   source->frame_name = [](int index) { return SevenScenesDataset::frameName(index); };
   const std::string depth_file = (fs::path(directory) / "camera-intrinsics.txt").string();
-  const std::string color_file = (fs::path(directory) / "color-intrinsics.txt").string();
+  const std::string color_file = camera.color_intrinsics.empty()
+                                     ? (fs::path(directory) / "color-intrinsics.txt").string()
+                                     : camera.color_intrinsics;
   source->load = [dataset, depth_file, color_file](int index, RgbdFrame* frame) {
     RgbdFrame loaded;
     const Status status = dataset->load(index, &loaded);
@@ -101,9 +104,10 @@ Status openSevenScenes(const std::string& directory, DatasetSource* source) {
     source->notes.push_back(text);
   }
   if (!dataset->registered()) {
-    source->notes.push_back(
-        "colour and depth are two cameras (color-intrinsics.txt): depth is registered to the "
-        "colour camera");
+    source->notes.push_back("colour and depth are two cameras (" + color_file +
+                            "): depth is registered to the colour camera");
+  } else if (camera.registered) {
+    source->notes.push_back("colour and depth are registered (--registered): one camera");
   } else {
     source->warnings.push_back(
         directory +
@@ -155,7 +159,7 @@ Status openSceneNN(const std::string& directory, DatasetSource* source) {
 }  // namespace
 
 Status openDatasetSource(const std::string& directory, const std::string& format,
-                         DatasetSource* source) {
+                         DatasetSource* source, const ColorCameraFiles& camera) {
   const fs::path dir(directory);
   std::error_code error;
   if (!fs::is_directory(dir, error)) {
@@ -169,8 +173,13 @@ Status openDatasetSource(const std::string& directory, const std::string& format
   DatasetSource opened;
   opened.format = layout;
   opened.directory = directory;
-  const Status status =
-      layout == "7scenes" ? openSevenScenes(directory, &opened) : openSceneNN(directory, &opened);
+  if (layout != "7scenes" && !camera.empty()) {
+    return Status::Error(directory +
+                         ": colour camera files and --registered are for 7-Scenes-layout "
+                         "folders (a SceneNN sequence's colour and depth are one camera)");
+  }
+  const Status status = layout == "7scenes" ? openSevenScenes(directory, camera, &opened)
+                                            : openSceneNN(directory, &opened);
   if (!status) return status;
   *source = std::move(opened);
   return Status::Ok();

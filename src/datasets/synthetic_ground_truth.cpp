@@ -93,6 +93,27 @@ Status readObject(const nlohmann::json& entry, const std::string& where, double 
 
 }  // namespace
 
+Status readGroundTruthUp(const std::string& path, Eigen::Vector3d* up_W, bool* found) {
+  *found = false;
+  std::string text;
+  const Status status = readFile(path, &text);
+  if (!status) return status;
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    return Status::Error(path + ": not valid JSON: " + e.what());
+  }
+  if (!doc.is_object() || !doc.contains("up")) return Status::Ok();
+  Eigen::Vector3d up;
+  if (!readVector(doc["up"], &up) || !(up.norm() > 0.0)) {
+    return Status::Error(path + ".up: expected a non-zero [x, y, z]");
+  }
+  *up_W = up.normalized();
+  *found = true;
+  return Status::Ok();
+}
+
 Status loadSyntheticGroundTruth(const std::string& path, double spacing_m,
                                 const Eigen::Vector3d& up_W,
                                 std::vector<GroundTruthObject>* objects) {

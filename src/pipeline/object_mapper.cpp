@@ -112,6 +112,7 @@ void ObjectMapper::Config::usePaperMethod() {
   lccp.implementation = "pcl";
   intersection_filter.duplicate_ratio = 0.0;
   intersection_filter.container_support_ratio = 0.0;
+  intersection_filter.flat_top_clearance_m = 0.0;
   database.amodal.enable = false;
   database.existence.enable = false;
   corrections.enable = false;
@@ -235,6 +236,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   KeyframeReport& out = report != nullptr ? *report : local_report;
   out = KeyframeReport();
   out.detections = static_cast<int>(detections.size());
+  out.object_ids.assign(detections.size(), -1);
 
   // A bad frame changes nothing.
   const Status valid = frame.validate();

@@ -55,6 +55,9 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     const ObjectDatabase::FusionResult result =
         fuseObservation(observation, defer_rebox, &out->times);
     view.object_id = result.object_id;
+    if (kept.index[k] < out->object_ids.size()) {
+      out->object_ids[kept.index[k]] = result.object_id;
+    }
     if (result.decision == ObjectDatabase::Decision::kFused) {
       ++out->fused;
     } else {

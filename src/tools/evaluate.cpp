@@ -12,6 +12,7 @@
 #include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
+#include "multiview_object_detection/evaluation/object_matches.h"
 #include "multiview_object_detection/io/json_io.h"
 
 namespace fs = std::filesystem;
@@ -51,9 +52,14 @@ const char* const kUsage =
     "                       ground truth (or over their own clouds without ground truth)\n"
     "  --voxel-size M       voxel of the segmentation IoU, metres (default: 0.05)\n"
     "  --up AXIS            world up: x, y, z, -x, -y, -z or auto (default: auto =\n"
-    "                       y for SceneNN, whose meshes are y-up; z for .json)\n"
+    "                       y for SceneNN, whose meshes are y-up; for .json the \"up\"\n"
+    "                       the file states, else z)\n"
     "  --markdown FILE      also write the table as Markdown\n"
     "  --csv FILE           also write the table as CSV (AP as fractions)\n"
+    "  --per-object FILE    Markdown, object by object (first scene): the map object each\n"
+    "                       annotated object became (best same-class box IoU), its box IoU\n"
+    "                       and centre error, and the map objects of annotated classes\n"
+    "                       that match none (IoU < 0.25)\n"
     "  --help               this text\n"
     "\n"
     "exit status: 0 ok, 1 an input cannot be read or an output written, 2 bad arguments\n";
@@ -65,6 +71,7 @@ struct Options {
   std::string plot;
   std::string markdown;
   std::string csv;
+  std::string per_object;
   std::string up = "auto";
   double voxel_size_m = 0.05;
 };
@@ -117,7 +124,8 @@ int parseArguments(int argc, char** argv, Options* options) {
   }
   for (const auto& [name, value] :
        {std::make_pair("--plot", &options->plot), std::make_pair("--markdown", &options->markdown),
-        std::make_pair("--csv", &options->csv)}) {
+        std::make_pair("--csv", &options->csv),
+        std::make_pair("--per-object", &options->per_object)}) {
     cli::addText(&app, name, value, std::string(name) + " needs a value");
   }
   cli::addValue(&app, "--up", [options](const std::string& text) {
@@ -145,6 +153,32 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 
 constexpr int kContinue = -1;  // a phase of main() went through
 
+// --up auto on .json ground truth: the "up" the files state (each the same), else z.
+int stateUp(const std::vector<std::string>& paths, Eigen::Vector3d* up_W) {
+  int stated = 0;
+  for (const std::string& path : paths) {
+    Eigen::Vector3d up;
+    bool found = false;
+    const mvod::Status read = mvod::readGroundTruthUp(path, &up, &found);
+    if (!read) {
+      std::cerr << "evaluate: " << read.message() << "\n";
+      return kExitFailure;
+    }
+    if (!found) continue;
+    if (stated > 0 && (up - *up_W).norm() > 1e-6) {
+      std::cerr << "evaluate: the ground-truth files state different \"up\" vectors: give --up\n";
+      return kExitFailure;
+    }
+    *up_W = up;
+    ++stated;
+  }
+  if (stated > 0 && stated < static_cast<int>(paths.size())) {
+    std::cerr << "evaluate: some ground-truth files state an \"up\" and some do not: give --up\n";
+    return kExitFailure;
+  }
+  return kContinue;
+}
+
 // A synthetic dataset folder holds its ground_truth.json (the path becomes it); a SceneNN folder
 // holds <id>.ply/.xml. The world's up: --up, else z for .json and y for SceneNN (not mixed).
 int resolveGroundTruth(Options* options, mvod::EvaluationOptions* evaluation) {
@@ -171,6 +205,9 @@ int resolveGroundTruth(Options* options, mvod::EvaluationOptions* evaluation) {
   evaluation->voxel_size_m = options->voxel_size_m;
   if (options->up == "auto") {
     evaluation->up_W = synthetic ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitY();
+    if (synthetic && stateUp(options->ground_truth, &evaluation->up_W) != kContinue) {
+      return kExitUsage;
+    }
   } else {
     parseAxis(options->up, &evaluation->up_W);
   }
@@ -230,6 +267,27 @@ bool writePlot(const std::string& path, const mvod::EvaluationScene& scene,
   return true;
 }
 
+// --per-object: the first scene object by object, and a line on stderr.
+bool writePerObject(const std::string& path, const mvod::EvaluationScene& scene,
+                    const Eigen::Vector3d& up_W) {
+  const mvod::ObjectMatches matches =
+      mvod::matchObjects(scene.ground_truth, scene.predictions, up_W);
+  int matched = 0;
+  for (const mvod::AnnotatedObjectMatch& m : matches.annotated) matched += m.box_iou >= 0.25;
+  std::fprintf(stderr,
+               "per object: %d of %zu annotated objects matched at box IoU >= 0.25; %zu map "
+               "objects of annotated classes match none\n",
+               matched, matches.annotated.size(), matches.unmatched_prediction_ids.size());
+  const mvod::Status written =
+      mvod::writeFileAtomic(path, mvod::objectMatchesToMarkdown(matches, scene.predictions));
+  if (!written) {
+    std::cerr << "evaluate: " << written.message() << "\n";
+    return false;
+  }
+  std::fprintf(stderr, "wrote %s\n", path.c_str());
+  return true;
+}
+
 // The table on stdout (and --markdown, --csv). False when a file cannot be written.
 bool report(const Options& options, const mvod::EvaluationResult& result, const SceneCounts& counts,
             double voxel_size_m) {
@@ -273,6 +331,10 @@ int main(int argc, char** argv) {
     exit_code = kExitFailure;
   }
   if (options.ground_truth.empty()) return exit_code;
+  if (!options.per_object.empty() &&
+      !writePerObject(options.per_object, scenes.front(), evaluation.up_W)) {
+    exit_code = kExitFailure;
+  }
   const mvod::EvaluationResult result = mvod::evaluateScenes(std::move(scenes), evaluation);
   if (!report(options, result, counts, evaluation.voxel_size_m)) exit_code = kExitFailure;
   return exit_code;

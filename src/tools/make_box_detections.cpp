@@ -2,13 +2,17 @@
 // <frame>.json per frame in FileInstanceSegmenter's format, for offline_detection --detector files.
 // What a perfect box detector would report: it judges the 3D cut and fusion on real depth and poses
 // (e.g. the hand-annotated redkitchen boxes in test/data) without a detector's own errors.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli_options.h"
+#include "multiview_object_detection/datasets/class_names.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
 #include "multiview_object_detection/datasets/ground_truth.h"
 #include "multiview_object_detection/evaluation/box_detections.h"
@@ -32,6 +36,11 @@ const char* const kUsage =
     "options:\n"
     "  --every N            only every N-th frame (default: 1)\n"
     "  --min-inside F       share of a projected box that must lie inside the image (default 0.1)\n"
+    "  --color-intrinsics FILE, --depth-to-color FILE, --registered\n"
+    "                       the colour camera apart from the dataset folder (as "
+    "offline_detection)\n"
+    "  --classes LIST       only the ground truth of these classes, comma-separated (default:\n"
+    "                       all; e.g. \"dining table,chair\")\n"
     "  --help               this text\n"
     "\n"
     "exit status: 0 ok, 1 an input cannot be read or an output written, 2 bad arguments\n";
@@ -42,7 +51,24 @@ struct Options {
   std::string output_dir;
   long every = 1;
   double min_inside = 0.1;
+  std::string classes;
+  mvod::ColorCameraFiles camera;
 };
+
+// --classes: the ground truth of the listed classes only (canonical names; all when empty).
+void keepClasses(const std::string& list, std::vector<mvod::GroundTruthObject>* truth) {
+  if (list.empty()) return;
+  std::set<std::string> wanted;
+  std::stringstream stream(list);
+  for (std::string name; std::getline(stream, name, ',');) {
+    wanted.insert(mvod::canonicalClassName(name));
+  }
+  truth->erase(std::remove_if(truth->begin(), truth->end(),
+                              [&](const mvod::GroundTruthObject& object) {
+                                return !wanted.count(object.class_name);
+                              }),
+               truth->end());
+}
 
 // -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).
 int parseArguments(int argc, char** argv, Options* options) {
@@ -51,6 +77,10 @@ int parseArguments(int argc, char** argv, Options* options) {
   cli::addText(&app, "--dataset", &options->dataset_dir);
   cli::addText(&app, "--ground-truth", &options->truth_path);
   cli::addText(&app, "--output", &options->output_dir);
+  cli::addText(&app, "--classes", &options->classes);
+  cli::addText(&app, "--color-intrinsics", &options->camera.color_intrinsics);
+  cli::addText(&app, "--depth-to-color", &options->camera.depth_to_color);
+  cli::addFlag(&app, "--registered", &options->camera.registered);
   cli::addInteger(&app, "--every", 1, 100000, &options->every, "--every needs an integer >= 1");
   cli::addNumber(
       &app, "--min-inside", &options->min_inside, [](double f) { return f >= 0 && f <= 1; },
@@ -76,7 +106,7 @@ int main(int argc, char** argv) {
   const long every = args.every;
   const double min_inside = args.min_inside;
   mvod::DatasetSource dataset;
-  mvod::Status status = mvod::openDatasetSource(dataset_dir, "auto", &dataset);
+  mvod::Status status = mvod::openDatasetSource(dataset_dir, "auto", &dataset, args.camera);
   if (!status) {
     std::cerr << "make_box_detections: " << status.message() << "\n";
     return kExitFailure;
@@ -92,6 +122,7 @@ int main(int argc, char** argv) {
     std::cerr << "make_box_detections: " << status.message() << "\n";
     return kExitFailure;
   }
+  keepClasses(args.classes, &truth);
   std::error_code error;
   fs::create_directories(output_dir, error);
   mvod::BoxDetectionOptions options;

@@ -25,7 +25,9 @@
 
 #include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/datasets/dataset_source.h"
+#include "multiview_object_detection/detectors/file_instance_segmenter.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
+#include "multiview_object_detection/evaluation/keyframe_overlay.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
@@ -40,6 +42,7 @@ using offline_detection::kExitUsage;
 using offline_detection::Options;
 using offline_detection::parseArguments;
 using offline_detection::printCostGrowth;
+using offline_detection::printRefinementRemovals;
 using offline_detection::printRunReport;
 using offline_detection::printTable;
 using offline_detection::RunStats;
@@ -138,7 +141,10 @@ int segmenterOptions(const Options& options, mvod::BenchmarkSegmenterOptions* se
                                   ? options.dataset
                                   : options.detections;
   segmenter->model_dir = options.model_dir;
-  segmenter->score_threshold = static_cast<float>(options.score_threshold);
+  segmenter->score_threshold = std::isfinite(options.score_threshold)
+                                   ? static_cast<float>(options.score_threshold)
+                                   : mvod::kDetectorDefault;
+  if (!options.yolo_seg_model.empty()) segmenter->yolo_seg_model = options.yolo_seg_model;
   segmenter->backend = options.backend;
   segmenter->max_detections = options.max_detections;
   if (options.simulated_perfect) {
@@ -155,7 +161,12 @@ int segmenterOptions(const Options& options, mvod::BenchmarkSegmenterOptions* se
 
 // The dataset; its warnings, and its notes unless --quiet.
 int openDataset(const Options& options, mvod::DatasetSource* dataset) {
-  const mvod::Status opened = mvod::openDatasetSource(options.dataset, options.format, dataset);
+  mvod::ColorCameraFiles camera;
+  camera.color_intrinsics = options.color_intrinsics;
+  camera.depth_to_color = options.depth_to_color;
+  camera.registered = options.registered;
+  const mvod::Status opened =
+      mvod::openDatasetSource(options.dataset, options.format, dataset, camera);
   if (!opened) {
     std::cerr << "offline_detection: cannot open dataset " << options.dataset << ": "
               << opened.message() << "\n";
@@ -212,7 +223,9 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   if (std::isfinite(options.existence_remove_below)) {
     config->database.existence.remove_below = options.existence_remove_below;
   }
-  config->min_probability = options.min_probability;
+  config->min_probability = std::isfinite(options.min_probability)
+                                ? options.min_probability
+                                : mvod::detectorThresholds(options.detector).min_probability;
   config->num_threads = options.threads;
   config->filter.enable = !options.no_filter;
   config->lccp.enable = !options.no_lccp;
@@ -230,7 +243,7 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
 
 // The folders of --save-clouds and --overlays.
 int makeOutputFolders(const Options& options) {
-  for (const std::string& dir : {options.save_clouds, options.overlays}) {
+  for (const std::string& dir : {options.save_clouds, options.overlays, options.save_detections}) {
     std::error_code error;
     if (!dir.empty() && !fs::create_directories(dir, error) && error) {
       std::cerr << "offline_detection: cannot create " << dir << ": " << error.message() << "\n";
@@ -291,8 +304,9 @@ class KeyframeLoop {
     if (frame.name.empty()) frame.name = name;
     std::vector<mvod::Detection2D> detections;
     if (!detect(frame, name, &detections)) return;
-    if (!options_.overlays.empty()) writeOverlay(frame, name, detections);
-    mapKeyframe(frame, name, detections);
+    if (!options_.save_detections.empty()) saveDetections(frame, name, detections);
+    const std::vector<int> object_ids = mapKeyframe(frame, name, detections);
+    if (!options_.overlays.empty()) writeOverlay(frame, name, detections, object_ids);
     keyframes_.push_back({index, frame.stamp_s, frame.T_C_D});
   }
 
@@ -361,11 +375,15 @@ class KeyframeLoop {
     return true;
   }
 
+  // The detections with the object each became, and the map's boxes after this keyframe.
   void writeOverlay(const mvod::RgbdFrame& frame, const std::string& name,
-                    const std::vector<mvod::Detection2D>& detections) {
+                    const std::vector<mvod::Detection2D>& detections,
+                    const std::vector<int>& object_ids) {
     const std::string path = options_.overlays + "/" + name + ".overlay.png";
     try {
-      if (!cv::imwrite(path, mvod::drawDetections(frame.color_bgr, detections))) {
+      const cv::Mat overlay = mvod::drawKeyframeOverlay(frame, detections, object_ids,
+                                                        mvod::databaseObjects(mapper_.database()));
+      if (!cv::imwrite(path, overlay)) {
         report(name + ": warning: cannot write " + path, false);
       }
     } catch (const cv::Exception& e) {
@@ -373,8 +391,29 @@ class KeyframeLoop {
     }
   }
 
-  void mapKeyframe(const mvod::RgbdFrame& frame, const std::string& name,
-                   const std::vector<mvod::Detection2D>& detections) {
+  // --save-detections: the detector's output in the files detector's format, to run the map
+  // again (other thresholds, --paper, --single-frame) without the detector.
+  void saveDetections(const mvod::RgbdFrame& frame, const std::string& name,
+                      std::vector<mvod::Detection2D> detections) {
+    for (mvod::Detection2D& detection : detections) {
+      cv::Point origin;
+      if (!mvod::maskOrigin(detection, frame.color_bgr.size(), &origin)) continue;
+      // The files format holds image-sized masks.
+      cv::Mat full = cv::Mat::zeros(frame.color_bgr.size(), CV_8UC1);
+      detection.mask.copyTo(full(cv::Rect(origin, detection.mask.size())));
+      detection.mask = full;
+    }
+    const mvod::Status written =
+        mvod::FileInstanceSegmenter::write(options_.save_detections, name, detections);
+    if (!written) {
+      ++stats_.errors;
+      report(name + ": error: " + written.message(), true);
+    }
+  }
+
+  // Returns, per detection, the map object it became (-1: not mapped).
+  std::vector<int> mapKeyframe(const mvod::RgbdFrame& frame, const std::string& name,
+                               const std::vector<mvod::Detection2D>& detections) {
     mvod::KeyframeReport keyframe;
     const mvod::Status processed = mapper_.processKeyframe(frame, detections, &keyframe);
     if (!processed) {
@@ -391,6 +430,7 @@ class KeyframeLoop {
       stats_.removed_gone += static_cast<int>(keyframe.removed.size());
       if (keyframe.above_threshold > 0 && !keyframe.waiting_for_gravity) {
         stats_.stage_times.push_back(keyframe.times);
+        stats_.stage_detection_ms.push_back(stats_.detection_ms.back());
         stats_.stage_frames.push_back(name);
       }
     }
@@ -403,6 +443,7 @@ class KeyframeLoop {
                  " keyframes)",
              false);
     }
+    return keyframe.object_ids;
   }
 
   // A line on stderr (not with --quiet unless it is an error), below the progress line.
@@ -430,7 +471,9 @@ class KeyframeLoop {
 int finishMap(const Options& options, RunStats stats, size_t num_frames,
               mvod::ObjectMapper* mapper) {
   stats.counts.before_refinement = static_cast<int>(mapper->database().size());
+  const std::vector<mvod::MapObject> before = mvod::databaseObjects(mapper->database());
   const mvod::ObjectMapper::RefinementReport refinement = mapper->refine();
+  if (!options.quiet) printRefinementRemovals(before, refinement);
   mvod::MapSummary summary = summarize(stats, num_frames, *mapper, refinement);
   if (options.output_frame == "gravity_aligned") {
     summary.objects_in_gravity_frame = true;

@@ -25,15 +25,27 @@ const char* const kUsage =
     "options:\n"
     "  --dataset DIR          dataset folder (required)\n"
     "  --format NAME          auto | 7scenes | scenenn (default: auto, from the folder's files)\n"
-    "  --detector NAME        files | simulated | fastestdet | maskrcnn (default: files)\n"
+    "  --color-intrinsics FILE  7-Scenes layout: the colour camera's 3x3 K, instead of the\n"
+    "                         folder's color-intrinsics.txt (a read-only dataset needs no file\n"
+    "                         written into it)\n"
+    "  --depth-to-color FILE  7-Scenes layout: the depth camera -> colour camera pose (4x4),\n"
+    "                         instead of the folder's depth-to-color.txt\n"
+    "  --registered           7-Scenes layout: colour and depth are one camera (the folder's\n"
+    "                         colour files are not read)\n"
+    "  --detector NAME        files | simulated | yolo_seg | fastestdet | maskrcnn (default:\n"
+    "                         files)\n"
     "  --detections DIR       files: folder of <frame>.json detections (required);\n"
     "                         simulated: the sequence with label/ and <id>.xml (default: "
     "--dataset)\n"
-    "  --model-dir DIR        folder of the DNN model files (default: $MVOD_MODEL_DIR)\n"
+    "  --model-dir DIR        folder of the DNN model files (default: $MVOD_MODEL_DIR, else\n"
+    "                         $ROS_HOME/multiview_object_detection/models, ~/.ros/...)\n"
     "  --simulated-seed S     simulated: seed of its failures (default: 1)\n"
     "  --simulated-perfect    simulated: no failures (exact masks and classes, score 0.85)\n"
-    "  --score-threshold S    detector score below which detections are not reported (default: "
-    "0.5)\n"
+    "  --score-threshold S    detector score below which detections are not reported (default:\n"
+    "                         the detector's own: yolo_seg 0.15, fastestdet and maskrcnn 0.5)\n"
+    "  --yolo-seg-model FILE  yolo_seg: another export of the official layout, e.g.\n"
+    "                         yolov5n-seg-320.onnx or yolov5s-seg.onnx (default:\n"
+    "                         yolov5n-seg.onnx; a name is looked up in the model folder)\n"
     "  --backend NAME         cpu | cuda: where OpenCV DNN runs the detector (default: cpu)\n"
     "  --max-detections N     files: at most N detections per frame, the highest scores\n"
     "                         (default: 100)\n"
@@ -47,8 +59,12 @@ const char* const kUsage =
     "                         world: the dataset's world frame (default: gravity_aligned)\n"
     "  --save-clouds DIR      one ASCII PLY per object: fused cloud and LCCP segment\n"
     "  --overlays DIR         detections drawn on each keyframe's colour image (PNG)\n"
+    "  --save-detections DIR  each keyframe's detections as <frame>.json and mask PNGs, the\n"
+    "                         format --detector files reads (a detector run once, the map made\n"
+    "                         again with other options)\n"
     "  --timings FILE         per-keyframe stage times as CSV (keyframes with detections)\n"
-    "  --min-probability P    lambda of Eq. 5 (default: 0.5)\n"
+    "  --min-probability P    lambda of Eq. 5 (default: the detector's own: yolo_seg 0.15,\n"
+    "                         the others 0.5)\n"
     "  --priors FILE          class priors YAML (default: config/class_priors.yaml of the "
     "package)\n"
     "  --no-filter            ablation: no voxel/pass-through/outlier filters\n"
@@ -99,10 +115,14 @@ void addInputOptions(CLI::App* app, Options* options) {
         std::make_pair("--output", &options->output),
         std::make_pair("--save-clouds", &options->save_clouds),
         std::make_pair("--overlays", &options->overlays),
+        std::make_pair("--save-detections", &options->save_detections),
         std::make_pair("--timings", &options->timings),
         std::make_pair("--priors", &options->priors),
         std::make_pair("--backend", &options->backend),
-        std::make_pair("--corrected-poses", &options->corrected_poses)}) {
+        std::make_pair("--yolo-seg-model", &options->yolo_seg_model),
+        std::make_pair("--corrected-poses", &options->corrected_poses),
+        std::make_pair("--color-intrinsics", &options->color_intrinsics),
+        std::make_pair("--depth-to-color", &options->depth_to_color)}) {
     cli::addText(app, name, value, std::string(name) + " needs a value");
   }
   cli::addValue(app, "--format", [options](const std::string& text) {
@@ -148,6 +168,7 @@ void addInputOptions(CLI::App* app, Options* options) {
                   std::numeric_limits<int>::max(), &options->correct_at,
                   "--correct-at needs an integer");
   cli::addFlag(app, "--quiet", &options->quiet);
+  cli::addFlag(app, "--registered", &options->registered);
 }
 
 // The method's options: Eq. 5's lambda, the ablations and the paper's variants.

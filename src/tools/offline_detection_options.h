@@ -15,10 +15,14 @@ constexpr int kExitUsage = 2;    // bad arguments
 struct Options {
   std::string dataset;
   std::string format = "auto";
+  std::string color_intrinsics;  // the colour camera apart from the dataset folder
+  std::string depth_to_color;
+  bool registered = false;
   std::string detections;
   std::string detector = "files";
   std::string model_dir;
-  double score_threshold = 0.5;
+  double score_threshold = std::numeric_limits<double>::quiet_NaN();  // the detector's own
+  std::string yolo_seg_model;
   std::string backend = "cpu";
   int max_detections = 100;
   int threads = 0;
@@ -29,8 +33,9 @@ struct Options {
   std::string output_frame = "gravity_aligned";
   std::string save_clouds;
   std::string overlays;
+  std::string save_detections;
   std::string timings;
-  double min_probability = 0.5;
+  double min_probability = std::numeric_limits<double>::quiet_NaN();  // the detector's own
   std::string priors;
   bool no_filter = false;
   bool no_lccp = false;

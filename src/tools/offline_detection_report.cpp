@@ -71,13 +71,14 @@ void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times) {
 
 bool writeTimings(const std::string& path, const RunStats& stats) {
   std::ofstream csv(path);
+  // total_ms is the geometry's (the mapper's stages); detection_ms the detector's, apart.
   csv << "frame,extraction_ms,filter_ms,lccp_ms,manhattan_ms,fusion_ms,total_ms,existence_ms,"
-         "largest_view_ms\n";
+         "largest_view_ms,detection_ms\n";
   for (size_t k = 0; k < stats.stage_times.size(); ++k) {
     const mvod::StageTimes& t = stats.stage_times[k];
     csv << stats.stage_frames[k] << "," << t.extraction_ms << "," << t.filter_ms << "," << t.lccp_ms
         << "," << t.manhattan_ms << "," << t.fusion_ms << "," << t.total_ms << "," << t.existence_ms
-        << "," << t.largest_view_ms << "\n";
+        << "," << t.largest_view_ms << "," << stats.stage_detection_ms[k] << "\n";
   }
   if (!csv) {
     std::cerr << "offline_detection: cannot write " << path << "\n";
@@ -108,21 +109,27 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                     const mvod::MapSummary& summary) {
   const mvod::StageTimes& med = summary.stage_ms_median;
   const mvod::MapSummary::Counts& counts = summary.counts;
+  // The keyframe's whole time, detector and geometry (they run one after the other).
+  std::vector<double> keyframe_ms;
+  for (size_t k = 0; k < stats.stage_times.size(); ++k) {
+    keyframe_ms.push_back(stats.stage_detection_ms[k] + stats.stage_times[k].total_ms);
+  }
   std::fprintf(stderr,
                "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
                "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
                "%d gone by the existence evidence)\n"
                "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
-               "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f  refinement %.1f\n"
+               "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f (geometry; with the "
+               "detection %.1f)  refinement %.1f\n"
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
                num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
                refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
                refinement.merged_ids.size(), stats.removed_gone, median(stats.detection_ms),
                med.extraction_ms, med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms,
-               med.existence_ms, med.total_ms, med.refinement_ms, counts.detections,
-               counts.above_threshold, counts.with_box, counts.inserted, counts.fused,
-               counts.before_refinement);
+               med.existence_ms, med.total_ms, median(keyframe_ms), med.refinement_ms,
+               counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
+               counts.fused, counts.before_refinement);
 }
 
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame) {
@@ -138,6 +145,27 @@ void printTable(const std::vector<mvod::MapObject>& objects, const std::string& 
                 s.x(), s.y(), s.z(), o.yaw_rad * 180.0 / M_PI);
   }
   std::fflush(stdout);
+}
+
+void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
+                             const mvod::ObjectMapper::RefinementReport& refinement) {
+  const auto line = [&](int id, const std::string& reason) {
+    for (const mvod::MapObject& object : before) {
+      if (object.id != id) continue;
+      const Eigen::Vector3d& size = object.box.size_m;
+      std::fprintf(stderr, "refinement removed #%d %s (%.2f x %.2f x %.2f m, %d views): %s\n", id,
+                   object.class_name.c_str(), size.x(), size.y(), size.z(), object.observations,
+                   reason.c_str());
+    }
+  };
+  for (const int id : refinement.atypical_ids) line(id, "atypical size for its class (Eq. 9)");
+  for (const int id : refinement.intersecting_ids) {
+    std::string reason = "mostly inside another object (Eq. 10, 11)";
+    for (const auto& merged : refinement.merged_ids) {
+      if (merged.first == id) reason = "a duplicate, merged into #" + std::to_string(merged.second);
+    }
+    line(id, reason);
+  }
 }
 
 }  // namespace offline_detection

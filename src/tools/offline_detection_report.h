@@ -15,6 +15,8 @@ struct RunStats {
   std::vector<mvod::StageTimes> stage_times;  // keyframes that had detections to process
   std::vector<std::string> stage_frames;      // their names
   std::vector<double> detection_ms;
+  // Per entry of stage_times: its keyframe's detector time (--timings' detection_ms).
+  std::vector<double> stage_detection_ms;
   int keyframes = 0;
   int errors = 0;
   mvod::MapSummary::Counts counts;
@@ -40,6 +42,11 @@ bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& obje
 
 // The objects as a table on stdout, in `frame` (gravity_aligned or world).
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame);
+
+// What the refinement removed, one line per object with its class, box size and the reason
+// (atypical size, mostly inside another, merged duplicate), from the objects before it.
+void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
+                             const mvod::ObjectMapper::RefinementReport& refinement);
 
 // Frames, keyframes, objects, removals, stage medians and counts, on stderr.
 void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,

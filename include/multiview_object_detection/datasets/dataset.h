@@ -20,10 +20,21 @@
 
 namespace mvod {
 
+// The colour camera's files given apart from the dataset folder (which may be read-only): empty
+// paths = the folder's color-intrinsics.txt and depth-to-color.txt. registered: colour and depth
+// are one camera (the folder's colour files are not read).
+struct ColorCameraFiles {
+  std::string color_intrinsics;
+  std::string depth_to_color;
+  bool registered = false;
+  bool empty() const { return color_intrinsics.empty() && depth_to_color.empty() && !registered; }
+};
+
 class SevenScenesDataset {
  public:
   // Lists the frames and reads the intrinsics; fails on a missing folder or camera-intrinsics.txt.
-  static Status open(const std::string& directory, SevenScenesDataset* dataset);
+  static Status open(const std::string& directory, SevenScenesDataset* dataset,
+                     const ColorCameraFiles& camera = {});
 
   size_t size() const { return frame_indices_.size(); }
   const std::vector<int>& frameIndices() const { return frame_indices_; }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "multiview_object_detection/datasets/dataset.h"
 #include "multiview_object_detection/pipeline/types/rgbd_frame.h"
 
 namespace mvod {
@@ -36,7 +37,9 @@ std::string nameFirstFrames(const std::vector<int>& indices, size_t max_named,
 
 // format: "auto" (trajectory.log or depth/ -> SceneNN, camera-intrinsics.txt -> 7-Scenes),
 // "7scenes" or "scenenn". Fails with a message naming the folder or file.
+// camera: the colour camera's files apart from the folder (7-Scenes layout only; an error for
+// SceneNN).
 Status openDatasetSource(const std::string& directory, const std::string& format,
-                         DatasetSource* source);
+                         DatasetSource* source, const ColorCameraFiles& camera = {});
 
 }  // namespace mvod

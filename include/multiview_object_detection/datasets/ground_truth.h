@@ -25,6 +25,9 @@ struct GroundTruthObject {
 Status loadSyntheticGroundTruth(const std::string& path, double spacing_m,
                                 const Eigen::Vector3d& up_W,
                                 std::vector<GroundTruthObject>* objects);
+// The world's up a synthetic ground_truth.json states ("up": [x, y, z], as the redkitchen
+// annotation does); *found false (and *up_W untouched) when it states none.
+Status readGroundTruthUp(const std::string& path, Eigen::Vector3d* up_W, bool* found);
 // A SceneNN sequence: `path` is the <id> folder (with <id>.ply and <id>.xml) or the .ply itself
 // (the .xml next to it). Points: the mesh vertices of each label with an evaluated class; box: the
 // gravity-aligned box of those vertices (the XML obbox is documented as inaccurate). Labels with no

@@ -48,6 +48,9 @@ struct KeyframeReport {
   int with_box = 0;         // survived extraction, filters, LCCP and got a box
   int inserted = 0;
   int fused = 0;
+  // Per detection given (in order): the map object it was fused into or inserted as; -1 when it
+  // was not mapped (under λ, no box). An id the existence evidence removed is still named.
+  std::vector<int> object_ids;
   bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
   // Objects this keyframe's votes showed gone (existence evidence), as they were; removed.
   std::vector<MapObject> removed;

@@ -202,6 +202,41 @@ TEST_F(SevenScenesDatasetTest, TwoCameraDatasetWithGravity) {
   EXPECT_TRUE(identity.depthToColor().isApprox(Eigen::Isometry3d::Identity()));
 }
 
+// The colour camera's files given apart from a (read-only) dataset folder: they win over the
+// folder's; --registered ignores the folder's colour files; a missing file is an error naming it.
+TEST_F(SevenScenesDatasetTest, ColourCameraFilesApartFromTheFolder) {
+  writeDataset();
+  writeText("color-intrinsics.txt", "525 0 8.5\n0 526 5.5\n0 0 1\n");
+  const fs::path elsewhere = dir_ / "calibration";
+  fs::create_directories(elsewhere);
+  std::ofstream(elsewhere / "K.txt") << "530 0 8\n0 530 6\n0 0 1\n";
+  const Eigen::Isometry3d T_C_D(Eigen::Translation3d(0.029, 0.001, 0.0));
+  std::ofstream(elsewhere / "T.txt") << poseText(T_C_D);
+  for (const int index : {0, 5, 10}) {
+    ASSERT_TRUE(cv::imwrite((dir_ / (SevenScenesDataset::frameName(index) + ".color.png")).string(),
+                            testColour(index, 16, 12)));
+  }
+  ColorCameraFiles camera;
+  camera.color_intrinsics = (elsewhere / "K.txt").string();
+  camera.depth_to_color = (elsewhere / "T.txt").string();
+  SevenScenesDataset dataset;
+  ASSERT_TRUE(SevenScenesDataset::open(dir_.string(), &dataset, camera).ok());
+  EXPECT_FALSE(dataset.registered());
+  EXPECT_DOUBLE_EQ(dataset.colorIntrinsics().fx, 530.0);
+  EXPECT_TRUE(dataset.depthToColor().isApprox(T_C_D, 1e-12));
+
+  ColorCameraFiles registered;
+  registered.registered = true;
+  ASSERT_TRUE(SevenScenesDataset::open(dir_.string(), &dataset, registered).ok());
+  EXPECT_TRUE(dataset.registered());
+  EXPECT_DOUBLE_EQ(dataset.colorIntrinsics().fx, dataset.depthIntrinsics().fx);
+
+  camera.color_intrinsics = (elsewhere / "missing.txt").string();
+  const Status missing = SevenScenesDataset::open(dir_.string(), &dataset, camera);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("missing.txt"), std::string::npos) << missing.message();
+}
+
 TEST_F(SevenScenesDatasetTest, OpenErrorsNameTheFile) {
   {
     SevenScenesDataset dataset;

@@ -13,6 +13,7 @@
 #include "multiview_object_detection/datasets/ground_truth_geometry.h"
 #include "multiview_object_detection/datasets/scenenn_annotation.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/evaluation/object_matches.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/ply_reader.h"
 #include "test_files.h"
@@ -179,6 +180,45 @@ TEST(EvaluationMatching, ClassMismatchNeverMatches) {
   EXPECT_EQ(result.classes[1].num_predictions, 1);
   EXPECT_TRUE(std::isnan(result.classes[1].ap_segmentation));  // no couch in the GT
   EXPECT_DOUBLE_EQ(result.map_segmentation, 0.0);              // mean over GT classes only
+}
+
+// Object by object: each annotation takes its best same-class box, one each; what matches nothing
+// (a false chair, a second box on one chair) is listed; an annotation without a box names the
+// nearest one of its class.
+TEST(EvaluationObjectMatches, EachAnnotationTakesItsBestBoxOnce) {
+  std::vector<GroundTruthObject> gt(3);
+  gt[0].class_name = "chair";
+  gt[0].box = makeBox({0.0, 0.0, 0.45}, {0.5, 0.5, 0.9}, 0.0);
+  gt[1].class_name = "chair";
+  gt[1].box = makeBox({2.0, 0.0, 0.45}, {0.5, 0.5, 0.9}, 0.0);
+  gt[2].class_name = "dining table";
+  gt[2].box = makeBox({1.0, 2.0, 0.375}, {1.5, 0.9, 0.75}, 0.0);
+  std::vector<EvaluatedPrediction> predictions(4);
+  predictions[0].id = 7;  // chair 0, 5 cm off
+  predictions[0].class_name = "chair";
+  predictions[0].box = makeBox({0.05, 0.0, 0.45}, {0.5, 0.5, 0.9}, 0.0);
+  predictions[1].id = 8;  // a second, worse box on chair 0
+  predictions[1].class_name = "chair";
+  predictions[1].box = makeBox({0.2, 0.0, 0.45}, {0.5, 0.5, 0.9}, 0.0);
+  predictions[2].id = 9;  // a chair where there is none, 1 m from chair 1
+  predictions[2].class_name = "chair";
+  predictions[2].box = makeBox({2.0, 1.0, 0.45}, {0.5, 0.5, 0.9}, 0.0);
+  predictions[3].id = 10;  // a cup: no annotated class, not listed
+  predictions[3].class_name = "cup";
+  predictions[3].box = makeBox({5.0, 5.0, 0.8}, {0.1, 0.1, 0.1}, 0.0);
+  const ObjectMatches matches = matchObjects(gt, predictions, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(matches.annotated.size(), 3u);
+  EXPECT_EQ(matches.annotated[0].prediction_id, 7);
+  EXPECT_NEAR(matches.annotated[0].box_iou, 0.45 / 0.55, 1e-6);
+  EXPECT_NEAR(matches.annotated[0].centre_distance_m, 0.05, 1e-9);
+  EXPECT_EQ(matches.annotated[1].prediction_id, -1);               // no box overlaps chair 1
+  EXPECT_NEAR(matches.annotated[1].centre_distance_m, 1.0, 1e-9);  // the nearest chair, #9
+  EXPECT_EQ(matches.annotated[2].prediction_id, -1);
+  EXPECT_TRUE(std::isnan(matches.annotated[2].centre_distance_m));  // no table at all
+  EXPECT_EQ(matches.unmatched_prediction_ids, (std::vector<int>{8, 9}));
+  const std::string markdown = objectMatchesToMarkdown(matches, predictions);
+  EXPECT_NE(markdown.find("| 0 | chair | #7 | 0.82 | 0.050 |"), std::string::npos) << markdown;
+  EXPECT_NE(markdown.find("#8 chair, #9 chair"), std::string::npos) << markdown;
 }
 
 TEST(EvaluationClasses, SynonymsMapToCocoNames) {
@@ -478,6 +518,25 @@ TEST_F(EvaluationFiles, LoadsSceneNNSequenceYUp) {
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.message().find("012.ply"), std::string::npos) << missing.message();
   EXPECT_EQ(objects.size(), 2u);
+}
+
+// The redkitchen annotation states its world's up (not z); evaluate scores with it.
+TEST_F(EvaluationFiles, GroundTruthStatesItsUp) {
+  Eigen::Vector3d up(0, 0, 1);
+  bool found = true;
+  ASSERT_TRUE(readGroundTruthUp(write("none.json", R"({"objects": []})"), &up, &found).ok());
+  EXPECT_FALSE(found);
+  ASSERT_TRUE(
+      readGroundTruthUp(write("up.json", R"({"up": [0, -2, 0], "objects": []})"), &up, &found)
+          .ok());
+  EXPECT_TRUE(found);
+  EXPECT_TRUE(up.isApprox(Eigen::Vector3d(0, -1, 0)));
+  EXPECT_FALSE(readGroundTruthUp(write("zero.json", R"({"up": [0, 0, 0]})"), &up, &found).ok());
+  const std::string annotation =
+      std::string(MVOD_SOURCE_DIR) + "/test/data/7scenes_redkitchen_annotation/ground_truth.json";
+  ASSERT_TRUE(readGroundTruthUp(annotation, &up, &found).ok());
+  EXPECT_TRUE(found);
+  EXPECT_NEAR(up.y(), -0.904, 1e-3);
 }
 
 TEST_F(EvaluationFiles, LoadsSyntheticGroundTruth) {

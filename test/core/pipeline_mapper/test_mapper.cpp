@@ -114,9 +114,18 @@ TEST_F(ObjectMapperTest, SecondViewFusesIntoTheSameObject) {
   cv::Mat mask2;
   const RgbdFrame second = renderFrame(
       scene_, test::cameraLookingAlongY(Eigen::Vector3d(0.4, 0.1, 1.0), 25.0), 2, &mask2);
-  ASSERT_TRUE(
-      mapper.processKeyframe(second, {detectionFromMask(mask2, "chair", 0.7f)}, &report).ok());
+  ASSERT_EQ(report.object_ids.size(), 1u);
+  const int first_id = report.object_ids[0];
+  EXPECT_NE(mapper.database().find(first_id), nullptr);
+  // A detection under λ is named as not mapped (-1), the one fused names the first's object.
+  ASSERT_TRUE(mapper
+                  .processKeyframe(second,
+                                   {detectionFromMask(mask2, "chair", 0.1f),
+                                    detectionFromMask(mask2, "chair", 0.7f)},
+                                   &report)
+                  .ok());
   EXPECT_EQ(report.fused, 1);
+  EXPECT_EQ(report.object_ids, (std::vector<int>{-1, first_id}));
   EXPECT_EQ(report.inserted, 0);
   ASSERT_EQ(mapper.database().size(), 1u);
   const MapObject& object = mapper.database().objects().begin()->second;

@@ -1,0 +1,70 @@
+#include "multiview_object_detection/evaluation/keyframe_overlay.h"
+
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "multiview_object_detection/detectors/segmenter_factory.h"
+
+namespace mvod {
+namespace {
+
+// Nearer than this to the colour camera a corner is not projected (behind it, or at its centre).
+constexpr double kMinDepthM = 0.05;
+
+// The box's 12 edges as corner index pairs (corner i has sign bits x: i&1, y: i&2, z: i&4).
+constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
+                               {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+
+void drawBox(const RgbdFrame& frame, const Eigen::Isometry3d& T_C_W, const MapObject& object,
+             cv::Mat* canvas) {
+  const std::vector<Eigen::Vector3d> corners_W = object.box.corners();
+  std::vector<cv::Point2d> pixels(corners_W.size());
+  std::vector<bool> in_front(corners_W.size(), false);
+  const CameraIntrinsics& K = frame.K_color;
+  for (size_t i = 0; i < corners_W.size(); ++i) {
+    const Eigen::Vector3d p_C = T_C_W * corners_W[i];
+    if (!(p_C.z() > kMinDepthM)) continue;
+    in_front[i] = true;
+    pixels[i] = cv::Point2d(K.fx * p_C.x() / p_C.z() + K.cx, K.fy * p_C.y() / p_C.z() + K.cy);
+  }
+  const cv::Scalar colour(255, 255, 255);
+  const cv::Rect image(cv::Point(), canvas->size());
+  bool drawn = false;
+  cv::Point label_at(canvas->cols, canvas->rows);
+  for (const auto& edge : kEdges) {
+    if (!in_front[edge[0]] || !in_front[edge[1]]) continue;
+    cv::Point a(cvRound(pixels[edge[0]].x), cvRound(pixels[edge[0]].y));
+    cv::Point b(cvRound(pixels[edge[1]].x), cvRound(pixels[edge[1]].y));
+    if (!cv::clipLine(image, a, b)) continue;
+    cv::line(*canvas, a, b, colour, 1, cv::LINE_AA);
+    drawn = true;
+    for (const cv::Point& p : {a, b}) {
+      if (p.y < label_at.y || (p.y == label_at.y && p.x < label_at.x)) label_at = p;
+    }
+  }
+  if (!drawn) return;
+  char text[96];
+  std::snprintf(text, sizeof(text), "#%d %s", object.id, object.class_name.c_str());
+  const cv::Point origin(std::min(label_at.x, canvas->cols - 80), std::max(label_at.y - 3, 12));
+  cv::putText(*canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 3);
+  cv::putText(*canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1);
+}
+
+}  // namespace
+
+cv::Mat drawKeyframeOverlay(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
+                            const std::vector<int>& object_ids,
+                            const std::vector<MapObject>& objects) {
+  // Each detection's label names the object it became.
+  std::vector<Detection2D> labelled = detections;
+  for (size_t k = 0; k < labelled.size(); ++k) {
+    const int id = k < object_ids.size() ? object_ids[k] : -1;
+    labelled[k].class_name += id >= 0 ? " -> #" + std::to_string(id) : " (not mapped)";
+  }
+  cv::Mat canvas = drawDetections(frame.color_bgr, labelled);
+  const Eigen::Isometry3d T_C_W = frame.T_C_D * frame.T_W_D.inverse();
+  for (const MapObject& object : objects) drawBox(frame, T_C_W, object, &canvas);
+  return canvas;
+}
+
+}  // namespace mvod
