@@ -88,7 +88,13 @@ class RedkitchenAnnotationTest : public ::testing::Test {
     const std::string annotation =
         std::string(MVOD_SOURCE_DIR) + "/test/data/7scenes_redkitchen_annotation/ground_truth.json";
     ASSERT_TRUE(loadSyntheticGroundTruth(annotation, 0.05, up_, &truth_).ok());
-    ASSERT_EQ(truth_.size(), 6u);
+    // The table and the five chairs come first; the smaller things annotated after them (cups,
+    // books, monitors) are the real-detector benchmark's (benchmark/redkitchen_benchmark).
+    ASSERT_GE(truth_.size(), 6u);
+    truth_.resize(6);
+    for (size_t i = 0; i < truth_.size(); ++i) {
+      ASSERT_EQ(truth_[i].class_name, i == 0 ? "dining table" : "chair") << i;
+    }
     ASSERT_TRUE(
         ClassPriors::loadYaml(std::string(MVOD_SOURCE_DIR) + "/config/class_priors.yaml", &priors_)
             .ok());
