@@ -55,8 +55,9 @@ struct PartScene {
     return best;
   }
 
-  // A 640x480 frame and the 2D box of `object`'s pixels.
-  RgbdFrame render(const Eigen::Isometry3d& T_W_D, const std::string& object, cv::Rect* box) const {
+  // A 640x480 frame and the 2D box of `object`'s pixels (and, when asked, their mask).
+  RgbdFrame render(const Eigen::Isometry3d& T_W_D, const std::string& object, cv::Rect* box,
+                   cv::Mat* object_mask = nullptr) const {
     RgbdFrame frame;
     frame.name = "frame-0";
     frame.K_depth = CameraIntrinsics{520.0, 520.0, 319.5, 239.5, 640, 480};
@@ -77,6 +78,7 @@ struct PartScene {
       }
     }
     *box = cv::boundingRect(mask);
+    if (object_mask != nullptr) *object_mask = mask;
     return frame;
   }
 };

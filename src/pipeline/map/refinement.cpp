@@ -116,6 +116,10 @@ Status IntersectionFilter::Config::isValid() const {
     return Status::Error("duplicate_ratio must be in [0, 1] (got " +
                          std::to_string(duplicate_ratio) + ")");
   }
+  if (!(std::isfinite(flat_top_clearance_m) && flat_top_clearance_m >= 0.0)) {
+    return Status::Error("flat_top_clearance_m must be a finite value >= 0 (got " +
+                         streamNumber(flat_top_clearance_m) + ")");
+  }
   if (!(container_support_ratio == 0.0 ||
         (std::isfinite(container_support_ratio) && container_support_ratio >= 1.0))) {
     return Status::Error("container_support_ratio must be 0 (off) or a finite value >= 1 (got " +
@@ -130,8 +134,21 @@ std::string IntersectionFilter::Config::print() const {
       << "volume_ratio_threshold: " << volume_ratio_threshold << "\n"
       << "duplicate_ratio: " << duplicate_ratio << "\n"
       << "merge_duplicates: " << (merge_duplicates ? "true" : "false") << "\n"
-      << "container_support_ratio: " << container_support_ratio << "\n";
+      << "container_support_ratio: " << container_support_ratio << "\n"
+      << "flat_top_clearance_m: " << flat_top_clearance_m << "\n";
   return out.str();
+}
+
+OrientedBox IntersectionFilter::containmentBox(const MapObject& object, const ClassPriors& priors,
+                                               const Eigen::Vector3d& up) const {
+  OrientedBox box = object.seenBox();
+  const ClassPrior* prior = priors.find(object.class_name);
+  if (prior == nullptr || !prior->flat_top || !(config_.flat_top_clearance_m > 0.0)) return box;
+  // Its vertical axis is up (gravity-aligned boxes); lower the top, keep the bottom.
+  const double lowered = std::min(config_.flat_top_clearance_m, 0.5 * box.size_m.z());
+  box.size_m.z() -= lowered;
+  box.center_m -= 0.5 * lowered * up.normalized();
+  return box;
 }
 
 double IntersectionFilter::support(const MapObject& object) {
@@ -178,12 +195,15 @@ std::vector<int> IntersectionFilter::intersectingObjects(
   if (!config_.enable) return deleted_ids;
 
   std::vector<const MapObject*> objects;  // id order (std::map)
+  // A completed box (amodal completion) reaches into what no view saw: a chair pushed under a
+  // table would lie mostly inside the table's box. Containment is judged on what was seen, and a
+  // flat top's box below its top (flat_top_clearance_m).
+  std::vector<OrientedBox> boxes;
   std::vector<double> volumes;
   for (const auto& entry : database.objects()) {
     objects.push_back(&entry.second);
-    // A completed box (amodal completion) reaches into what no view saw: a chair pushed under a
-    // table would lie mostly inside the table's box. Containment is judged on what was seen.
-    volumes.push_back(usableVolume(entry.second.seenBox()));
+    boxes.push_back(containmentBox(entry.second, database.priors(), up));
+    volumes.push_back(usableVolume(boxes.back()));
   }
   const size_t count = objects.size();
   const double threshold = config_.volume_ratio_threshold;
@@ -202,8 +222,8 @@ std::vector<int> IntersectionFilter::intersectingObjects(
     for (size_t tau = sigma + 1; tau < count; ++tau) {
       if (deleted[tau]) continue;
       Pair pair{tau, 0.0, 0.0};
-      volumeRatios(objects[sigma]->seenBox(), volumes[sigma], objects[tau]->seenBox(), volumes[tau],
-                   up, &pair.eta_sigma, &pair.eta_tau);
+      volumeRatios(boxes[sigma], volumes[sigma], boxes[tau], volumes[tau], up, &pair.eta_sigma,
+                   &pair.eta_tau);
       if (pair.eta_sigma > 0.0 || pair.eta_tau > 0.0) pairs.push_back(pair);
     }
     while (true) {

@@ -123,6 +123,8 @@ struct SegmentSelector::Work {
         y_h(in.gravity.y_h.cast<float>()),
         cos_tilt(std::cos(config.support_max_tilt_deg * kDegToRad)),
         on_floor(in.prior != nullptr && in.prior->on_floor),
+        own_horizontal(in.prior != nullptr && in.prior->hasLargeHorizontalSurface()),
+        lies_flat(in.prior != nullptr && in.prior->liesFlat()),
         bounding(num_segments, 0),
         resting(num_segments, 0),
         kept(num_segments, 0) {}
@@ -167,6 +169,9 @@ struct SegmentSelector::Work {
   const Eigen::Vector3f y_h;
   const double cos_tilt;
   const bool on_floor;
+  const bool own_horizontal;    // a horizontal plane running past is the object's (a table top)
+  const bool lies_flat;         // the object lies flat on a support (a book on a table)
+  std::vector<char> in_mask;    // per point: its colour pixel in the detection's mask
   std::vector<int> core_count;  // per segment: its points in the detection's core
   std::vector<Plane> planes;    // per segment; rms_m infinite: under 20 points, no plane
   std::vector<char> bounding;   // walls, surfaces running past the detection
@@ -174,6 +179,9 @@ struct SegmentSelector::Work {
   PointCloud points_W;          // the points in the world frame
   std::vector<Extent> extents;  // per segment, in the gravity frame
   int seed = -1;
+  // lies_flat: the support's segment the object lies on, when the core holds nothing else; the
+  // object is then that segment's points inside the mask.
+  int flat_support = -1;
   std::vector<char> kept;
   std::size_t kept_points = 0;
 };
@@ -216,11 +224,14 @@ void SegmentSelector::countCorePoints(Work* work) const {
   const PointCloud& points = work->points;
   const cv::Rect& crop = work->masks.crop;
   const cv::Mat& core = work->masks.core;
+  const cv::Mat& mask = work->masks.mask;
   std::vector<char> in_core(points.size(), 0);
+  work->in_mask.assign(points.size(), 0);
   for (size_t i = 0; i < points.size(); ++i) {
     cv::Point pixel;
     if (colorPixelOf(work->frame, points[i].cast<double>(), &pixel) && crop.contains(pixel)) {
       in_core[i] = core.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] != 0;
+      work->in_mask[i] = mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] != 0;
     }
   }
   work->core_count.assign(work->num_segments, 0);
@@ -262,8 +273,11 @@ void SegmentSelector::markBoundingSurfaces(const FrameView& view, Work* work,
     // runs past its box; a floor-standing object's box holds no support of its own, so a
     // horizontal plane that crosses its ring narrowly is a part of it (a clipped seat).
     Eigen::Vector3f n, p;
-    const bool support =
-        !work->on_floor && work->horizontal(s, config_.plane_max_thickness_m, &n, &p);
+    const bool horizontal = work->horizontal(s, config_.plane_max_thickness_m, &n, &p);
+    // A class with large horizontal surfaces of its own: what runs past its mask is its top (a
+    // table's, holed by what stands on it and clipped by the mask's edge), not a bounding surface.
+    if (horizontal && work->own_horizontal) continue;
+    const bool support = !work->on_floor && horizontal;
     work->bounding[s] = on_plane[s] >= config_.min_continuation_points &&
                         (support || on_plane[s] >= ring_points_needed) &&
                         on_plane[s] >= config_.min_continuation * near[s];
@@ -329,6 +343,7 @@ Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
     if (work->excluded(s) || core_count[s] == 0) continue;
     if (seed < 0 || core_count[s] > core_count[seed]) seed = s;
   }
+  if (seed < 0 && work->lies_flat && chooseFlatSupport(work)) return Status::Ok();
   if (seed < 0 && (result.bounding_segments > 0 || result.resting_segments > 0)) {
     // The core holds only bounding surfaces and what rests on them (a chair pushed under a table
     // shows its backrest above the top, at the edge of its box): the largest other segment of
@@ -349,7 +364,22 @@ Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
   return Status::Ok();
 }
 
+bool SegmentSelector::chooseFlatSupport(Work* work) const {
+  // A book on a table is part of the table's plane in depth: the horizontal bounding segment with
+  // the most core points is what it lies on.
+  int support = -1;
+  for (int s = 0; s < work->num_segments; ++s) {
+    Eigen::Vector3f n, p;
+    if (!work->bounding[s] || work->core_count[s] == 0) continue;
+    if (!work->horizontal(s, config_.plane_max_thickness_m, &n, &p)) continue;
+    if (support < 0 || work->core_count[s] > work->core_count[support]) support = s;
+  }
+  work->flat_support = support;
+  return support >= 0;
+}
+
 void SegmentSelector::growFromSeed(Work* work) const {
+  if (work->seed < 0) return;  // lying flat on a support: nothing to grow
   // Adjacency between segments: points within adjacency_distance_m (neighbouring cells).
   const std::vector<std::vector<int>>& segments = work->segments;
   const std::vector<int>& core_count = work->core_count;
@@ -436,6 +466,17 @@ bool SegmentSelector::findFlatTop(const Work& work, Eigen::Vector3f* top_normal_
 
 Status SegmentSelector::collectKept(const Work& work, Result* result) const {
   const std::vector<std::vector<int>>& segments = work.segments;
+  if (work.flat_support >= 0) {
+    // The support's points inside the mask: a thin box on the support.
+    for (const int i : segments[work.flat_support]) {
+      if (work.in_mask[i]) result->indices.push_back(i);
+    }
+    std::sort(result->indices.begin(), result->indices.end());
+    result->flat_on_support = true;
+    result->kept_segments = 1;
+    if (result->indices.empty()) return Status::Error("nothing of the support inside the mask");
+    return Status::Ok();
+  }
   Eigen::Vector3f top_normal_W, top_point_W;
   std::vector<cv::Point2f> top_hull;  // the top's footprint
   const bool has_top = findFlatTop(work, &top_normal_W, &top_point_W, &top_hull);

@@ -11,6 +11,15 @@
 
 namespace mvod {
 
+bool ClassPrior::hasLargeHorizontalSurface() const {
+  if (flat_top) return true;
+  return on_floor && has_size && std::min(size_m.x(), size_m.y()) >= kLargeSurfaceM;
+}
+
+bool ClassPrior::liesFlat() const {
+  return !on_floor && has_size && size_m.minCoeff() <= kFlatEdgeM;
+}
+
 const std::vector<std::string>& cocoClassNames() {
   // The 80 COCO 2017 category names in contiguous order (YOLO / FastestDet output order).
   static const std::vector<std::string> kNames = {"person",        "bicycle",      "car",

@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
 
@@ -57,6 +57,11 @@ class IntersectionFilter {
     // two chairs called a couch in 3 keyframes, the chairs seen in 8 and 19) does not.
     // 0 = Algorithm 1 as published (the inner one goes, whatever the support).
     double container_support_ratio = 2.0;
+    // Flat tops (flat_top classes: a table): what stands or lies on the top rises above it and is
+    // not inside the table (Eq. 11 removed a book lying on the table, its thin box reaching a
+    // centimetre into the table's). The table's box is taken this far below its top when judging
+    // what lies in it. 0 = Algorithm 1 as published.
+    double flat_top_clearance_m = 0.05;
     Status isValid() const;
     std::string print() const;
   };
@@ -71,6 +76,10 @@ class IntersectionFilter {
   // A.
   // What the refinement weighs objects by: observations x probability (Eq. 8's running value).
   static double support(const MapObject& object);
+  // The box an object's containment is judged on: what its views saw, for a flat_top class
+  // without its top flat_top_clearance_m.
+  OrientedBox containmentBox(const MapObject& object, const ClassPriors& priors,
+                             const Eigen::Vector3d& up) const;
 
   Case classify(const OrientedBox& a, const OrientedBox& b, const Eigen::Vector3d& up,
                 double* eta_a = nullptr, double* eta_b = nullptr) const;

@@ -13,6 +13,9 @@
 //     the central part of a box);
 //   - segments that touch the kept ones in 3D join them while the union stays within the class's
 //     prior size, so a chair's back and legs join its seat but the table beside it does not.
+// The class priors' shapes (ClassPrior): a class with large horizontal surfaces of its own (a
+// table) keeps a horizontal plane that runs past its mask, as its top; a class that lies flat (a
+// book on a table), whose core holds only its support's plane, is that plane inside its mask.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -140,6 +143,9 @@ class SegmentSelector {
     int bounding_segments = 0;  // dropped as walls / surfaces running past the detection
     int resting_segments = 0;   // dropped as standing on another surface (on_floor classes)
     int above_top_points = 0;   // dropped above or beside a flat top (flat_top classes)
+    // A class that lies flat (ClassPrior::liesFlat: a book) whose core held only the support's
+    // plane: the object is that plane's points inside the mask, a thin box on the support.
+    bool flat_on_support = false;
   };
 
   SegmentSelector() = default;
@@ -173,6 +179,8 @@ class SegmentSelector {
   // The segment with the most points in the core (or, when the core holds only excluded
   // segments, the largest other one of some size); an error where there is none.
   Status chooseSeed(Work* work, const Result& result) const;
+  // Classes that lie flat: the horizontal bounding surface the core lies on; false if none.
+  bool chooseFlatSupport(Work* work) const;
   // Touching segments join the seed while the union stays plausible in size.
   void growFromSeed(Work* work) const;
   // flat_top classes: the kept set's main horizontal surface, its plane and footprint.

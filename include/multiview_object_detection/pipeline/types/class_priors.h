@@ -35,6 +35,18 @@ struct ClassPrior {
   // much thinner than it (only a backrest seen above a table) is completed to it on the side the
   // views never saw through (AmodalCompletion). 0: never completed.
   double amodal_depth_m = 0.0;
+
+  // Shapes derived from the fields above (no YAML of their own), for the cut:
+  // A class with horizontal surfaces larger than any mask of it covers cleanly (a table's top, a
+  // bed's mattress, a couch's seat): flat_top classes, and floor-standing ones at least
+  // kLargeSurfaceM across both ways. In its detection, a horizontal plane running past the mask is
+  // its own surface, not a bounding one.
+  static constexpr double kLargeSurfaceM = 0.8;
+  bool hasLargeHorizontalSurface() const;
+  // A class that lies flat on a support (a book, a keyboard, a phone): not floor-standing, its
+  // shortest prior edge at most kFlatEdgeM. In depth it is part of the support's plane.
+  static constexpr double kFlatEdgeM = 0.04;
+  bool liesFlat() const;
 };
 
 class ClassPriors {
