@@ -61,10 +61,11 @@ cv::Mat drawKeyframeOverlay(const RgbdFrame& frame, const std::vector<Detection2
     const int id = k < object_ids.size() ? object_ids[k] : -1;
     labelled[k].class_name += id >= 0 ? " -> #" + std::to_string(id) : " (not mapped)";
   }
-  cv::Mat canvas = drawDetections(frame.color_bgr, labelled);
+  // The map's boxes first, the detections (and their labels) over them.
+  cv::Mat canvas = frame.color_bgr.clone();
   const Eigen::Isometry3d T_C_W = frame.T_C_D * frame.T_W_D.inverse();
   for (const MapObject& object : objects) drawBox(frame, T_C_W, object, &canvas);
-  return canvas;
+  return drawDetections(canvas, labelled);
 }
 
 }  // namespace mvod

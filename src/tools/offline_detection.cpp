@@ -144,6 +144,12 @@ int segmenterOptions(const Options& options, mvod::BenchmarkSegmenterOptions* se
   segmenter->score_threshold = std::isfinite(options.score_threshold)
                                    ? static_cast<float>(options.score_threshold)
                                    : mvod::kDetectorDefault;
+  if (std::isfinite(options.nms_threshold)) {
+    segmenter->nms_threshold = static_cast<float>(options.nms_threshold);
+  }
+  if (std::isfinite(options.mask_threshold)) {
+    segmenter->mask_threshold = static_cast<float>(options.mask_threshold);
+  }
   if (!options.yolo_seg_model.empty()) segmenter->yolo_seg_model = options.yolo_seg_model;
   segmenter->backend = options.backend;
   segmenter->max_detections = options.max_detections;

@@ -43,6 +43,8 @@ const char* const kUsage =
     "  --simulated-perfect    simulated: no failures (exact masks and classes, score 0.85)\n"
     "  --score-threshold S    detector score below which detections are not reported (default:\n"
     "                         the detector's own: yolo_seg 0.15, fastestdet and maskrcnn 0.5)\n"
+    "  --nms-threshold T, --mask-threshold T  fastestdet, yolo_seg: NMS IoU; yolo_seg,\n"
+    "                         maskrcnn: mask probability -> binary (default: the detector's)\n"
     "  --yolo-seg-model FILE  yolo_seg: another export of the official layout, e.g.\n"
     "                         yolov5n-seg-320.onnx or yolov5s-seg.onnx (default:\n"
     "                         yolov5n-seg.onnx; a name is looked up in the model folder)\n"
@@ -146,6 +148,12 @@ void addInputOptions(CLI::App* app, Options* options) {
   cli::addNumber(
       app, "--score-threshold", &options->score_threshold, [](double) { return true; },
       "--score-threshold needs a number");
+  cli::addNumber(
+      app, "--nms-threshold", &options->nms_threshold, [](double) { return true; },
+      "--nms-threshold needs a number");
+  cli::addNumber(
+      app, "--mask-threshold", &options->mask_threshold, [](double) { return true; },
+      "--mask-threshold needs a number");
   cli::addInteger(app, "--max-detections", 1, std::numeric_limits<int>::max(),
                   &options->max_detections, "--max-detections needs an integer >= 1");
   cli::addInteger(app, "--threads", 0, 256, &options->threads,

@@ -22,6 +22,8 @@ struct Options {
   std::string detector = "files";
   std::string model_dir;
   double score_threshold = std::numeric_limits<double>::quiet_NaN();  // the detector's own
+  double nms_threshold = std::numeric_limits<double>::quiet_NaN();    // the detector's own
+  double mask_threshold = std::numeric_limits<double>::quiet_NaN();   // the detector's own
   std::string yolo_seg_model;
   std::string backend = "cpu";
   int max_detections = 100;

@@ -315,7 +315,7 @@ TEST_F(YoloSegRealTest, PersonDogAndHorseWithTheirMasks) {
     EXPECT_GT(d->score, 0.5f) << name;
     ASSERT_EQ(d->mask.size(), d->box_px.size()) << name;  // box-sized: inside its box
     const double cover = cv::countNonZero(d->mask) / static_cast<double>(d->box_px.area());
-    EXPECT_GT(cover, 0.5) << name;   // measured: person 0.64, dog 0.59, horse 0.57
+    EXPECT_GT(cover, 0.5) << name;   // measured: person 0.68, dog 0.64, horse 0.61
     EXPECT_LT(cover, 0.95) << name;  // a shape, not the box
     RecordProperty(std::string(name) + "_mask_cover", std::to_string(cover));
   }

@@ -1,0 +1,91 @@
+// The map a real instance segmenter gives of a real room: offline_detection with YOLOv5n-seg (its
+// own thresholds) over every 10th of the 7-Scenes redkitchen's 1000 frames, with the colour camera
+// estimated from the data, scored object by object against the hand-checked annotation
+// (test/data/7scenes_redkitchen_annotation). Skipped without ../shared's frames or the model.
+// benchmark/redkitchen_benchmark gives the same map with the paper's method and the single-frame
+// baseline beside it (docs/benchmarks.md).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "multiview_object_detection/datasets/ground_truth.h"
+#include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/evaluation/object_matches.h"
+#include "shared_data.h"
+#include "test_files.h"
+
+namespace mvod {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSourceDir = MVOD_SOURCE_DIR;
+const std::string kAnnotationDir = kSourceDir + "/test/data/7scenes_redkitchen_annotation";
+
+std::string quoted(const std::string& arg) { return "'" + arg + "'"; }
+
+TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableAndChairs) {
+  const std::string frames = test::sharedPath("data/7scenes_redkitchen/data");
+  const std::string models = test::sharedPath("models");
+  if (frames.empty() || models.empty() || !fs::exists(fs::path(models) / "yolov5n-seg.onnx")) {
+    GTEST_SKIP() << "needs ../shared/data/7scenes_redkitchen/data and "
+                    "../shared/models/yolov5n-seg.onnx (or $MVOD_SHARED_DIR)";
+  }
+  const fs::path work = test::freshTestDir("mvod_redkitchen_yolo");
+  const fs::path objects = work / "objects.json";
+  const std::string command =
+      quoted(MVOD_OFFLINE_DETECTION_BIN) + " --dataset " + quoted(frames) + " --color-intrinsics " +
+      quoted(kAnnotationDir + "/colour_camera/color-intrinsics.txt") + " --depth-to-color " +
+      quoted(kAnnotationDir + "/colour_camera/depth-to-color.txt") +
+      " --detector yolo_seg --model-dir " + quoted(models) + " --every 10 --threads 0 --priors " +
+      quoted(kSourceDir + "/config/class_priors.yaml") + " --output " + quoted(objects.string()) +
+      " --quiet > " + quoted((work / "log.txt").string()) + " 2>&1";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << test::readText(work / "log.txt");
+
+  Eigen::Vector3d up;
+  bool found = false;
+  const std::string annotation = kAnnotationDir + "/ground_truth.json";
+  ASSERT_TRUE(readGroundTruthUp(annotation, &up, &found).ok());
+  ASSERT_TRUE(found);
+  std::vector<GroundTruthObject> truth;
+  ASSERT_TRUE(loadSyntheticGroundTruth(annotation, 0.05, up, &truth).ok());
+  std::vector<EvaluatedPrediction> predictions;
+  ASSERT_TRUE(loadPredictions(objects.string(), "", &predictions, nullptr).ok());
+  const ObjectMatches matches = matchObjects(truth, predictions, up);
+  const std::string table = objectMatchesToMarkdown(matches, predictions);
+
+  // Issue 49's goals, measured on 2026-12-04: the table at IoU 0.87 (goal >= 0.6: met); chairs A,
+  // B and C within 0.05 m, D and E not found (goal 4 of 5: not met; YOLOv5n-seg scores chair D
+  // 0.14-0.18 in 2 of the keyframes that show it and never calls chair E a chair); 2 chairs where
+  // the annotation has none (goal at most 1: not met). The test holds what was met and what was
+  // measured, so that a change that loses any of it fails.
+  ASSERT_EQ(matches.annotated[0].class_name, "dining table");
+  EXPECT_GE(matches.annotated[0].box_iou, 0.6) << table;
+  int chairs_near = 0;
+  for (const AnnotatedObjectMatch& m : matches.annotated) {
+    if (m.class_name == "chair" && m.prediction_id >= 0 && m.centre_distance_m <= 0.10) {
+      ++chairs_near;
+    }
+  }
+  EXPECT_GE(chairs_near, 3) << table;
+  int unmatched_furniture = 0;
+  for (const int id : matches.unmatched_prediction_ids) {
+    for (const EvaluatedPrediction& p : predictions) {
+      if (p.id == id && (p.class_name == "chair" || p.class_name == "dining table")) {
+        ++unmatched_furniture;
+      }
+    }
+  }
+  EXPECT_LE(unmatched_furniture, 2) << table;
+  RecordProperty("per_object", table);
+  if (!HasFailure()) fs::remove_all(work);
+}
+
+}  // namespace
+}  // namespace mvod
