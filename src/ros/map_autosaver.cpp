@@ -28,7 +28,7 @@ Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* obje
   std::vector<MapObject> loaded;
   MapSummary summary;
   std::deque<KeyframeRecord> history;
-  Status status = readFile(path, &text);
+  Status status = readFile(path, &text, kDefaultMaxFileBytes, Links::kRefuse);
   if (status) status = objectsFromJson(text, &loaded, &summary, &history);
   if (status) status = worker->replaceMap(loaded, summary, std::move(history), timeout_s);
   if (status && objects != nullptr) *objects = loaded.size();

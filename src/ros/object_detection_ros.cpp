@@ -1,5 +1,6 @@
 #include "multiview_object_detection/ros/object_detection_ros.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 
 #include <boost/bind/bind.hpp>
@@ -210,7 +211,7 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
     return;
   }
   struct stat info {};
-  if (::stat(path.c_str(), &info) != 0 && errno == ENOENT) {
+  if (::lstat(path.c_str(), &info) != 0 && errno == ENOENT) {
     ROS_INFO("load_map_on_start: no map at %s yet (a first run): starting with an empty map",
              path.c_str());
     return;
@@ -222,9 +223,12 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
     worker_->publishMap(ros::Time::now());
     return;
   }
-  // Kept for a person to look at, and out of the autosave's way.
+  // Kept for a person to look at, and out of the autosave's way. `path` is no link (resolveMapPath
+  // refuses them), and rename() moves a name, never what a link there points to; RENAME_NOREPLACE:
+  // a file already at the new name is not replaced.
   const std::string aside = path + ".unreadable-" + std::to_string(std::time(nullptr));
-  const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
+  const bool moved =
+      ::renameat2(AT_FDCWD, path.c_str(), AT_FDCWD, aside.c_str(), RENAME_NOREPLACE) == 0;
   ROS_ERROR("load_map_on_start: cannot load %s: %s; %s; starting with an empty map", path.c_str(),
             status.message().c_str(),
             moved ? ("the file is kept as " + aside).c_str() : "the file could not be moved aside");

@@ -26,6 +26,7 @@
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "node_process.h"
 #include "test_node_common.h"
 
 namespace mvod_test {
@@ -35,43 +36,6 @@ namespace fs = std::filesystem;
 
 constexpr char kNode[] = "/autosave_node";
 constexpr char kAutosaveName[] = "autosave_node.autosave.json";
-
-std::string nodeBinary() {
-  // Beside this test's binary in the devel space.
-  return (fs::read_symlink("/proc/self/exe").parent_path() / "object_detection_node").string();
-}
-
-// The node process, started with the inputs remapped to the test's topics.
-// `output` (optional): the file the node's stdout and stderr go to.
-pid_t startNode(const std::string& map_directory, const std::string& node = kNode,
-                const std::vector<std::string>& extra = {}, const std::string& output = "") {
-  std::vector<std::string> args = {nodeBinary(),
-                                   "__name:=" + node.substr(1),
-                                   std::string("rgb/image_rect_color:=") + kRgbTopic,
-                                   std::string("depth_registered/image_rect:=") + kDepthTopic,
-                                   std::string("rgb/camera_info:=") + kInfoTopic,
-                                   std::string("pose:=") + kPoseTopic,
-                                   std::string("detections:=") + kDetectionsTopic,
-                                   "_map_directory:=" + map_directory,
-                                   "__log:=" + map_directory + "/../node.log"};
-  args.insert(args.end(), extra.begin(), extra.end());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (!output.empty()) {
-      const int fd = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        ::dup2(fd, 1);
-        ::dup2(fd, 2);
-      }
-    }
-    std::vector<char*> argv;
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
 
 // The objects of a map file; false if it does not load.
 bool loadMapFile(const std::string& path, std::vector<mvod::MapObject>* objects,
@@ -93,17 +57,6 @@ std::vector<std::string> temporariesIn(const std::string& directory) {
   }
   return found;
 }
-
-// SIGKILLs the node when a cycle ends early (a failed ASSERT): a node left running would keep the
-// test run's output pipe open and hold make test up. `pid` -1 once the node has been reaped.
-struct KillOnExit {
-  pid_t pid = -1;
-  ~KillOnExit() {
-    if (pid <= 0) return;
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-  }
-};
 
 // The file's modification time in seconds since the epoch; 0 when it does not exist.
 double modificationTimeS(const std::string& path) {
@@ -151,7 +104,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   double held_mtime_s = 0.0;  // the autosave can only get newer than this
   for (int cycle = 0; cycle <= cycles; ++cycle) {
     SCOPED_TRACE("cycle " + std::to_string(cycle));
-    const pid_t pid = startNode(directory);
+    const pid_t pid = startNode(directory, kNode);
     ASSERT_GT(pid, 0);
     KillOnExit node{pid};
     ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/get_objects", 30000))
