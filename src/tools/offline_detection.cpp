@@ -297,9 +297,14 @@ class KeyframeLoop {
   }
 
   // --corrected-poses: the keyframes so far that have a pose file there take that pose
-  // (before_frame: the frame it happens before; -1 after the last).
+  // (before_frame: the frame it happens before; -1 after the last). A pose file that cannot be read
+  // (malformed, a FIFO, a device, too large) is an error, and the correction is not applied at all:
+  // half a loop closure would bend the map.
   void correctPoses(int before_frame) {
+    const std::string when =
+        before_frame >= 0 ? "before frame " + std::to_string(before_frame) : "after the last frame";
     std::vector<mvod::PoseCorrection> corrections;
+    int unreadable = 0;
     for (const ProcessedKeyframe& keyframe : keyframes_) {
       char name[32];
       std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", keyframe.index);
@@ -310,6 +315,7 @@ class KeyframeLoop {
       const mvod::Status read = mvod::SevenScenesDataset::readPose(path.string(), &T_W_D);
       if (!read) {
         ++stats_.errors;
+        ++unreadable;
         report("error: corrected pose " + path.string() + ": " + read.message(), true);
         continue;
       }
@@ -318,10 +324,14 @@ class KeyframeLoop {
       correction.T_W_C = T_W_D * keyframe.T_C_D.inverse();
       corrections.push_back(correction);
     }
+    if (unreadable > 0) {
+      report("error: corrections " + when + " not applied: " + std::to_string(unreadable) +
+                 " pose file(s) could not be read",
+             true);
+      return;
+    }
     mvod::ObjectMapper::CorrectionReport correction;
     const mvod::Status applied = mapper_.correctPoses(corrections, &correction);
-    const std::string when =
-        before_frame >= 0 ? "before frame " + std::to_string(before_frame) : "after the last frame";
     if (!applied) {
       ++stats_.errors;
       report("error: corrections " + when + ": " + applied.message(), true);
@@ -459,6 +469,12 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
   if (!options.quiet) {
     printRunReport(stats, num_frames, objects.size(), refinement, summary);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
+  }
+  // A frame or file that could not be read was reported and skipped; the run says so in its status
+  // too (a script must not take a partial map for a whole one).
+  if (stats.errors > 0) {
+    std::fprintf(stderr, "offline_detection: %d error(s) above; exit status 1\n", stats.errors);
+    exit_code = kExitFailure;
   }
   return exit_code;
 }
