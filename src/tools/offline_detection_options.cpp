@@ -87,7 +87,9 @@ const char* const kUsage =
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
     "  --help                 this text\n"
     "\n"
-    "exit status: 0 ok, 1 dataset or another input cannot be opened, 2 bad arguments\n";
+    "exit status: 0 ok, 1 dataset or another input cannot be opened, the output cannot be\n"
+    "written, or an error was reported during the run (the map of the rest is written), 2 bad\n"
+    "arguments\n";
 
 // Input, detector and output options.
 void addInputOptions(CLI::App* app, Options* options) {
