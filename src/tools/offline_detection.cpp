@@ -40,6 +40,7 @@ using offline_detection::kExitUsage;
 using offline_detection::Options;
 using offline_detection::parseArguments;
 using offline_detection::printCostGrowth;
+using offline_detection::printHistoryUsage;
 using offline_detection::printRunReport;
 using offline_detection::printTable;
 using offline_detection::RunStats;
@@ -208,6 +209,7 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   if (options.no_amodal) config->database.amodal.enable = false;
   if (options.no_existence) config->database.existence.enable = false;
   if (options.no_history) config->corrections.enable = false;
+  if (options.history_mb > 0.0) config->corrections.max_memory_mb = options.history_mb;
   if (options.every_pixel) config->extractor.near_sampling_leaf_m = 0.0;
   if (std::isfinite(options.existence_remove_below)) {
     config->database.existence.remove_below = options.existence_remove_below;
@@ -468,6 +470,7 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
   }
   if (!options.quiet) {
     printRunReport(stats, num_frames, objects.size(), refinement, summary);
+    printHistoryUsage(mapper->history().usage(), mapper->config().corrections.max_memory_mb);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
   }
   // A frame or file that could not be read was reported and skipped; the run says so in its status

@@ -42,6 +42,9 @@ bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& obje
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame);
 
 // Frames, keyframes, objects, removals, stage medians and counts, on stderr.
+// The keyframe history's size and how far it degraded under its bound.
+void printHistoryUsage(const mvod::KeyframeHistory::Usage& usage, double max_memory_mb);
+
 void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,
                     const mvod::ObjectMapper::RefinementReport& refinement,
                     const mvod::MapSummary& summary);

@@ -26,6 +26,7 @@
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "node_process.h"
 #include "test_node_common.h"
 
@@ -35,23 +36,23 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr char kNode[] = "/autosave_node";
-constexpr char kAutosaveName[] = "autosave_node.autosave.json";
+constexpr char kAutosaveName[] = "autosave_node.autosave.mvmap";
 
 // The objects of a map file; false if it does not load.
 bool loadMapFile(const std::string& path, std::vector<mvod::MapObject>* objects,
                  std::string* error) {
-  std::string text;
   mvod::MapSummary summary;
   std::deque<mvod::KeyframeRecord> history;
-  mvod::Status status = mvod::readFile(path, &text);
-  if (status) status = mvod::objectsFromJson(text, objects, &summary, &history);
+  const mvod::Status status =
+      mvod::loadMap(path, mvod::Links::kRefuse, objects, &summary, &history);
   if (!status) *error = status.message();
   return status.ok();
 }
 
+// Save temporaries in the map directory and the map folders in it.
 std::vector<std::string> temporariesIn(const std::string& directory) {
   std::vector<std::string> found;
-  for (const auto& entry : fs::directory_iterator(directory)) {
+  for (const auto& entry : fs::recursive_directory_iterator(directory)) {
     const std::string name = entry.path().filename().string();
     if (name.find(".save-") != std::string::npos) found.push_back(name);
   }
@@ -75,6 +76,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   const std::string directory = (root / "maps").string();
   fs::create_directories(directory);
   const std::string autosave = directory + "/" + kAutosaveName;
+  const std::string autosave_map = autosave + "/map.json";  // written last by each save
 
   SyntheticStream stream{SyntheticStream::Options()};
   InputPublisher inputs(nh);
@@ -157,9 +159,9 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     // before its first save: the file is then the one the previous node left.
     if (cycle % 2 == 0) {
       int saves_after_change = 0;
-      double last_mtime_s = modificationTimeS(autosave);
+      double last_mtime_s = modificationTimeS(autosave_map);
       const bool held = publishUntil(after(120.0), [&] {
-        const double mtime_s = modificationTimeS(autosave);
+        const double mtime_s = modificationTimeS(autosave_map);
         if (mtime_s <= last_mtime_s) return false;
         last_mtime_s = mtime_s;
         if (mtime_s > change_s) ++saves_after_change;
@@ -182,7 +184,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     std::vector<mvod::MapObject> saved;
     std::string error;
     ASSERT_TRUE(loadMapFile(autosave, &saved, &error)) << error;
-    const double mtime_s = modificationTimeS(autosave);
+    const double mtime_s = modificationTimeS(autosave_map);
     EXPECT_GE(mtime_s, held_mtime_s) << "the autosave went back to an older file";
     objects_before_kill = saved.size();
     std::printf(

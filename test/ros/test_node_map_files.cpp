@@ -13,6 +13,7 @@
 #include "multiview_object_detection/MapFile.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "node_process.h"
 #include "test_node_common.h"
 
@@ -23,8 +24,8 @@ namespace fs = std::filesystem;
 
 constexpr char kDecoyText[] = "a file the node does not own\n";
 
-// A map folder with a decoy file beside it (0640, not a map), a map of one chair in it, and links:
-// link.json -> the decoy, to_other.json -> the map.
+// A map folder with a decoy file beside it (0640, not a map), a map of one chair in it
+// (other.mvmap), and links: link.mvmap and link.json -> the decoy, to_other.mvmap -> the map.
 class NodeMapLinksTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -43,12 +44,17 @@ class NodeMapLinksTest : public ::testing::Test {
     chair.box.center_m = Eigen::Vector3d(1.0, 0.0, 0.45);
     chair.box.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
     chair.box.rotation.setIdentity();
-    other_text_ = mvod::objectsToJson({chair}, mvod::MapSummary(), false);
-    ASSERT_TRUE(mvod::writeFileAtomic((root_ / "maps" / "other.json").string(), other_text_).ok());
+    mvod::MapFolderWriter writer;
+    ASSERT_TRUE(
+        writer.write((root_ / "maps" / "other.mvmap").string(), {chair}, mvod::MapSummary(), {})
+            .ok());
+    ASSERT_TRUE(mvod::readFile(otherMap(), &other_text_).ok());
+    fs::create_symlink(decoy_, root_ / "maps" / "link.mvmap");
     fs::create_symlink(decoy_, root_ / "maps" / "link.json");
-    fs::create_symlink(root_ / "maps" / "other.json", root_ / "maps" / "to_other.json");
+    fs::create_symlink(root_ / "maps" / "other.mvmap", root_ / "maps" / "to_other.mvmap");
   }
   void TearDown() override { fs::remove_all(root_); }
+  std::string otherMap() const { return (root_ / "maps" / "other.mvmap" / "map.json").string(); }
 
   pid_t start(const std::string& node, const std::vector<std::string>& parameters,
               const std::string& output) {
@@ -70,10 +76,11 @@ class NodeMapLinksTest : public ::testing::Test {
     struct stat info {};
     ASSERT_EQ(::lstat(decoy_.c_str(), &info), 0);
     EXPECT_EQ(info.st_mode & 07777, 0640u) << "the decoy's mode changed";
-    ASSERT_TRUE(mvod::readFile((root_ / "maps" / "other.json").string(), &text).ok());
+    ASSERT_TRUE(mvod::readFile(otherMap(), &text).ok());
     EXPECT_EQ(text, other_text_) << "the other map was written over";
-    EXPECT_TRUE(fs::is_symlink(root_ / "maps" / "link.json"));
-    EXPECT_TRUE(fs::is_symlink(root_ / "maps" / "to_other.json"));
+    for (const std::string link : {"link.mvmap", "link.json", "to_other.mvmap"}) {
+      EXPECT_TRUE(fs::is_symlink(root_ / "maps" / link)) << link;
+    }
     for (const fs::path& folder : {root_, root_ / "maps"}) {
       for (const auto& entry : fs::directory_iterator(folder)) {
         const std::string name = entry.path().filename().string();
@@ -90,8 +97,8 @@ class NodeMapLinksTest : public ::testing::Test {
 TEST_F(NodeMapLinksTest, AnAutosavePathThatIsALinkStopsTheStartAndTouchesNothing) {
   // Out of map_directory with allow_any_map_path, and to another map inside it without.
   const std::vector<std::vector<std::string>> cases = {
-      {"_allow_any_map_path:=true", "_autosave_path:=link.json", "_load_map_on_start:=link.json"},
-      {"_autosave_path:=to_other.json", "_load_map_on_start:=to_other.json"}};
+      {"_allow_any_map_path:=true", "_autosave_path:=link.mvmap", "_load_map_on_start:=link.json"},
+      {"_autosave_path:=to_other", "_load_map_on_start:=to_other.mvmap"}};
   for (size_t i = 0; i < cases.size(); ++i) {
     SCOPED_TRACE("case " + std::to_string(i));
     std::vector<std::string> parameters = cases[i];
@@ -124,7 +131,7 @@ TEST_F(NodeMapLinksTest, LoadOnStartSaveAndLoadRefuseLinksAndTheRestWorks) {
     EXPECT_TRUE(ros::service::call(node + "/" + service, srv)) << service;
     return srv.response;
   };
-  for (const std::string link : {"link.json", "to_other.json"}) {
+  for (const std::string link : {"link.json", "link.mvmap", "to_other", "to_other.mvmap"}) {
     for (const std::string service : {"save_map", "load_map"}) {
       SCOPED_TRACE(service + " " + link);
       const multiview_object_detection::MapFile::Response refused = call(service, link);
@@ -134,10 +141,10 @@ TEST_F(NodeMapLinksTest, LoadOnStartSaveAndLoadRefuseLinksAndTheRestWorks) {
   }
   expectUntouched();
   // The map itself, by its own path: loaded, then saved under a new name.
-  EXPECT_TRUE(call("load_map", "other.json").success);
+  EXPECT_TRUE(call("load_map", "other").success);
   EXPECT_EQ(getObjects(node).objects.size(), 1u);
   EXPECT_TRUE(call("save_map", "own.json").success);
-  EXPECT_TRUE(fs::is_regular_file(root_ / "maps" / "own.json"));
+  EXPECT_TRUE(fs::is_regular_file(root_ / "maps" / "own.mvmap" / "map.json"));
   ::kill(pid, SIGINT);
   int status = 0;
   ::waitpid(pid, &status, 0);
