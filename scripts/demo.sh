@@ -10,7 +10,7 @@
 # node (models in $MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models: scripts/download_models.sh),
 # without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames.
 #   usage: scripts/demo.sh WORKSPACE [DATASET]
-# Output: build/demo/ (objects.json, accuracy.md/.csv, map.png, rviz.png, roslaunch.log).
+# Output: build/demo/ (map.mvmap, accuracy.md/.csv, map.png, rviz.png, roslaunch.log).
 set -euo pipefail
 
 # The synthetic scene: "scenenn:ROOM" (SceneNN layout, y-up, simulated detector with its failures; ROOM =
@@ -129,15 +129,15 @@ if [[ -n "$gravity" ]]; then replay+=(--gravity-down "$gravity"); else replay+=(
 echo
 if [[ -n "$ground_truth" ]]; then
   echo "== 4/4 accuracy against the ground truth (evaluate; see README, Evaluation)"
-  "$bin/evaluate" --objects "$out/objects.json" --ground-truth "$ground_truth" \
+  "$bin/evaluate" --objects "$out/map.mvmap" --ground-truth "$ground_truth" \
     --markdown "$out/accuracy.md" --csv "$out/accuracy.csv" --plot "$out/map.png"
 else
   echo "== 4/4 no ground truth for $dataset_name: no accuracy table; the bird's-eye map of the objects"
-  "$bin/evaluate" --objects "$out/objects.json" --plot "$out/map.png"
+  "$bin/evaluate" --objects "$out/map.mvmap" --plot "$out/map.png"
 fi
 echo
 echo "demo done in $(($(date +%s) - start)) s. In $out:"
-for f in objects.json accuracy.md map.png rviz.png roslaunch.log demo.bag; do
+for f in map.mvmap accuracy.md map.png rviz.png roslaunch.log demo.bag; do
   if [[ -e "$out/$f" ]]; then echo "  $f"; fi
 done
 if [[ -n "$gravity" ]]; then gravity_arg="gravity_down:=\"$gravity\""; else gravity_arg="gravity_source:=estimate"; fi

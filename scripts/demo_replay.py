@@ -10,7 +10,7 @@ Starts roslaunch (its own master on a free port, so it never meets another maste
 virtual X display (Xvfb), rviz. Plays the bag with its clock (BagPlayer: like `rosbag play --clock`, but never
 more than a few frames ahead of what the node received, so a loaded machine slows the replay down instead of
 losing frames), waits on /diagnostics until every selected keyframe is processed, calls ~refine and ~save_map
-(DIR/objects.json, with clouds), prints ~get_objects as a table, shows the map in rviz gravity-up and saves a
+(DIR/map.mvmap, the map folder), prints ~get_objects as a table, shows the map in rviz gravity-up and saves a
 screenshot (DIR/rviz.png). Everything it started is stopped on the way out. Exit status: 0 ok; 1 the node
 failed, found nothing, or did not take every frame of the bag (lost, rejected, dropped or failed: the message
 says which); 2 bad arguments.
@@ -398,8 +398,8 @@ class Demo:
         from multiview_object_detection.srv import GetObjects, MapFile
         reply = self.call('refine', Trigger)
         log('~refine: ' + reply.message)
-        objects_path = os.path.join(a.output_dir, 'objects.json')
-        reply = self.call('save_map', MapFile, os.path.abspath(objects_path))
+        map_path = os.path.join(a.output_dir, 'map.mvmap')  # the node's map folder
+        reply = self.call('save_map', MapFile, os.path.abspath(map_path))
         if not reply.success:
             raise DemoError('~save_map: ' + reply.message)
         log('~save_map: ' + reply.message)
@@ -476,7 +476,7 @@ def print_objects(objects):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--bag', required=True)
-    parser.add_argument('--output-dir', required=True, help='objects.json, rviz.png, roslaunch.log')
+    parser.add_argument('--output-dir', required=True, help='map.mvmap, rviz.png, roslaunch.log')
     parser.add_argument('--detector', default='topic', help='topic (detections in the bag), fastestdet, maskrcnn')
     parser.add_argument('--model-dir', default='')
     parser.add_argument('--gravity-down', default='[0, 0, -1]', help='YAML list, world frame, pointing down')

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
@@ -29,10 +28,10 @@ constexpr double kMaxGravityComponent = 1e6;
 // Reads exactly `count` whitespace-separated finite numbers; anything else is an error naming the
 // file.
 Status readNumbers(const std::string& path, size_t count, std::vector<double>* values) {
-  std::ifstream in(path);
-  if (!in) {
-    return Status::Error(path + ": " + (isFile(path) ? "cannot be read" : "no such file"));
-  }
+  std::string text;
+  const Status read = dataset_files::readTextFile(path, dataset_files::kMaxNumberFileBytes, &text);
+  if (!read) return read;
+  std::istringstream in(text);
   values->clear();
   std::string token;
   while (in >> token) {

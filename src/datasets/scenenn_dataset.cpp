@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
@@ -116,8 +115,10 @@ std::vector<std::string> missingSceneNNDepthWarnings(const fs::path& dir,
 std::string SceneNNDataset::frameName(int index) { return "image" + fileNumber(index); }
 
 Status SceneNNDataset::readIntrinsics(const std::string& path, CameraIntrinsics* K) {
-  std::ifstream in(path);
-  if (!in) return Status::Error(path + ": " + (isFile(path) ? "cannot be read" : "no such file"));
+  std::string text;
+  const Status read = dataset_files::readTextFile(path, dataset_files::kMaxNumberFileBytes, &text);
+  if (!read) return read;
+  std::istringstream in(text);
   CameraIntrinsics result;
   result.fx = kDefaultFocalPx;
   result.fy = kDefaultFocalPx;
@@ -158,8 +159,10 @@ Status SceneNNDataset::readIntrinsics(const std::string& path, CameraIntrinsics*
 
 Status SceneNNDataset::readTrajectory(const std::string& path,
                                       std::map<int, Eigen::Isometry3d>* T_W_C_by_index) {
-  std::ifstream in(path);
-  if (!in) return Status::Error(path + ": " + (isFile(path) ? "cannot be read" : "no such file"));
+  std::string text;
+  const Status read = dataset_files::readTextFile(path, dataset_files::kMaxListFileBytes, &text);
+  if (!read) return read;
+  std::istringstream in(text);
   std::map<int, Eigen::Isometry3d> result;
   std::string line;
   int line_number = 0;
@@ -228,8 +231,10 @@ Status SceneNNDataset::readTrajectory(const std::string& path,
 
 Status SceneNNDataset::readTimestamps(const std::string& path,
                                       std::map<int, double>* stamp_s_by_frame) {
-  std::ifstream in(path);
-  if (!in) return Status::Error(path + ": " + (isFile(path) ? "cannot be read" : "no such file"));
+  std::string text;
+  const Status read = dataset_files::readTextFile(path, dataset_files::kMaxListFileBytes, &text);
+  if (!read) return read;
+  std::istringstream in(text);
   std::map<int, double> result;
   std::string line;
   int line_number = 0;

@@ -7,10 +7,12 @@
 #include <fstream>
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "detector_common.h"
 #include "multiview_object_detection/detectors/onnx_input_shape.h"
 #include "multiview_object_detection/detectors/yolo_seg_decoder.h"
+#include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
 namespace mvod {
@@ -165,8 +167,12 @@ Status networkClassCount(DnnInstanceSegmenter::Model model, int input_px, cv::dn
 }  // namespace
 
 Status readLabelFile(const std::string& path, std::vector<std::string>* labels) {
-  std::ifstream in(path);
-  if (!in) return Status::Error("cannot read label file " + path);
+  // A FIFO or device at the path is refused at once; a label file is a few kB (80 names).
+  constexpr size_t kMaxLabelFileBytes = size_t{1} << 20;
+  std::string text;
+  const Status read = readFile(path, &text, kMaxLabelFileBytes);
+  if (!read) return Status::Error("label file: " + read.message());
+  std::istringstream in(text);
   std::vector<std::string> names;
   std::string line;
   while (std::getline(in, line)) {

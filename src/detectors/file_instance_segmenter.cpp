@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/image_io.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 
@@ -222,26 +223,10 @@ Status FileInstanceSegmenter::detect(const cv::Mat& image_bgr, const std::string
   const fs::file_status status = fs::status(path, error);
   if (status.type() == fs::file_type::not_found) return Status::Ok();  // no detections here
   if (error) return Status::Error(path.string() + ": cannot be read: " + error.message());
-  // A folder or a FIFO is an error, not an exception or a blocked read.
-  if (status.type() != fs::file_type::regular) {
-    return Status::Error(path.string() +
-                         ": not a regular file (expected a JSON array of "
-                         "detections)");
-  }
-  const std::uintmax_t size_bytes = fs::file_size(path, error);
-  if (error) return Status::Error(path.string() + ": cannot be read: " + error.message());
-  if (size_bytes > static_cast<std::uintmax_t>(kMaxDetectionFileBytes)) {
-    return Status::Error(path.string() + ": " + std::to_string(size_bytes) +
-                         " bytes, more than the limit of " +
-                         std::to_string(kMaxDetectionFileBytes) + " bytes for a detection file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path.string() + ": cannot be read");
-  std::string text(static_cast<size_t>(size_bytes), '\0');
-  in.read(&text[0], static_cast<std::streamsize>(text.size()));
-  if (in.bad() || static_cast<size_t>(in.gcount()) != text.size()) {
-    return Status::Error(path.string() + ": cannot be read");
-  }
+  // A folder or a FIFO is an error, not an exception or a blocked read; so is a larger file.
+  std::string text;
+  const Status read = readFile(path.string(), &text, static_cast<size_t>(kMaxDetectionFileBytes));
+  if (!read) return Status::Error(read.message() + " (expected a JSON array of detections)");
   return parseDetections(text, path.string(), directory_, image_bgr.size(), config_, detections,
                          warnings);
 }

@@ -15,6 +15,7 @@
 #include "multiview_object_detection/datasets/class_names.h"
 #include "multiview_object_detection/datasets/ground_truth_geometry.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/io/ply_reader.h"
 #include "multiview_object_detection/pipeline/stages/box_estimator.h"
 
@@ -332,13 +333,14 @@ std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObj
 Status loadPredictions(const std::string& objects_json_path, const std::string& clouds_dir,
                        std::vector<EvaluatedPrediction>* predictions, int* num_with_clouds) {
   if (predictions == nullptr) return Status::Error(objects_json_path + ": no output");
-  std::string text;
-  Status status = readFile(objects_json_path, &text);
-  if (!status) return status;
+  // objects.json of offline_detection, or a map the node saved (a .mvmap folder).
   std::vector<MapObject> objects;
   MapSummary summary;
-  if (!(status = objectsFromJson(text, &objects, &summary))) {
-    return Status::Error(objects_json_path + ": " + status.message());
+  Status status = loadMap(objects_json_path, Links::kFollow, &objects, &summary, nullptr);
+  if (!status) {
+    return Status::Error(status.message().rfind(objects_json_path, 0) == 0
+                             ? status.message()
+                             : objects_json_path + ": " + status.message());
   }
   std::vector<EvaluatedPrediction> parsed;
   int with_clouds = 0;
@@ -350,8 +352,7 @@ Status loadPredictions(const std::string& objects_json_path, const std::string& 
       // LCCP segment, scored) and ..._fused.ply (the fused cloud, the fallback).
       for (const char* suffix : {"_segment.ply", "_fused.ply"}) {
         const fs::path cloud_path =
-            fs::path(clouds_dir) /
-            (objectCloudFileStem(object.id, object.class_name) + suffix);
+            fs::path(clouds_dir) / (objectCloudFileStem(object.id, object.class_name) + suffix);
         std::error_code error;
         if (!fs::is_regular_file(cloud_path, error)) continue;
         if (!(status = readPlyVertices(cloud_path.string(), &prediction.points_W, nullptr))) {

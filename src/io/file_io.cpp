@@ -22,6 +22,12 @@ namespace {
 // another saver's file in progress or a user's file.
 std::string temporaryPrefix(const std::string& name) { return "." + name + ".save-"; }
 
+// `path`, known to be a link, for a message.
+std::string linkText(const std::string& path) {
+  const std::string described = describeLink(path);
+  return described.empty() ? "a symbolic link" : described;
+}
+
 bool processAlive(long pid) {
   if (pid <= 0 || pid > INT32_MAX) return false;
   return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
@@ -61,8 +67,14 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash == 0 ? 1 : slash);
   const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
   if (name.empty()) return Status::Error("cannot write " + path + ": no file name");
+  // lstat: a link at `path` is reported as one, never followed (its target is not ours to replace).
   struct stat existing {};
-  const bool replacing = ::stat(path.c_str(), &existing) == 0;
+  const bool replacing = ::lstat(path.c_str(), &existing) == 0;
+  if (replacing && S_ISLNK(existing.st_mode)) {
+    return Status::Error("cannot write " + path + ": it is " + linkText(path) +
+                         "; no file is written through a link, nor a link replaced: give the "
+                         "path of the file itself");
+  }
   if (replacing && !S_ISREG(existing.st_mode)) {
     return Status::Error("cannot write " + path + ": it exists and is not a regular file");
   }
@@ -93,7 +105,10 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
     written += static_cast<size_t>(n);
   }
   // mkstemp creates 0600: a replaced file keeps its mode, a new one gets the usual permissions.
+  // The owner first (where allowed: root, or the same owner), as a change of owner clears the
+  // set-id bits; a failure leaves the file the saver's, as any new file is.
   if (replacing) {
+    if (::fchown(fd, existing.st_uid, existing.st_gid) != 0) errno = 0;
     ::fchmod(fd, existing.st_mode & 07777);
   } else {
     const mode_t mask = ::umask(0);
@@ -121,9 +136,21 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
   return Status::Ok();
 }
 
-Status readFile(const std::string& path, std::string* content, size_t max_bytes) {
+std::string describeLink(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path target = std::filesystem::read_symlink(path, error);
+  if (error) return "";
+  return "a symbolic link to " + target.string();
+}
+
+Status readFile(const std::string& path, std::string* content, size_t max_bytes, Links links) {
   // O_NONBLOCK: opening a FIFO must not wait for a writer; only regular files are read.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  const int fd = ::open(
+      path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | (links == Links::kRefuse ? O_NOFOLLOW : 0));
+  if (fd < 0 && errno == ELOOP && links == Links::kRefuse) {
+    return Status::Error("cannot read " + path + ": it is " + linkText(path) +
+                         "; read by its own path only, never through a link");
+  }
   if (fd < 0) return Status::Error("cannot open " + path + ": " + std::strerror(errno));
   struct stat info {};
   if (::fstat(fd, &info) != 0) {

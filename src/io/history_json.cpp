@@ -53,9 +53,17 @@ bool fromBase64(const std::string& text, std::vector<std::uint8_t>* bytes) {
   return true;
 }
 
+// An array's bytes: a base64 string (blobs null), or appended to *blobs as [offset, size].
+json putBytes(const void* data, std::size_t bytes, std::string* blobs) {
+  if (blobs == nullptr) return toBase64(data, bytes);
+  const std::size_t offset = blobs->size();
+  blobs->append(static_cast<const char*>(data), bytes);
+  return json::array({offset, bytes});
+}
+
 template <typename T>
-std::string arrayToBase64(const std::vector<T>& values) {
-  return toBase64(values.data(), values.size() * sizeof(T));
+json putArray(const std::vector<T>& values, std::string* blobs) {
+  return putBytes(values.data(), values.size() * sizeof(T), blobs);
 }
 
 json isometryToJson(const Eigen::Isometry3d& T) {
@@ -66,23 +74,24 @@ json isometryToJson(const Eigen::Isometry3d& T) {
   return rows;
 }
 
-json depthToJson(const cv::Mat& depth) {
+json depthToJson(const cv::Mat& depth, std::string* blobs) {
   if (depth.empty()) return nullptr;
   json out{{"width", depth.cols}, {"height", depth.rows}};
   if (depth.type() == CV_16UC1) {
     std::vector<std::uint8_t> png;
     cv::imencode(".png", depth, png, {cv::IMWRITE_PNG_COMPRESSION, 1});
     out["encoding"] = "png16";
-    out["data"] = arrayToBase64(png);
+    out["data"] = putArray(png, blobs);
   } else {
     const cv::Mat continuous = depth.isContinuous() ? depth : depth.clone();
     out["encoding"] = "float32";
-    out["data"] = toBase64(continuous.data, continuous.total() * sizeof(float));
+    out["data"] = putBytes(continuous.data, continuous.total() * sizeof(float), blobs);
   }
   return out;
 }
 
-void encodeCut(const RecordedCut& recorded, EncodingCache::Cut* out) {
+json viewToJson(const RecordedView& view, std::string* blobs) {
+  const RecordedCut& recorded = *view.cut;
   std::vector<float> cut;
   cut.reserve(recorded.cut_W.size() * 3);
   for (const Eigen::Vector3f& p : recorded.cut_W) cut.insert(cut.end(), {p.x(), p.y(), p.z()});
@@ -90,34 +99,6 @@ void encodeCut(const RecordedCut& recorded, EncodingCache::Cut* out) {
   normals.reserve(recorded.normals_W.size() * 3);
   for (const Eigen::Vector3f& n : recorded.normals_W) {
     normals.insert(normals.end(), {n.x(), n.y(), n.z()});
-  }
-  out->cut_points = arrayToBase64(cut);
-  out->normals = arrayToBase64(normals);
-  out->outside = arrayToBase64(recorded.outside_keys);
-}
-
-json cachedDepth(const cv::Mat& depth, EncodingCache* cache) {
-  if (cache == nullptr || depth.empty()) return depthToJson(depth);
-  EncodingCache::Depth& entry = cache->depths[depth.data];
-  if (entry.depth.empty()) {
-    entry.depth = depth;
-    entry.encoded = depthToJson(depth);
-  }
-  entry.used = true;
-  return entry.encoded;
-}
-
-json viewToJson(const RecordedView& view, EncodingCache* cache) {
-  const RecordedCut& recorded = *view.cut;
-  EncodingCache::Cut local;
-  EncodingCache::Cut* encoded = &local;
-  if (cache != nullptr) {
-    encoded = &cache->cuts[view.cut.get()];
-    encoded->used = true;
-  }
-  if (!encoded->cut) {
-    encodeCut(recorded, encoded);
-    if (cache != nullptr) encoded->cut = view.cut;
   }
   json rotation = json::array();
   for (int r = 0; r < 3; ++r) {
@@ -133,36 +114,13 @@ json viewToJson(const RecordedView& view, EncodingCache* cache) {
               {"rotation", rotation},
               {"yaw", view.yaw_rad},
               {"voxel_size_m", recorded.voxel_size_m},
-              {"cut", encoded->cut_points},
-              {"normals", encoded->normals},
-              {"outside", encoded->outside}};
+              {"cut", putArray(cut, blobs)},
+              {"normals", putArray(normals, blobs)},
+              {"outside", putArray(recorded.outside_keys, blobs)}};
 }
 
 // ---------------------------------------------------------------------------------------------
 // Reading
-
-Status readIsometry(const json& parent, const std::string& path, const char* key,
-                    Eigen::Isometry3d* T) {
-  const json* value = nullptr;
-  Status status = json_fields::member(parent, path, key, &value);
-  if (!status) return status;
-  const std::string where = path + key;
-  if (!value->is_array() || value->size() != 3) return fieldError(where, "expected 3 rows of 4");
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    const json& row = (*value)[r];
-    if (!row.is_array() || row.size() != 4) return fieldError(where, "expected 3 rows of 4");
-    for (int c = 0; c < 4; ++c) {
-      if (!row[c].is_number()) return fieldError(where, "expected numbers");
-      pose(r, c) = row[c].get<double>();
-    }
-  }
-  if (!isValidPose(pose, 1e-3) || pose.translation().cwiseAbs().maxCoeff() > kMapCoordinateLimitM) {
-    return fieldError(where, "not a rigid transform within the map's range");
-  }
-  *T = pose;
-  return Status::Ok();
-}
 
 Status readString(const json& parent, const std::string& path, const char* key, std::string* out) {
   const json* value = nullptr;
@@ -173,23 +131,40 @@ Status readString(const json& parent, const std::string& path, const char* key, 
   return Status::Ok();
 }
 
+// An array's bytes: a base64 string, or [offset, size] into `blobs`.
 Status readBytes(const json& parent, const std::string& path, const char* key,
-                 std::size_t element_bytes, std::vector<std::uint8_t>* bytes) {
-  std::string text;
-  Status status = readString(parent, path, key, &text);
+                 std::size_t element_bytes, const std::string* blobs,
+                 std::vector<std::uint8_t>* bytes) {
+  const json* value = nullptr;
+  Status status = json_fields::member(parent, path, key, &value);
   if (!status) return status;
-  if (!fromBase64(text, bytes) || bytes->size() % element_bytes != 0) {
-    return fieldError(path + key,
-                      "expected base64 of " + std::to_string(element_bytes) + "-byte elements");
+  const std::string what = "expected " + std::string(blobs != nullptr ? "[offset, size] or " : "") +
+                           "base64 of " + std::to_string(element_bytes) + "-byte elements";
+  if (value->is_string()) {
+    if (!fromBase64(value->get_ref<const std::string&>(), bytes)) {
+      return fieldError(path + key, what);
+    }
+  } else if (blobs != nullptr && value->is_array() && value->size() == 2 &&
+             (*value)[0].is_number_unsigned() && (*value)[1].is_number_unsigned()) {
+    const std::uint64_t offset = (*value)[0].get<std::uint64_t>();
+    const std::uint64_t size = (*value)[1].get<std::uint64_t>();
+    if (offset > blobs->size() || size > blobs->size() - offset) {
+      return fieldError(path + key, "[offset, size] beyond the file's data");
+    }
+    bytes->assign(blobs->begin() + static_cast<std::ptrdiff_t>(offset),
+                  blobs->begin() + static_cast<std::ptrdiff_t>(offset + size));
+  } else {
+    return fieldError(path + key, what);
   }
+  if (bytes->size() % element_bytes != 0) return fieldError(path + key, what);
   return Status::Ok();
 }
 
 // Triples of float32: points (finite, within the map's range) or normals (unit or NaN).
 Status readTriples(const json& parent, const std::string& path, const char* key, bool normals,
-                   std::vector<Eigen::Vector3f>* out) {
+                   const std::string* blobs, std::vector<Eigen::Vector3f>* out) {
   std::vector<std::uint8_t> bytes;
-  Status status = readBytes(parent, path, key, 3 * sizeof(float), &bytes);
+  Status status = readBytes(parent, path, key, 3 * sizeof(float), blobs, &bytes);
   if (!status) return status;
   out->resize(bytes.size() / (3 * sizeof(float)));
   std::memcpy(out->data(), bytes.data(), bytes.size());
@@ -204,7 +179,8 @@ Status readTriples(const json& parent, const std::string& path, const char* key,
   return Status::Ok();
 }
 
-Status readDepth(const json& value, const std::string& path, cv::Mat* depth) {
+Status readDepth(const json& value, const std::string& path, const std::string* blobs,
+                 cv::Mat* depth) {
   if (value.is_null()) return Status::Ok();  // given up (max_keyframes_with_depth)
   int width = 0;
   int height = 0;
@@ -219,7 +195,7 @@ Status readDepth(const json& value, const std::string& path, cv::Mat* depth) {
   if (int64_t{width} * height > kMaxDepthPixels) return fieldError(path, "too large");
   std::vector<std::uint8_t> bytes;
   if (encoding == "png16") {
-    if (!(status = readBytes(value, path + ".", "data", 1, &bytes))) return status;
+    if (!(status = readBytes(value, path + ".", "data", 1, blobs, &bytes))) return status;
     cv::Mat decoded;
     status = decodeImageChecked(bytes, path, cv::IMREAD_UNCHANGED, cv::Size(width, height),
                                 kMaxDepthPixels, &decoded);
@@ -229,7 +205,9 @@ Status readDepth(const json& value, const std::string& path, cv::Mat* depth) {
     return Status::Ok();
   }
   if (encoding != "float32") return fieldError(path + ".encoding", "png16 or float32");
-  if (!(status = readBytes(value, path + ".", "data", sizeof(float), &bytes))) return status;
+  if (!(status = readBytes(value, path + ".", "data", sizeof(float), blobs, &bytes))) {
+    return status;
+  }
   if (bytes.size() != static_cast<std::size_t>(width) * height * sizeof(float)) {
     return fieldError(path + ".data", "does not hold width x height floats");
   }
@@ -239,7 +217,8 @@ Status readDepth(const json& value, const std::string& path, cv::Mat* depth) {
   return Status::Ok();
 }
 
-Status readView(const json& value, const std::string& path, RecordedView* view) {
+Status readView(const json& value, const std::string& path, const std::string* blobs,
+                RecordedView* view) {
   if (!value.is_object()) return fieldError(path, "expected an object");
   auto cut = std::make_shared<RecordedCut>();
   const std::string p = path + ".";
@@ -271,15 +250,17 @@ Status readView(const json& value, const std::string& path, RecordedView* view) 
   }
   if (!isValidPose(R, 1e-3)) return fieldError(p + "rotation", "not a rotation");
   view->box.rotation = R.linear();
-  if (!(status = readTriples(value, p, "cut", false, &cut->cut_W)) ||
-      !(status = readTriples(value, p, "normals", true, &cut->normals_W))) {
+  if (!(status = readTriples(value, p, "cut", false, blobs, &cut->cut_W)) ||
+      !(status = readTriples(value, p, "normals", true, blobs, &cut->normals_W))) {
     return status;
   }
   if (!cut->normals_W.empty() && cut->normals_W.size() != cut->cut_W.size()) {
     return fieldError(p + "normals", "one per cut point, or none");
   }
   std::vector<std::uint8_t> bytes;
-  if (!(status = readBytes(value, p, "outside", sizeof(std::int64_t), &bytes))) return status;
+  if (!(status = readBytes(value, p, "outside", sizeof(std::int64_t), blobs, &bytes))) {
+    return status;
+  }
   std::vector<std::int64_t>& keys = cut->outside_keys;
   keys.resize(bytes.size() / sizeof(std::int64_t));
   std::memcpy(keys.data(), bytes.data(), bytes.size());
@@ -293,16 +274,42 @@ Status readView(const json& value, const std::string& path, RecordedView* view) 
   return Status::Ok();
 }
 
-Status readRecord(const json& value, const std::string& path, KeyframeRecord* record) {
+}  // namespace
+
+Status readPose(const json& parent, const std::string& path, const char* key,
+                Eigen::Isometry3d* T) {
+  const json* value = nullptr;
+  Status status = json_fields::member(parent, path, key, &value);
+  if (!status) return status;
+  const std::string where = path + key;
+  if (!value->is_array() || value->size() != 3) return fieldError(where, "expected 3 rows of 4");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    const json& row = (*value)[r];
+    if (!row.is_array() || row.size() != 4) return fieldError(where, "expected 3 rows of 4");
+    for (int c = 0; c < 4; ++c) {
+      if (!row[c].is_number()) return fieldError(where, "expected numbers");
+      pose(r, c) = row[c].get<double>();
+    }
+  }
+  if (!isValidPose(pose, 1e-3) || pose.translation().cwiseAbs().maxCoeff() > kMapCoordinateLimitM) {
+    return fieldError(where, "not a rigid transform within the map's range");
+  }
+  *T = pose;
+  return Status::Ok();
+}
+
+Status recordFromJson(const json& value, const std::string& path, const std::string* blobs,
+                      KeyframeRecord* record) {
   if (!value.is_object()) return fieldError(path, "expected an object");
   const std::string p = path + ".";
   Status status;
   if (!(status = json_fields::readInt(value, p, "keyframe", 0, &record->keyframe)) ||
       !(status = json_fields::readNumber(value, p, "stamp", &record->stamp_s)) ||
       !(status = readString(value, p, "name", &record->name)) ||
-      !(status = readIsometry(value, p, "T_W_D_recorded", &record->T_W_D_recorded)) ||
-      !(status = readIsometry(value, p, "T_W_D", &record->T_W_D)) ||
-      !(status = readIsometry(value, p, "T_C_D", &record->T_C_D))) {
+      !(status = readPose(value, p, "T_W_D_recorded", &record->T_W_D_recorded)) ||
+      !(status = readPose(value, p, "T_W_D", &record->T_W_D)) ||
+      !(status = readPose(value, p, "T_C_D", &record->T_C_D))) {
     return status;
   }
   const json* K = nullptr;
@@ -330,13 +337,18 @@ Status readRecord(const json& value, const std::string& path, KeyframeRecord* re
   }
   const json* depth = nullptr;
   if (!(status = json_fields::member(value, p, "depth", &depth))) return status;
-  if (!(status = readDepth(*depth, p + "depth", &record->depth))) return status;
+  if (!(status = readDepth(*depth, p + "depth", blobs, &record->depth))) return status;
+  const auto coarse = value.find("depth_coarse");  // maps of 0.9.x and before have none
+  if (coarse != value.end()) {
+    if (!coarse->is_boolean()) return fieldError(p + "depth_coarse", "expected true or false");
+    record->depth_coarse = coarse->get<bool>() && !record->depth.empty();
+  }
   const json* views = nullptr;
   if (!(status = json_fields::member(value, p, "views", &views))) return status;
   if (!views->is_array()) return fieldError(p + "views", "expected an array");
   for (std::size_t i = 0; i < views->size(); ++i) {
     RecordedView view;
-    if (!(status = readView((*views)[i], p + "views[" + std::to_string(i) + "]", &view))) {
+    if (!(status = readView((*views)[i], p + "views[" + std::to_string(i) + "]", blobs, &view))) {
       return status;
     }
     record->views.push_back(std::move(view));
@@ -344,38 +356,29 @@ Status readRecord(const json& value, const std::string& path, KeyframeRecord* re
   return Status::Ok();
 }
 
-}  // namespace
-
-void EncodingCache::dropUnused() {
-  for (auto it = depths.begin(); it != depths.end();) {
-    it = it->second.used ? std::next(it) : depths.erase(it);
-  }
-  for (auto it = cuts.begin(); it != cuts.end();) {
-    it = it->second.used ? std::next(it) : cuts.erase(it);
-  }
-  for (auto& entry : depths) entry.second.used = false;
-  for (auto& entry : cuts) entry.second.used = false;
+json recordToJson(const KeyframeRecord& record, std::string* blobs) {
+  json views = json::array();
+  for (const RecordedView& view : record.views) views.push_back(viewToJson(view, blobs));
+  json entry{{"keyframe", record.keyframe},
+             {"stamp", record.stamp_s},
+             {"name", record.name},
+             {"T_W_D_recorded", isometryToJson(record.T_W_D_recorded)},
+             {"T_W_D", isometryToJson(record.T_W_D)},
+             {"T_C_D", isometryToJson(record.T_C_D)},
+             {"K", json::array({record.K_depth.fx, record.K_depth.fy, record.K_depth.cx,
+                                record.K_depth.cy, record.K_depth.width, record.K_depth.height})},
+             {"depth", depthToJson(record.depth, blobs)},
+             {"views", views}};
+  if (record.has_floor) entry["floor_point"] = json_fields::vectorToJson(record.floor_point_D);
+  if (record.depth_coarse && !record.depth.empty()) entry["depth_coarse"] = true;
+  return entry;
 }
 
-json historyToJson(const std::deque<KeyframeRecord>& records, EncodingCache* cache) {
+json poseToJson(const Eigen::Isometry3d& T) { return isometryToJson(T); }
+
+json historyToJson(const std::deque<KeyframeRecord>& records) {
   json out = json::array();
-  for (const KeyframeRecord& record : records) {
-    json views = json::array();
-    for (const RecordedView& view : record.views) views.push_back(viewToJson(view, cache));
-    json entry{{"keyframe", record.keyframe},
-               {"stamp", record.stamp_s},
-               {"name", record.name},
-               {"T_W_D_recorded", isometryToJson(record.T_W_D_recorded)},
-               {"T_W_D", isometryToJson(record.T_W_D)},
-               {"T_C_D", isometryToJson(record.T_C_D)},
-               {"K", json::array({record.K_depth.fx, record.K_depth.fy, record.K_depth.cx,
-                                  record.K_depth.cy, record.K_depth.width, record.K_depth.height})},
-               {"depth", cachedDepth(record.depth, cache)},
-               {"views", views}};
-    if (record.has_floor) entry["floor_point"] = json_fields::vectorToJson(record.floor_point_D);
-    out.push_back(std::move(entry));
-  }
-  if (cache != nullptr) cache->dropUnused();
+  for (const KeyframeRecord& record : records) out.push_back(recordToJson(record, nullptr));
   return out;
 }
 
@@ -385,7 +388,8 @@ Status historyFromJson(const json& value, const std::string& path,
   std::deque<KeyframeRecord> loaded;
   for (std::size_t i = 0; i < value.size(); ++i) {
     KeyframeRecord record;
-    const Status status = readRecord(value[i], path + "[" + std::to_string(i) + "]", &record);
+    const Status status =
+        recordFromJson(value[i], path + "[" + std::to_string(i) + "]", nullptr, &record);
     if (!status) return status;
     if (!loaded.empty() && !(record.keyframe > loaded.back().keyframe)) {
       return fieldError(path + "[" + std::to_string(i) + "]",

@@ -1,46 +1,35 @@
-// The keyframe history in the map file ("keyframe_history"): each keyframe's poses, intrinsics,
-// depth (a 16-bit PNG, or raw 32-bit floats, base64) and recorded views (cut points and normals
-// as little-endian float32 triples, the voxel keys voted against as int64, base64), so that a map
-// loaded tomorrow still follows the SLAM's corrections. Private to the io library.
+// The keyframe history in the map: each keyframe's poses, intrinsics, depth (a 16-bit PNG, or raw
+// 32-bit floats) and recorded views (cut points and normals as little-endian float32 triples, the
+// voxel keys voted against as int64). The arrays are either base64 strings inside the JSON (the
+// single-file map of 0.9.x, "keyframe_history") or bytes beside it, [offset, size] in the JSON
+// (the map folder's keyframe files, map_folder.h). Private to the io library.
 #pragma once
 
 #include <deque>
-#include <memory>
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
 #include <string>
-#include <unordered_map>
 
 #include "multiview_object_detection/pipeline/map/keyframe_history.h"
 
 namespace mvod {
 namespace history_json {
 
-// Encodings from earlier saves of one map: a keyframe's depth image and its cuts never change once
-// recorded (shared, immutable data), so a map saved again encodes only what is new. Keyed by the
-// data's address; each entry holds a reference to its data, so no address is reused while cached.
-// What a save did not use is dropped after it.
-struct EncodingCache {
-  struct Depth {
-    cv::Mat depth;  // keeps the address alive
-    nlohmann::json encoded;
-    bool used = false;
-  };
-  struct Cut {
-    std::shared_ptr<const RecordedCut> cut;  // keeps the address alive
-    nlohmann::json cut_points, normals, outside;
-    bool used = false;
-  };
-  std::unordered_map<const void*, Depth> depths;
-  std::unordered_map<const void*, Cut> cuts;
-  void dropUnused();
-};
-
-// `cache` (may be null): reused and updated.
-nlohmann::json historyToJson(const std::deque<KeyframeRecord>& records,
-                             EncodingCache* cache = nullptr);
+// One record. `blobs` null: arrays as base64 strings; else appended to *blobs.
+nlohmann::json recordToJson(const KeyframeRecord& record, std::string* blobs);
 // Checks every field (poses rigid, points finite and within the map's range, keys valid, depth
-// images of the stated size); a malformed history is an error naming the field.
+// images of the stated size); a malformed record is an error naming the field. `blobs`: the bytes
+// the record's [offset, size] fields point into (null: base64 strings only).
+Status recordFromJson(const nlohmann::json& value, const std::string& path,
+                      const std::string* blobs, KeyframeRecord* record);
+
+// A rigid pose within the map's range: 3 rows of 4 numbers at parent[key].
+Status readPose(const nlohmann::json& parent, const std::string& path, const char* key,
+                Eigen::Isometry3d* T);
+// As the records write them.
+nlohmann::json poseToJson(const Eigen::Isometry3d& T);
+
+// The single-file map's "keyframe_history": an array of records in keyframe order, base64 arrays.
+nlohmann::json historyToJson(const std::deque<KeyframeRecord>& records);
 Status historyFromJson(const nlohmann::json& value, const std::string& path,
                        std::deque<KeyframeRecord>* records);
 

@@ -15,6 +15,7 @@
 
 #include "history_json.h"
 #include "json_fields.h"
+#include "map_document.h"
 #include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/pipeline/types/map_limits.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
@@ -141,15 +142,9 @@ std::vector<MapObject> databaseObjects(const ObjectDatabase& database) {
   return objects;
 }
 
-struct MapEncodingCache::Impl {
-  history_json::EncodingCache history;
-};
-MapEncodingCache::MapEncodingCache() : impl(std::make_unique<Impl>()) {}
-MapEncodingCache::~MapEncodingCache() = default;
+namespace map_document {
 
-std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
-                          bool include_clouds, const std::deque<KeyframeRecord>* history,
-                          MapEncodingCache* cache) {
+json toJson(const std::vector<MapObject>& objects, const MapSummary& summary, bool include_clouds) {
   json doc;
   doc["frames"] = summary.frames;
   doc["keyframes"] = summary.keyframes;
@@ -173,30 +168,31 @@ std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummar
   doc["counts"] = {{"detections", c.detections}, {"above_threshold", c.above_threshold},
                    {"with_box", c.with_box},     {"inserted", c.inserted},
                    {"fused", c.fused},           {"before_refinement", c.before_refinement}};
-  if (history != nullptr && !history->empty()) {
-    doc["keyframe_history"] =
-        history_json::historyToJson(*history, cache != nullptr ? &cache->impl->history : nullptr);
-  }
-  // With clouds the document is large: compact. Without, indented for people to read.
-  // Names come from detectors: bytes that are not UTF-8 are replaced rather than failing the save.
-  return doc.dump(include_clouds ? -1 : 2, ' ', false, json::error_handler_t::replace) + "\n";
+  return doc;
 }
 
-Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
-                       MapSummary* summary, std::deque<KeyframeRecord>* history) {
-  json doc;
+std::string dump(const json& doc, bool compact) {
+  // Names come from detectors: bytes that are not UTF-8 are replaced rather than failing the save.
+  return doc.dump(compact ? -1 : 2, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+Status parse(const std::string& text, const std::string& name, json* doc) {
   try {
-    doc = json::parse(text);
+    *doc = json::parse(text);
   } catch (const json::parse_error& e) {
     // The position only: the parser's message quotes the bytes it read, which may be anything
     // (a file that is not a map at all).
-    return Status::Error("objects.json: not valid JSON (parse error at byte " +
-                         std::to_string(e.byte) + ")");
+    return Status::Error(name + ": not valid JSON (parse error at byte " + std::to_string(e.byte) +
+                         ")");
   } catch (const json::exception& e) {
-    return Status::Error("objects.json: not valid JSON (error " + std::to_string(e.id) + ")");
+    return Status::Error(name + ": not valid JSON (error " + std::to_string(e.id) + ")");
   }
-  if (!doc.is_object()) return fieldError("(document)", "expected a JSON object");
+  if (!doc->is_object()) return fieldError("(document)", "expected a JSON object");
+  return Status::Ok();
+}
 
+Status fromJson(const json& doc, std::vector<MapObject>* objects, MapSummary* summary,
+                std::deque<KeyframeRecord>* history) {
   MapSummary parsed;
   Status status;
   if (!(status = readInt(doc, "", "frames", 0, &parsed.frames))) return status;
@@ -254,6 +250,26 @@ Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
   if (summary != nullptr) *summary = parsed;
   if (history != nullptr) *history = std::move(parsed_history);
   return Status::Ok();
+}
+
+}  // namespace map_document
+
+std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
+                          bool include_clouds, const std::deque<KeyframeRecord>* history) {
+  json doc = map_document::toJson(objects, summary, include_clouds);
+  if (history != nullptr && !history->empty()) {
+    doc["keyframe_history"] = history_json::historyToJson(*history);
+  }
+  // With clouds the document is large: compact. Without, indented for people to read.
+  return map_document::dump(doc, include_clouds);
+}
+
+Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,
+                       MapSummary* summary, std::deque<KeyframeRecord>* history) {
+  json doc;
+  const Status parsed = map_document::parse(text, "objects.json", &doc);
+  if (!parsed) return parsed;
+  return map_document::fromJson(doc, objects, summary, history);
 }
 
 }  // namespace mvod

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <system_error>
 
+#include "multiview_object_detection/io/file_io.h"
+
 namespace mvod {
 namespace fs = std::filesystem;
 
@@ -52,8 +54,13 @@ Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool
     return Status::Error("map_directory '" + directory + "': " + error.message());
   }
   const fs::path requested = fs::path(path).is_absolute() ? fs::path(path) : dir / path;
-  // Links and '..' resolved: what the open would reach.
-  const fs::path target = fs::weakly_canonical(requested, error);
+  const fs::path name = requested.filename();
+  if (name.empty() || name == "." || name == "..") {
+    return Status::Error("'" + path + "' names a directory, not a file");
+  }
+  // The folders' links and '..' resolved (what the open would reach), the file's own name kept: a
+  // link there is refused below, never followed to a file the node does not own.
+  const fs::path target = fs::weakly_canonical(requested.parent_path(), error) / name;
   if (error) return Status::Error("'" + path + "': " + error.message());
   const bool inside = liesIn(target, dir) && target != dir;
   if (!inside && !policy.allow_any_path) {
@@ -68,6 +75,12 @@ Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool
       return Status::Error("cannot create " + target.parent_path().string() + ": " +
                            error.message());
     }
+  }
+  const std::string link = describeLink(target.string());
+  if (!link.empty()) {
+    return Status::Error("'" + path + "' (" + target.string() + ") is " + link +
+                         ": the node reads, writes and moves aside only map files themselves, "
+                         "never through a link; give the file's own path");
   }
   *resolved = target.string();
   return Status::Ok();

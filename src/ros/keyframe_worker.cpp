@@ -460,6 +460,15 @@ void KeyframeWorker::updateSnapshotLocked() {
   snapshot->summary.removed_intersecting = removed_intersecting_;
   snapshot->summary.removed_gone = removed_gone_;
   snapshot->history = mapper_->history().records();
+  const KeyframeHistory::Usage usage = mapper_->history().usage();
+  stats_->update([&usage](ObjectDetectionStatistics& stats) {
+    stats.history_mb = static_cast<double>(usage.bytes) / (1024.0 * 1024.0);
+    stats.history_keyframes = usage.keyframes;
+    stats.history_full_depth = usage.full_depth;
+    stats.history_coarse_depth = usage.coarse_depth;
+    stats.history_views_only = usage.views_only;
+    stats.history_forgotten = usage.forgotten;
+  });
   std::lock_guard<std::mutex> lock(snapshot_mutex_);
   snapshot_ = std::move(snapshot);
 }

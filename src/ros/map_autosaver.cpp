@@ -9,27 +9,26 @@
 #include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/ros/throttled_log.h"
 
 namespace mvod {
 
-Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& map,
-                    int frames_received, size_t* bytes, MapEncodingCache* cache) {
+Status writeMapFile(const std::string& folder, const KeyframeWorker::MapSnapshot& map,
+                    int frames_received, MapFolderWriter* writer, MapFolderWriter::Report* report) {
   MapSummary summary = map.summary;
   summary.frames = frames_received;
-  const std::string text = objectsToJson(map.objects, summary, true, &map.history, cache);
-  if (bytes != nullptr) *bytes = text.size();
-  return writeFileAtomic(path, text);
+  MapFolderWriter local;
+  return (writer != nullptr ? writer : &local)
+      ->write(folder, map.objects, summary, map.history, report);
 }
 
 Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects,
                    double timeout_s) {
-  std::string text;
   std::vector<MapObject> loaded;
   MapSummary summary;
   std::deque<KeyframeRecord> history;
-  Status status = readFile(path, &text);
-  if (status) status = objectsFromJson(text, &loaded, &summary, &history);
+  Status status = loadMap(path, Links::kRefuse, &loaded, &summary, &history);
   if (status) status = worker->replaceMap(loaded, summary, std::move(history), timeout_s);
   if (status && objects != nullptr) *objects = loaded.size();
   return status;
@@ -49,7 +48,7 @@ MapAutosaver::~MapAutosaver() {
 }
 
 void MapAutosaver::start() {
-  const int removed = removeOrphanTemporaries(path_);
+  const int removed = removeOrphanTemporaries(path_ + "/map.json");
   if (removed > 0) {
     ROS_WARN("autosave: removed %d temporary file(s) that a killed save of %s left behind", removed,
              path_.c_str());
@@ -76,12 +75,6 @@ void MapAutosaver::loop() {
   const auto period = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
       std::chrono::duration<double>(period_s_));
   auto next = std::chrono::steady_clock::now() + period;
-  // A map loaded at start is encoded once now, in the background, so that its first save costs
-  // what the later ones do (only the keyframes recorded since).
-  if (last_saved_ && !last_saved_->history.empty()) {
-    objectsToJson(last_saved_->objects, last_saved_->summary, true, &last_saved_->history,
-                  &encodings_);
-  }
   std::unique_lock<std::mutex> lock(mutex_);
   while (!stop_) {
     if (cv_.wait_until(lock, next, [this] { return stop_; })) break;
@@ -94,11 +87,13 @@ void MapAutosaver::loop() {
 
 void MapAutosaver::saveIfChanged(bool final) {
   const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
-  if (!map || map == last_saved_) return;
+  // The same snapshot (owner) as the last save's: unchanged. A weak reference: holding the snapshot
+  // for a period would hold every depth image and cut the history gave up since (its bound).
+  if (!map || (!last_saved_.owner_before(map) && !map.owner_before(last_saved_))) return;
   const auto start = std::chrono::steady_clock::now();
-  size_t bytes = 0;
+  MapFolderWriter::Report report;
   const Status written =
-      writeMapFile(path_, *map, stats_->get().frames_received, &bytes, &encodings_);
+      writeMapFile(path_, *map, stats_->get().frames_received, &writer_, &report);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!written) {
@@ -109,18 +104,25 @@ void MapAutosaver::saveIfChanged(bool final) {
   }
   last_saved_ = map;
   const int objects = static_cast<int>(map->objects.size());
-  stats_->update([ms, bytes](ObjectDetectionStatistics& s) {
+  const double bytes = static_cast<double>(report.folder_bytes);
+  const double written_bytes = static_cast<double>(report.bytes_written);
+  stats_->update([ms, bytes, written_bytes](ObjectDetectionStatistics& s) {
     ++s.autosaves;
     s.autosave_ms = ms;
-    s.autosave_bytes = static_cast<double>(bytes);
+    s.autosave_bytes = bytes;
+    s.autosave_written_bytes = written_bytes;
   });
+  const std::string what = std::to_string(objects) + " objects, " +
+                           std::to_string(report.keyframe_files_written) + " of " +
+                           std::to_string(map->history.size()) + " keyframe files written (" +
+                           std::to_string(report.bytes_written) + " of " +
+                           std::to_string(report.folder_bytes) + " bytes) to " + path_;
   if (final || !saved_once_) {
     saved_once_ = true;
-    ROS_INFO("autosave%s: %d objects, %zu bytes to %s in %.1f ms",
-             final ? " at shutdown" : " (the first)", objects, bytes, path_.c_str(), ms);
+    ROS_INFO("autosave%s: %s in %.1f ms", final ? " at shutdown" : " (the first)", what.c_str(),
+             ms);
   } else {
-    ROS_DEBUG("autosave: %d objects, %zu bytes to %s in %.1f ms", objects, bytes, path_.c_str(),
-              ms);
+    ROS_DEBUG("autosave: %s in %.1f ms", what.c_str(), ms);
   }
 }
 

@@ -96,6 +96,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"autosave failures", stats.autosave_failures},
       {"autosave ms", stats.autosave_ms},
       {"autosave bytes", stats.autosave_bytes},
+      {"autosave written bytes", stats.autosave_written_bytes},
       {"pose failures", stats.pose_failures},
       {"time jumps back", stats.time_jumps},
       {"detections capped", stats.detections_capped},
@@ -127,6 +128,12 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"corrections applied", stats.corrections_applied},
       {"keyframes corrected", stats.keyframes_corrected},
       {"correction ms", stats.correction_ms},
+      {"history MB", stats.history_mb},
+      {"history keyframes", stats.history_keyframes},
+      {"history full depth", stats.history_full_depth},
+      {"history coarse depth", stats.history_coarse_depth},
+      {"history views only", stats.history_views_only},
+      {"history forgotten", stats.history_forgotten},
   };
   for (const auto& [key, value] : values) status.add(key, value);
 }

@@ -1,5 +1,6 @@
 #include "multiview_object_detection/ros/object_detection_ros.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 
 #include <boost/bind/bind.hpp>
@@ -10,6 +11,7 @@
 #include <utility>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/detections_buffer.h"
 #include "multiview_object_detection/ros/keyframe_buffer.h"
@@ -163,7 +165,7 @@ bool ObjectDetectionRos::setUpMapFiles(const Config& config, const MapPathPolicy
     const std::string name = config.autosave_path.empty()
                                  ? defaultAutosaveName(nh_private_.getNamespace())
                                  : config.autosave_path;
-    const Status resolved = resolveMapPath(name, map_paths, true, &autosave_path);
+    const Status resolved = resolveMapPath(mapFolderPath(name), map_paths, true, &autosave_path);
     if (!resolved) {
       fail("autosave_path: " + resolved.message() + " (autosave_period_s 0 turns autosave off)");
       return false;
@@ -203,16 +205,17 @@ void ObjectDetectionRos::startThreads(const Config& config) {
 }
 
 void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolicy& paths) {
-  std::string path;
-  Status status = resolveMapPath(config.load_map_on_start, paths, false, &path);
+  std::string requested;
+  Status status = resolveMapPath(config.load_map_on_start, paths, false, &requested);
   if (!status) {
     ROS_ERROR("load_map_on_start: %s; starting with an empty map", status.message().c_str());
     return;
   }
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0 && errno == ENOENT) {
+  // The folder the name stands for, or a map file of 0.9.x, whichever was written last.
+  const std::string path = mapToLoad(requested);
+  if (path.empty()) {
     ROS_INFO("load_map_on_start: no map at %s yet (a first run): starting with an empty map",
-             path.c_str());
+             mapFolderPath(requested).c_str());
     return;
   }
   size_t objects = 0;
@@ -222,12 +225,19 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
     worker_->publishMap(ros::Time::now());
     return;
   }
-  // Kept for a person to look at, and out of the autosave's way.
+  // Kept for a person to look at, and out of the autosave's way (a map folder as a whole). A link
+  // is never moved (nor what it points to); RENAME_NOREPLACE: nothing already at the new name is
+  // replaced.
   const std::string aside = path + ".unreadable-" + std::to_string(std::time(nullptr));
-  const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
+  struct stat info {};
+  const bool link = ::lstat(path.c_str(), &info) == 0 && S_ISLNK(info.st_mode);
+  const bool moved =
+      !link && ::renameat2(AT_FDCWD, path.c_str(), AT_FDCWD, aside.c_str(), RENAME_NOREPLACE) == 0;
   ROS_ERROR("load_map_on_start: cannot load %s: %s; %s; starting with an empty map", path.c_str(),
             status.message().c_str(),
-            moved ? ("the file is kept as " + aside).c_str() : "the file could not be moved aside");
+            moved  ? ("it is kept as " + aside).c_str()
+            : link ? "it is a symbolic link, left as it is"
+                   : "it could not be moved aside");
 }
 
 void ObjectDetectionRos::reconfigureCallback(multiview_object_detection::ObjectDetectionConfig& rc,

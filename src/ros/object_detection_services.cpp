@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/ros/map_autosaver.h"
 
 namespace mvod {
@@ -65,7 +66,8 @@ bool ObjectDetectionServices::getObjects(
 bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Request& request,
                                       multiview_object_detection::MapFile::Response& response) {
   std::string path;
-  Status status = resolveMapPath(request.path, map_paths_, true, &path);
+  // A map is a folder <name>.mvmap: "kitchen" and "kitchen.json" are saved as kitchen.mvmap.
+  Status status = resolveMapPath(mapFolderPath(request.path), map_paths_, true, &path);
   if (!status) {
     response.success = false;
     response.message = "save_map refused: " + status.message();
@@ -73,11 +75,13 @@ bool ObjectDetectionServices::saveMap(multiview_object_detection::MapFile::Reque
     return true;
   }
   const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
-  const Status written = writeMapFile(path, *map, stats_->get().frames_received);
+  MapFolderWriter::Report report;
+  const Status written = writeMapFile(path, *map, stats_->get().frames_received, nullptr, &report);
   response.success = written.ok();
-  response.message = written
-                         ? "saved " + std::to_string(map->objects.size()) + " objects to " + path
-                         : "save_map: " + written.message();
+  response.message = written ? "saved " + std::to_string(map->objects.size()) + " objects and " +
+                                   std::to_string(map->history.size()) + " keyframes (" +
+                                   std::to_string(report.folder_bytes) + " bytes) to " + path
+                             : "save_map: " + written.message();
   if (written) {
     ROS_INFO("%s", response.message.c_str());
   } else {
@@ -91,6 +95,15 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
   std::string path;
   size_t loaded = 0;
   Status status = resolveMapPath(request.path, map_paths_, false, &path);
+  if (status) {
+    // The folder the name stands for (kitchen.json: kitchen.mvmap), or a map file of 0.9.x.
+    const std::string found = mapToLoad(path);
+    if (found.empty()) {
+      status = Status::Error("no map at " + mapFolderPath(path) +
+                             (mapFolderPath(path) == path ? "" : " (nor a map file " + path + ")"));
+    }
+    path = found;
+  }
   if (status) status = loadMapFile(path, worker_, &loaded, timeout_s_);
   if (!status) {
     response.success = false;

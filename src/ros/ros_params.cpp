@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/io/map_path.h"
 
 namespace mvod {
@@ -291,7 +292,11 @@ KeyframeHistory::Config getKeyframeHistoryConfigFromRosParam(const ros::NodeHand
   KeyframeHistory::Config c = start;
   p.read("enable", &c.enable);
   p.read("stamp_tolerance_s", &c.stamp_tolerance_s);
-  p.read("max_keyframes_with_depth", &c.max_keyframes_with_depth);
+  p.read("max_memory_mb", &c.max_memory_mb);
+  if (p.has("max_keyframes_with_depth")) {
+    p.error("parameter " + nh_corrections.resolveName("max_keyframes_with_depth") +
+            " was replaced by max_memory_mb (the history's memory bound in MB): remove it");
+  }
   return c;
 }
 
@@ -364,7 +369,8 @@ std::string defaultAutosaveName(const std::string& node_namespace) {
   for (char& c : name) {
     if (c == '/') c = '.';
   }
-  return (name.empty() ? std::string("object_detection") : name) + ".autosave.json";
+  return (name.empty() ? std::string("object_detection") : name) + ".autosave" +
+         kMapFolderExtension;
 }
 
 ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHandle& nh_private,

@@ -129,12 +129,14 @@ int main(int argc, char** argv) {
   options.min_inside_fraction = min_inside;
   int frames = 0;
   int boxes = 0;
+  int skipped = 0;
   for (const int index : dataset.indices) {
     if (index % every != 0) continue;
     mvod::RgbdFrame frame;
     status = dataset.load(index, &frame);
     if (!status) {
       std::cerr << "make_box_detections: " << status.message() << " (frame skipped)\n";
+      ++skipped;
       continue;
     }
     const std::vector<mvod::Detection2D> detections =
@@ -151,5 +153,9 @@ int main(int argc, char** argv) {
   }
   std::cout << "make_box_detections: " << boxes << " boxes in " << frames << " frames -> "
             << output_dir << "\n";
+  if (skipped > 0) {
+    std::cerr << "make_box_detections: " << skipped << " frame(s) could not be read (above)\n";
+    return kExitFailure;
+  }
   return 0;
 }

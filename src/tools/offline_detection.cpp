@@ -43,6 +43,7 @@ using offline_detection::Options;
 using offline_detection::parseArguments;
 using offline_detection::printCostGrowth;
 using offline_detection::printRefinementRemovals;
+using offline_detection::printHistoryUsage;
 using offline_detection::printRunReport;
 using offline_detection::printTable;
 using offline_detection::RunStats;
@@ -225,6 +226,7 @@ int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
   if (options.no_amodal) config->database.amodal.enable = false;
   if (options.no_existence) config->database.existence.enable = false;
   if (options.no_history) config->corrections.enable = false;
+  if (options.history_mb > 0.0) config->corrections.max_memory_mb = options.history_mb;
   if (options.every_pixel) config->extractor.near_sampling_leaf_m = 0.0;
   if (std::isfinite(options.existence_remove_below)) {
     config->database.existence.remove_below = options.existence_remove_below;
@@ -317,9 +319,14 @@ class KeyframeLoop {
   }
 
   // --corrected-poses: the keyframes so far that have a pose file there take that pose
-  // (before_frame: the frame it happens before; -1 after the last).
+  // (before_frame: the frame it happens before; -1 after the last). A pose file that cannot be read
+  // (malformed, a FIFO, a device, too large) is an error, and the correction is not applied at all:
+  // half a loop closure would bend the map.
   void correctPoses(int before_frame) {
+    const std::string when =
+        before_frame >= 0 ? "before frame " + std::to_string(before_frame) : "after the last frame";
     std::vector<mvod::PoseCorrection> corrections;
+    int unreadable = 0;
     for (const ProcessedKeyframe& keyframe : keyframes_) {
       char name[32];
       std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", keyframe.index);
@@ -330,6 +337,7 @@ class KeyframeLoop {
       const mvod::Status read = mvod::SevenScenesDataset::readPose(path.string(), &T_W_D);
       if (!read) {
         ++stats_.errors;
+        ++unreadable;
         report("error: corrected pose " + path.string() + ": " + read.message(), true);
         continue;
       }
@@ -338,10 +346,14 @@ class KeyframeLoop {
       correction.T_W_C = T_W_D * keyframe.T_C_D.inverse();
       corrections.push_back(correction);
     }
+    if (unreadable > 0) {
+      report("error: corrections " + when + " not applied: " + std::to_string(unreadable) +
+                 " pose file(s) could not be read",
+             true);
+      return;
+    }
     mvod::ObjectMapper::CorrectionReport correction;
     const mvod::Status applied = mapper_.correctPoses(corrections, &correction);
-    const std::string when =
-        before_frame >= 0 ? "before frame " + std::to_string(before_frame) : "after the last frame";
     if (!applied) {
       ++stats_.errors;
       report("error: corrections " + when + ": " + applied.message(), true);
@@ -507,7 +519,14 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
   }
   if (!options.quiet) {
     printRunReport(stats, num_frames, objects.size(), refinement, summary);
+    printHistoryUsage(mapper->history().usage(), mapper->config().corrections.max_memory_mb);
     if (written) std::fprintf(stderr, "wrote %s\n", options.output.c_str());
+  }
+  // A frame or file that could not be read was reported and skipped; the run says so in its status
+  // too (a script must not take a partial map for a whole one).
+  if (stats.errors > 0) {
+    std::fprintf(stderr, "offline_detection: %d error(s) above; exit status 1\n", stats.errors);
+    exit_code = kExitFailure;
   }
   return exit_code;
 }

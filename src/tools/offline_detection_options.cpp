@@ -90,6 +90,8 @@ const char* const kUsage =
     "                         few of the views that show them, are not removed)\n"
     "  --no-history           keep no keyframe history (the map cannot follow SLAM corrections;\n"
     "                         --corrected-poses is then ignored, as with --paper)\n"
+    "  --history-mb MB        the keyframe history's memory bound (corrections/max_memory_mb,\n"
+    "                         default 1024); past it the oldest keyframes degrade\n"
     "  --every-pixel          no near sampling: every depth pixel of a mask, however close (the\n"
     "                         default samples surfaces nearer than fx x 5 mm on a coarser grid)\n"
     "  --existence-remove-below L  remove an object once its existence log-odds fall below L\n"
@@ -105,7 +107,9 @@ const char* const kUsage =
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
     "  --help                 this text\n"
     "\n"
-    "exit status: 0 ok, 1 dataset or another input cannot be opened, 2 bad arguments\n";
+    "exit status: 0 ok, 1 dataset or another input cannot be opened, the output cannot be\n"
+    "written, or an error was reported during the run (the map of the rest is written), 2 bad\n"
+    "arguments\n";
 
 // Input, detector and output options.
 void addInputOptions(CLI::App* app, Options* options) {
@@ -199,6 +203,9 @@ void addMethodOptions(CLI::App* app, Options* options) {
   cli::addFlag(app, "--no-existence", &options->no_existence);
   cli::addFlag(app, "--no-history", &options->no_history);
   cli::addFlag(app, "--every-pixel", &options->every_pixel);
+  cli::addNumber(
+      app, "--history-mb", &options->history_mb, [](double value) { return value > 0.0; },
+      "--history-mb needs a number of MB > 0");
   cli::addNumber(
       app, "--existence-remove-below", &options->existence_remove_below,
       [](double value) { return std::isfinite(value); },

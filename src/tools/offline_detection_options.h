@@ -47,6 +47,7 @@ struct Options {
   bool no_amodal = false;
   bool no_existence = false;
   bool no_history = false;
+  double history_mb = -1.0;  // the history's bound (MB); < 0: the default
   bool every_pixel = false;
   double existence_remove_below = std::numeric_limits<double>::quiet_NaN();
   std::string selection;

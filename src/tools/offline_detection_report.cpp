@@ -104,6 +104,20 @@ bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& obje
   return all_saved;
 }
 
+void printHistoryUsage(const mvod::KeyframeHistory::Usage& usage, double max_memory_mb) {
+  if (usage.keyframes == 0 && usage.forgotten == 0) return;
+  constexpr double kMB = 1024.0 * 1024.0;
+  const double per_keyframe_mb =
+      usage.keyframes > 0 ? static_cast<double>(usage.bytes) / kMB / usage.keyframes : 0.0;
+  std::fprintf(stderr,
+               "keyframe history: %d keyframes, %.1f MB of %.0f (%.3f MB per keyframe: depth %.1f "
+               "MB, cuts %.1f MB); %d with full depth, %d coarse, %d views only, %d forgotten\n",
+               usage.keyframes, static_cast<double>(usage.bytes) / kMB, max_memory_mb,
+               per_keyframe_mb, static_cast<double>(usage.depth_bytes) / kMB,
+               static_cast<double>(usage.cut_bytes) / kMB, usage.full_depth, usage.coarse_depth,
+               usage.views_only, usage.forgotten);
+}
+
 void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,
                     const mvod::ObjectMapper::RefinementReport& refinement,
                     const mvod::MapSummary& summary) {

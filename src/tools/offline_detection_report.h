@@ -49,6 +49,9 @@ void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
                              const mvod::ObjectMapper::RefinementReport& refinement);
 
 // Frames, keyframes, objects, removals, stage medians and counts, on stderr.
+// The keyframe history's size and how far it degraded under its bound.
+void printHistoryUsage(const mvod::KeyframeHistory::Usage& usage, double max_memory_mb);
+
 void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects,
                     const mvod::ObjectMapper::RefinementReport& refinement,
                     const mvod::MapSummary& summary);

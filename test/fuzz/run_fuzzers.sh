@@ -19,7 +19,7 @@ CXXFLAGS=(-std=c++17 -g -O1 -fno-omit-frame-pointer -fsanitize=fuzzer,address,un
 # The project sources each harness needs (nothing of PCL or ROS).
 declare -A SOURCES=(
   [map_json]="src/io/json_io.cpp src/io/object_json.cpp src/io/file_io.cpp src/io/history_json.cpp src/io/image_io.cpp src/pipeline/types/common.cpp src/pipeline/map/existence.cpp src/pipeline/map/depth_view.cpp src/pipeline/types/oriented_box.cpp src/pipeline/map/output_frame.cpp"
-  [detection_json]="src/detectors/file_instance_segmenter.cpp src/pipeline/types/class_priors.cpp src/io/image_io.cpp"
+  [detection_json]="src/detectors/file_instance_segmenter.cpp src/pipeline/types/class_priors.cpp src/io/image_io.cpp src/io/file_io.cpp"
   [image_decode]="src/io/image_io.cpp"
 )
 declare -A LIBS=(

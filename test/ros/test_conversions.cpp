@@ -731,8 +731,8 @@ TEST(RosConversionsTest, NodeConfigValidatesChoicesAndDerivesGravity) {
   config.autosave_period_s = 0.0;  // off
   EXPECT_TRUE(config.isValid().ok());
   EXPECT_EQ(defaultAutosaveName("/robot1/object_detection"),
-            "robot1.object_detection.autosave.json");
-  EXPECT_EQ(defaultAutosaveName("/"), "object_detection.autosave.json");
+            "robot1.object_detection.autosave.mvmap");
+  EXPECT_EQ(defaultAutosaveName("/"), "object_detection.autosave.mvmap");
 
   config = ObjectDetectionRosConfig();
   config.pose_source = "gps";

@@ -26,6 +26,8 @@
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/io/file_io.h"
 #include "multiview_object_detection/io/json_io.h"
+#include "multiview_object_detection/io/map_folder.h"
+#include "node_process.h"
 #include "test_node_common.h"
 
 namespace mvod_test {
@@ -34,76 +36,28 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr char kNode[] = "/autosave_node";
-constexpr char kAutosaveName[] = "autosave_node.autosave.json";
-
-std::string nodeBinary() {
-  // Beside this test's binary in the devel space.
-  return (fs::read_symlink("/proc/self/exe").parent_path() / "object_detection_node").string();
-}
-
-// The node process, started with the inputs remapped to the test's topics.
-// `output` (optional): the file the node's stdout and stderr go to.
-pid_t startNode(const std::string& map_directory, const std::string& node = kNode,
-                const std::vector<std::string>& extra = {}, const std::string& output = "") {
-  std::vector<std::string> args = {nodeBinary(),
-                                   "__name:=" + node.substr(1),
-                                   std::string("rgb/image_rect_color:=") + kRgbTopic,
-                                   std::string("depth_registered/image_rect:=") + kDepthTopic,
-                                   std::string("rgb/camera_info:=") + kInfoTopic,
-                                   std::string("pose:=") + kPoseTopic,
-                                   std::string("detections:=") + kDetectionsTopic,
-                                   "_map_directory:=" + map_directory,
-                                   "__log:=" + map_directory + "/../node.log"};
-  args.insert(args.end(), extra.begin(), extra.end());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (!output.empty()) {
-      const int fd = ::open(output.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        ::dup2(fd, 1);
-        ::dup2(fd, 2);
-      }
-    }
-    std::vector<char*> argv;
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return pid;
-}
+constexpr char kAutosaveName[] = "autosave_node.autosave.mvmap";
 
 // The objects of a map file; false if it does not load.
 bool loadMapFile(const std::string& path, std::vector<mvod::MapObject>* objects,
                  std::string* error) {
-  std::string text;
   mvod::MapSummary summary;
   std::deque<mvod::KeyframeRecord> history;
-  mvod::Status status = mvod::readFile(path, &text);
-  if (status) status = mvod::objectsFromJson(text, objects, &summary, &history);
+  const mvod::Status status =
+      mvod::loadMap(path, mvod::Links::kRefuse, objects, &summary, &history);
   if (!status) *error = status.message();
   return status.ok();
 }
 
+// Save temporaries in the map directory and the map folders in it.
 std::vector<std::string> temporariesIn(const std::string& directory) {
   std::vector<std::string> found;
-  for (const auto& entry : fs::directory_iterator(directory)) {
+  for (const auto& entry : fs::recursive_directory_iterator(directory)) {
     const std::string name = entry.path().filename().string();
     if (name.find(".save-") != std::string::npos) found.push_back(name);
   }
   return found;
 }
-
-// SIGKILLs the node when a cycle ends early (a failed ASSERT): a node left running would keep the
-// test run's output pipe open and hold make test up. `pid` -1 once the node has been reaped.
-struct KillOnExit {
-  pid_t pid = -1;
-  ~KillOnExit() {
-    if (pid <= 0) return;
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-  }
-};
 
 // The file's modification time in seconds since the epoch; 0 when it does not exist.
 double modificationTimeS(const std::string& path) {
@@ -122,6 +76,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   const std::string directory = (root / "maps").string();
   fs::create_directories(directory);
   const std::string autosave = directory + "/" + kAutosaveName;
+  const std::string autosave_map = autosave + "/map.json";  // written last by each save
 
   SyntheticStream stream{SyntheticStream::Options()};
   InputPublisher inputs(nh);
@@ -151,7 +106,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   double held_mtime_s = 0.0;  // the autosave can only get newer than this
   for (int cycle = 0; cycle <= cycles; ++cycle) {
     SCOPED_TRACE("cycle " + std::to_string(cycle));
-    const pid_t pid = startNode(directory);
+    const pid_t pid = startNode(directory, kNode);
     ASSERT_GT(pid, 0);
     KillOnExit node{pid};
     ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/get_objects", 30000))
@@ -204,9 +159,9 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     // before its first save: the file is then the one the previous node left.
     if (cycle % 2 == 0) {
       int saves_after_change = 0;
-      double last_mtime_s = modificationTimeS(autosave);
+      double last_mtime_s = modificationTimeS(autosave_map);
       const bool held = publishUntil(after(120.0), [&] {
-        const double mtime_s = modificationTimeS(autosave);
+        const double mtime_s = modificationTimeS(autosave_map);
         if (mtime_s <= last_mtime_s) return false;
         last_mtime_s = mtime_s;
         if (mtime_s > change_s) ++saves_after_change;
@@ -229,7 +184,7 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
     std::vector<mvod::MapObject> saved;
     std::string error;
     ASSERT_TRUE(loadMapFile(autosave, &saved, &error)) << error;
-    const double mtime_s = modificationTimeS(autosave);
+    const double mtime_s = modificationTimeS(autosave_map);
     EXPECT_GE(mtime_s, held_mtime_s) << "the autosave went back to an older file";
     objects_before_kill = saved.size();
     std::printf(

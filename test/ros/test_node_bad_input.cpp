@@ -360,7 +360,8 @@ TEST_F(NodeBadInputTest, TwoThousandBoxesAreCappedAndServicesKeepAnswering) {
   ASSERT_TRUE(srv.response.success) << srv.response.message;
   ASSERT_TRUE(callMapFile(std::string(kPoseNode) + "/load_map", name, &srv, &seconds));
   EXPECT_TRUE(srv.response.success) << srv.response.message;
-  std::remove((testMapDirectory() + "/" + name).c_str());
+  std::filesystem::remove_all(testMapDirectory() + "/" + name.substr(0, name.size() - 5) +
+                              ".mvmap");
 }
 
 TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
@@ -408,6 +409,7 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
   EXPECT_FALSE(srv.response.success);
   EXPECT_NE(srv.response.message.find("map_directory"), std::string::npos) << srv.response.message;
   EXPECT_FALSE(std::filesystem::exists("/tmp/outside_" + tag + ".json"));
+  EXPECT_FALSE(std::filesystem::exists("/tmp/outside_" + tag + ".mvmap"));
   ASSERT_TRUE(callMapFile(service, "/etc/passwd", &srv, &seconds));
   EXPECT_FALSE(srv.response.success);
 

@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -451,14 +452,14 @@ inline multiview_object_detection::ObjectArray getObjects(const std::string& nod
 // `from`'s map saved to a temporary file and loaded into `to`; the failure's reason, or "".
 inline std::string copyMap(const std::string& from, const std::string& to) {
   const std::string path = "/tmp/mvod_rostest_map_" + std::to_string(::getpid()) + "_" +
-                           std::to_string(std::rand()) + ".json";
+                           std::to_string(std::rand()) + ".mvmap";
   multiview_object_detection::MapFile save, load;
   save.request.path = path;
   load.request.path = path;
   if (!ros::service::call(from + "/save_map", save)) return from + "/save_map not called";
   if (!save.response.success) return save.response.message;
   const bool called = ros::service::call(to + "/load_map", load);
-  std::remove(path.c_str());
+  std::filesystem::remove_all(path);
   if (!called) return to + "/load_map not called";
   return load.response.success ? std::string() : load.response.message;
 }

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include "multiview_object_detection/GetObjects.h"
@@ -533,12 +534,15 @@ TEST_F(NodeSyntheticTest, GetObjectsFiltersByClassAndId) {
 TEST_F(NodeSyntheticTest, SaveResetLoadGivesTheSameObjects) {
   const ObjectArray before = getObjects("", {});
   ASSERT_FALSE(before.objects.empty());
+  // Asked for as a .json (as before 0.10), saved as the map folder <name>.mvmap.
   const std::string path = "/tmp/mvod_rostest_map_" + std::to_string(::getpid()) + ".json";
-  std::remove(path.c_str());
+  const std::string folder = "/tmp/mvod_rostest_map_" + std::to_string(::getpid()) + ".mvmap";
+  std::filesystem::remove_all(folder);
 
   const MapFile::Response saved = mapFile("save_map", path);
   ASSERT_TRUE(saved.success) << saved.message;
-  EXPECT_TRUE(std::ifstream(path).good()) << path;
+  EXPECT_NE(saved.message.find(folder), std::string::npos) << saved.message;
+  EXPECT_TRUE(std::ifstream(folder + "/map.json").good()) << folder;
 
   // Reset: no objects, and every box and label marker deleted.
   const size_t received = outputs_->objectsReceived();
@@ -577,7 +581,7 @@ TEST_F(NodeSyntheticTest, SaveResetLoadGivesTheSameObjects) {
   }
   EXPECT_TRUE(outputs_->waitFor([&] { return shownBoxIds() == idsOf(before); }, 5.0))
       << "the loaded objects' markers are not shown";
-  std::remove(path.c_str());
+  std::filesystem::remove_all(folder);
 }
 
 TEST_F(NodeSyntheticTest, CorruptMapIsRefusedAndTheMapKept) {

@@ -10,9 +10,10 @@
 namespace mvod {
 
 // Atomic write: a temporary file beside `path` (".<name>.save-<pid>.XXXXXX"), then rename. A
-// replaced file keeps its mode; the temporaries of `path` a killed save left behind are removed
-// first. Concurrent saves to one path (threads or processes) each succeed, the last rename wins.
-// Refuses to replace anything but a regular file.
+// replaced file keeps its mode (and owner, where the process may set it); the temporaries of `path`
+// a killed save left behind are removed first. Concurrent saves to one path (threads or processes)
+// each succeed, the last rename wins. Refuses to replace anything but a regular file: a symbolic
+// link at `path` is refused naming its target, and neither the link nor its target is touched.
 Status writeFileAtomic(const std::string& path, const std::string& content);
 
 // Removes the temporaries of `path` whose process is no longer running (a save killed mid-write);
@@ -20,9 +21,14 @@ Status writeFileAtomic(const std::string& path, const std::string& content);
 // how many it removed.
 int removeOrphanTemporaries(const std::string& path);
 // Whole-file read of a regular file of at most max_bytes: a FIFO, device or directory is refused
-// at once (never blocks, never reads forever).
+// at once (never blocks, never reads forever). kRefuse: a symbolic link at `path` is refused too
+// (O_NOFOLLOW; the node's map files), kFollow: read what it points to (datasets are often links).
+enum class Links { kFollow, kRefuse };
 constexpr size_t kDefaultMaxFileBytes = size_t{1} << 30;  // 1 GiB
 Status readFile(const std::string& path, std::string* content,
-                size_t max_bytes = kDefaultMaxFileBytes);
+                size_t max_bytes = kDefaultMaxFileBytes, Links links = Links::kFollow);
+
+// "a symbolic link to <target>" when `path` is a link (not followed), else "" (for messages).
+std::string describeLink(const std::string& path);
 
 }  // namespace mvod

@@ -49,23 +49,11 @@ struct MapSummary {
 //  ...}], "removed": {"atypical", "intersecting", "gone"}, "stage_ms": {...}, "counts": {...}}.
 //  With include_clouds the fused and segmented
 // clouds are stored too (a map that can be reloaded and fused into). With a history, its keyframes
-// too ("keyframe_history"): a map that still follows the SLAM's corrections once reloaded.
-// Encodings kept between saves of one map (the autosave): the keyframe history's depth images and
-// cuts never change once recorded, so a save encodes only the keyframes recorded since the last.
-// Not thread-safe: one saver at a time.
-class MapEncodingCache {
- public:
-  MapEncodingCache();
-  ~MapEncodingCache();
-  MapEncodingCache(const MapEncodingCache&) = delete;
-  MapEncodingCache& operator=(const MapEncodingCache&) = delete;
-  struct Impl;
-  std::unique_ptr<Impl> impl;
-};
-
+// too ("keyframe_history", base64 inside the JSON): the single-file map of 0.9.x, still read; the
+// node writes its maps as folders (map_folder.h), and the offline tools' objects.json has no
+// history.
 std::string objectsToJson(const std::vector<MapObject>& objects, const MapSummary& summary,
-                          bool include_clouds, const std::deque<KeyframeRecord>* history = nullptr,
-                          MapEncodingCache* cache = nullptr);
+                          bool include_clouds, const std::deque<KeyframeRecord>* history = nullptr);
 // Parses what objectsToJson wrote; a malformed document is an error naming the field, and leaves
 // the outputs untouched. history (optional): the keyframe history, empty when the file has none.
 Status objectsFromJson(const std::string& text, std::vector<MapObject>* objects,

@@ -19,7 +19,9 @@ struct MapPathPolicy {
 std::string defaultMapDirectory();
 
 // The file `path` names under `policy`: a relative path is taken in the map directory; `..` and
-// links are resolved before the check, so neither leads out of it. for_writing creates the map
+// the folders' links are resolved before the check, so neither leads out of it. A symbolic link at
+// the file's own name is refused (naming its target), whether or not it leads out: the node never
+// writes, replaces or moves a file through a link. for_writing creates the map
 // directory when the path lies in it. An empty path, one that ends in '/', or one outside the
 // directory is an error naming the directory.
 Status resolveMapPath(const std::string& path, const MapPathPolicy& policy, bool for_writing,

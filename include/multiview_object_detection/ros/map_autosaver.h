@@ -1,8 +1,9 @@
-// Autosave: the map written to one file in the background, so that a crash, an OOM kill or a power
-// cut loses at most one period of mapping. Every autosave_period_s the saver takes the worker's
-// current snapshot (a shared pointer: the worker is never held up by the save) and, if the map
-// changed since the last save, writes it atomically (writeFileAtomic: the file is always a whole
-// map, old or new). stop() saves once more (shutdown, SIGINT, SIGTERM).
+// Autosave: the map written to its folder (map_folder.h) in the background, so that a crash, an OOM
+// kill or a power cut loses at most one period of mapping. Every autosave_period_s the saver takes
+// the worker's current snapshot (a shared pointer: the worker is never held up by the save) and, if
+// the map changed since the last save, writes it: the objects, and the keyframe files that are new
+// or changed since the last save (the folder always holds a whole map, old or new). stop() saves
+// once more (shutdown, SIGINT, SIGTERM).
 #pragma once
 
 #include <condition_variable>
@@ -11,26 +12,29 @@
 #include <string>
 #include <thread>
 
+#include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/pipeline/types/common.h"
 #include "multiview_object_detection/ros/keyframe_worker.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 
 namespace mvod {
 
-// Writes `map` to `path` as ~save_map does (with clouds and the keyframe history); `bytes` (may be
-// null): the file's size; `cache` (may be null): encodings reused from the last save of this map.
-Status writeMapFile(const std::string& path, const KeyframeWorker::MapSnapshot& map,
-                    int frames_received, size_t* bytes = nullptr,
-                    MapEncodingCache* cache = nullptr);
+// Writes `map` to the map folder `folder` as ~save_map does (with clouds and the keyframe history);
+// `writer` (may be null: a new one, which writes every keyframe file) reuses what it wrote before;
+// `report` (may be null): what was written.
+Status writeMapFile(const std::string& folder, const KeyframeWorker::MapSnapshot& map,
+                    int frames_received, MapFolderWriter* writer = nullptr,
+                    MapFolderWriter::Report* report = nullptr);
 
-// Reads the map file at `path` (resolved) into the worker, replacing its map (~load_map,
-// load_map_on_start); on any error the worker's map is kept. `objects` (may be null): how many.
+// Reads the map at `path` (resolved: a map folder or a single-file map of 0.9.x) into the worker,
+// replacing its map (~load_map, load_map_on_start); on any error the worker's map is kept.
+// `objects` (may be null): how many.
 Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects = nullptr,
                    double timeout_s = -1.0);
 
 class MapAutosaver {
  public:
-  // `path`: resolved, absolute; `period_s` > 0.
+  // `path`: the map folder, resolved, absolute; `period_s` > 0.
   MapAutosaver(std::string path, double period_s, const KeyframeWorker* worker,
                SharedStatistics* stats);
   ~MapAutosaver();
@@ -52,8 +56,8 @@ class MapAutosaver {
   const double period_s_;
   const KeyframeWorker* worker_;
   SharedStatistics* stats_;
-  std::shared_ptr<const KeyframeWorker::MapSnapshot> last_saved_;  // the saver's thread only
-  MapEncodingCache encodings_;                                     // the saver's thread only
+  std::weak_ptr<const KeyframeWorker::MapSnapshot> last_saved_;  // the saver's thread only
+  MapFolderWriter writer_;                                       // the saver's thread only
   bool saved_once_ = false;
   std::mutex mutex_;
   std::condition_variable cv_;

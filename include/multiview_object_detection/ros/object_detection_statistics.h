@@ -37,13 +37,22 @@ struct ObjectDetectionStatistics {
   int keyframes_corrected = 0;
   int keyframe_poses_unmatched = 0;
   double correction_ms = 0.0;
+  // The keyframe history (corrections/max_memory_mb): its size, and how many keyframes keep their
+  // depth, a coarser depth, only their views, or were forgotten.
+  double history_mb = 0.0;
+  int history_keyframes = 0;
+  int history_full_depth = 0;
+  int history_coarse_depth = 0;
+  int history_views_only = 0;
+  int history_forgotten = 0;
   // Autosave: saves written and failed; the last one's time and size.
   int autosaves = 0;
   int autosave_failures = 0;
   double autosave_ms = 0.0;
-  double autosave_bytes = 0.0;
-  double detection_ms = 0.0;  // last keyframe
-  StageTimes stage_times;     // last keyframe
+  double autosave_bytes = 0.0;          // the map as saved (the whole folder)
+  double autosave_written_bytes = 0.0;  // what the last save wrote (new keyframe files, map.json)
+  double detection_ms = 0.0;            // last keyframe
+  StageTimes stage_times;               // last keyframe
   // From a keyframe's images arriving to its objects being published (queueing, pose wait,
   // detection and mapping): the last one and the median of the last 100.
   double latency_ms = 0.0;

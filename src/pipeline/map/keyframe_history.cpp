@@ -1,6 +1,7 @@
 #include "multiview_object_detection/pipeline/map/keyframe_history.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <iterator>
 #include <sstream>
@@ -36,11 +37,7 @@ Status KeyframeHistory::Config::isValid() const {
     return Status::Error("stamp_tolerance_s must be in [0, 1] (got " +
                          std::to_string(stamp_tolerance_s) + ")");
   }
-  if (Status s =
-          checkParameterRange("corrections/max_keyframes_with_depth", max_keyframes_with_depth);
-      !s) {
-    return s;
-  }
+  if (Status s = checkParameterRange("corrections/max_memory_mb", max_memory_mb); !s) return s;
   return Status::Ok();
 }
 
@@ -48,25 +45,86 @@ std::string KeyframeHistory::Config::print() const {
   std::ostringstream out;
   out << "enable: " << (enable ? "true" : "false") << "\n"
       << "stamp_tolerance_s: " << stamp_tolerance_s << "\n"
-      << "max_keyframes_with_depth: " << max_keyframes_with_depth << "\n";
+      << "max_memory_mb: " << max_memory_mb << "\n";
   return out.str();
 }
 
 void KeyframeHistory::setConfig(const Config& config) {
   config_ = config;
-  if (!config_.enable) records_.clear();
+  if (!config_.enable) {
+    clear();
+    return;
+  }
+  enforceBound();
 }
 
 void KeyframeHistory::add(KeyframeRecord record) {
   if (!config_.enable) return;
+  static std::atomic<std::uint64_t> next_uid{1};
+  record.uid = next_uid++;
+  record.revision = 0;
   records_.push_back(std::move(record));
-  // The oldest keyframes give up their depth first.
-  std::size_t with_depth = 0;
-  for (auto it = records_.rbegin(); it != records_.rend(); ++it) {
-    if (it->depth.empty()) continue;
-    if (++with_depth > static_cast<std::size_t>(config_.max_keyframes_with_depth)) {
-      it->depth.release();
+  enforceBound();
+}
+
+void coarsenDepth(KeyframeRecord* record) {
+  if (record->depth.empty() || record->depth_coarse) return;
+  const cv::Mat& depth = record->depth;
+  cv::Mat coarse(depth.rows / 2 + depth.rows % 2, depth.cols / 2 + depth.cols % 2, CV_16UC1);
+  for (int v = 0; v < coarse.rows; ++v) {
+    auto* out = coarse.ptr<std::uint16_t>(v);
+    if (depth.type() == CV_16UC1) {
+      const auto* in = depth.ptr<std::uint16_t>(2 * v);
+      for (int u = 0; u < coarse.cols; ++u) out[u] = in[2 * u];
+    } else {
+      // Metres to millimetres; no depth (0, NaN) and beyond 65.5 m stay no depth.
+      const auto* in = depth.ptr<float>(2 * v);
+      for (int u = 0; u < coarse.cols; ++u) {
+        const float mm = std::round(in[2 * u] * 1000.f);
+        out[u] = mm >= 1.f && mm <= 65535.f ? static_cast<std::uint16_t>(mm) : 0;
+      }
     }
+  }
+  // Old pixel 2k is new pixel k: u' = u / 2 (pixel centres at integers, depth_view.h).
+  CameraIntrinsics& K = record->K_depth;
+  K.fx /= 2.0;
+  K.fy /= 2.0;
+  K.cx /= 2.0;
+  K.cy /= 2.0;
+  K.width = coarse.cols;
+  K.height = coarse.rows;
+  record->depth = coarse;
+  record->depth_coarse = true;
+  ++record->revision;
+}
+
+void KeyframeHistory::enforceBound() {
+  const double budget_bytes = config_.max_memory_mb * 1024.0 * 1024.0;
+  Usage now = usage();
+  while (static_cast<double>(now.bytes) > budget_bytes && !records_.empty()) {
+    if (static_cast<double>(now.depth_bytes) > budget_bytes / 4.0) {
+      degradeOldestDepth(now.coarse_depth < now.full_depth);
+    } else {
+      records_.pop_front();
+      ++forgotten_;
+    }
+    now = usage();
+  }
+}
+
+void KeyframeHistory::degradeOldestDepth(bool coarsen) {
+  // With depth, oldest first: the coarse ones, then the full ones. A full one becomes coarse while
+  // they are fewer (the older half of them is coarse), else the oldest gives up its depth.
+  for (KeyframeRecord& record : records_) {
+    if (record.depth.empty() || (coarsen && record.depth_coarse)) continue;
+    if (coarsen) {
+      coarsenDepth(&record);
+    } else {
+      record.depth.release();
+      record.depth_coarse = false;
+      ++record.revision;
+    }
+    return;
   }
 }
 
@@ -110,6 +168,25 @@ std::size_t KeyframeHistory::memoryBytes() const {
   std::size_t bytes = 0;
   for (const KeyframeRecord& record : records_) bytes += record.memoryBytes();
   return bytes;
+}
+
+KeyframeHistory::Usage KeyframeHistory::usage() const {
+  Usage usage;
+  usage.forgotten = forgotten_;
+  for (const KeyframeRecord& record : records_) {
+    usage.bytes += record.memoryBytes();
+    ++usage.keyframes;
+    if (record.depth.empty()) {
+      ++usage.views_only;
+    } else {
+      usage.depth_bytes += record.depth.total() * record.depth.elemSize();
+      ++(record.depth_coarse ? usage.coarse_depth : usage.full_depth);
+    }
+    for (const RecordedView& view : record.views) {
+      if (view.cut != nullptr) usage.cut_bytes += view.cut->memoryBytes();
+    }
+  }
+  return usage;
 }
 
 namespace {

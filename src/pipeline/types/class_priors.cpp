@@ -291,6 +291,16 @@ Status ClassPriors::loadYaml(const std::string& path, ClassPriors* priors) {
   if (!std::filesystem::is_regular_file(path, error)) {
     return Status::Error(source + ": not found or not a regular file");
   }
+  // The pipeline cannot use io's readFile (io builds on it): the type above and the size here
+  // bound the read (the package's file is 6 kB).
+  constexpr std::uintmax_t kMaxPriorsFileBytes = std::uintmax_t{16} << 20;
+  const std::uintmax_t size_bytes = std::filesystem::file_size(path, error);
+  if (error || size_bytes > kMaxPriorsFileBytes) {
+    return Status::Error(source + ": " +
+                         (error ? error.message()
+                                : std::to_string(size_bytes) + " bytes, more than the limit of " +
+                                      std::to_string(kMaxPriorsFileBytes)));
+  }
   std::ifstream in(path, std::ios::binary);
   std::stringstream text;
   if (!in || !(text << in.rdbuf() || in.peek() == std::ifstream::traits_type::eof())) {

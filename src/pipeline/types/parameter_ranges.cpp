@@ -60,8 +60,8 @@ const std::vector<ParameterRange>& parameterRanges() {
        "the map's voxel keys address +-5,000 m from 5 mm (map_limits.h)"},
       {"gravity/ransac_iterations", 1, 10000, "", false, "plane hypotheses per keyframe"},
       {"gravity/voxel_size_m", 0.005, 1.0, "m", false, "points the plane search sees"},
-      {"corrections/max_keyframes_with_depth", 0, 10000, "", false,
-       "depth images kept for corrections: 0.6 MB each at 640x480, 6 GB at the top"},
+      {"corrections/max_memory_mb", 1, 65536, "MB", false,
+       "the keyframe history's memory bound; past it the oldest keyframes degrade"},
   };
   return kRanges;
 }

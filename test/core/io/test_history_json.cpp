@@ -10,67 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "history_records.h"
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 
 namespace mvod {
 namespace {
 
-KeyframeRecord makeRecord(int keyframe, int depth_type) {
-  KeyframeRecord record;
-  record.keyframe = keyframe;
-  record.stamp_s = 100.25 + keyframe;
-  record.name = "frame-" + std::to_string(keyframe);
-  record.T_W_D_recorded.linear() =
-      Eigen::AngleAxisd(0.3 * keyframe + 0.1, Eigen::Vector3d(0.2, 1.0, -0.4).normalized())
-          .matrix();
-  record.T_W_D_recorded.translation() = Eigen::Vector3d(1.5, -0.25, 0.125 * keyframe);
-  record.T_W_D = Eigen::Translation3d(0.01, 0.02, -0.03) * record.T_W_D_recorded;
-  record.T_C_D.translation() = Eigen::Vector3d(0.025, 0.0, 0.0);
-  record.K_depth = CameraIntrinsics{525.0, 526.5, 319.5, 239.25, 8, 6};
-  if (depth_type == CV_16UC1) {
-    record.depth = cv::Mat(6, 8, CV_16UC1);
-    for (int i = 0; i < 48; ++i)
-      record.depth.at<std::uint16_t>(i) = static_cast<std::uint16_t>(i * 997);
-  } else {
-    record.depth = cv::Mat(6, 8, CV_32FC1);
-    for (int i = 0; i < 48; ++i) record.depth.at<float>(i) = 0.5f + 0.0123f * i;
-    record.depth.at<float>(3) = std::numeric_limits<float>::quiet_NaN();
-  }
-  record.has_floor = keyframe % 2 == 0;
-  if (record.has_floor) record.floor_point_D = Eigen::Vector3d(0.1, 1.2, 2.3);
-  RecordedView view;
-  view.class_id = 56;
-  view.class_name = "chair";
-  view.probability = 0.8125;
-  view.box.center_m = Eigen::Vector3d(1.0, 2.0, 0.45);
-  view.box.size_m = Eigen::Vector3d(0.5, 0.55, 0.9);
-  view.box.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).matrix();
-  view.yaw_rad = 0.7;
-  view.object_id = 3 + keyframe;
-  auto cut = std::make_shared<RecordedCut>();
-  cut->cut_W = {Eigen::Vector3f(1.0001f, 2.123456f, 0.3f), Eigen::Vector3f(-3.5f, 1e-7f, 9.75f)};
-  cut->normals_W = {Eigen::Vector3f(0.f, 0.6f, 0.8f),
-                    Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN())};
-  cut->outside_keys = {packVoxel(Eigen::Vector3i(-5, 3, 100)),
-                       packVoxel(Eigen::Vector3i(7, -1, 0))};
-  std::sort(cut->outside_keys.begin(), cut->outside_keys.end());
-  cut->voxel_size_m = 0.01;
-  view.cut = cut;
-  record.views.push_back(view);
-  return record;
-}
-
-bool sameFloats(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Vector3f>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      if (std::isnan(a[i][k]) != std::isnan(b[i][k])) return false;
-      if (!std::isnan(a[i][k]) && a[i][k] != b[i][k]) return false;
-    }
-  }
-  return true;
-}
+using test::makeRecord;
+using test::sameFloats;
 
 std::string saveMap(const std::deque<KeyframeRecord>& history) {
   return objectsToJson({}, MapSummary(), true, &history);
@@ -169,35 +117,6 @@ TEST(HistoryJson, MalformedHistoriesAreRefused) {
   nlohmann::json doc =
       nlohmann::json::parse(saveMap({makeRecord(4, CV_16UC1), makeRecord(2, CV_16UC1)}));
   EXPECT_FALSE(objectsFromJson(doc.dump(), nullptr, nullptr, nullptr).ok());
-}
-
-}  // namespace
-}  // namespace mvod
-
-namespace mvod {
-namespace {
-
-// The autosave's encoding cache gives the same bytes as a save without it, however the history
-// changed since the last save: keyframes added, dropped, re-posed, their views relabelled.
-TEST(HistoryJson, SavesWithTheEncodingCacheEqualSavesWithout) {
-  std::deque<KeyframeRecord> history = {makeRecord(0, CV_16UC1), makeRecord(1, CV_32FC1)};
-  MapEncodingCache cache;
-  const auto save = [&](MapEncodingCache* with) {
-    return objectsToJson({}, MapSummary(), true, &history, with);
-  };
-  EXPECT_EQ(save(&cache), save(nullptr));
-  history.push_back(makeRecord(2, CV_16UC1));
-  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe added";
-  history.pop_front();
-  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe dropped";
-  history.front().T_W_D.translation().x() += 0.25;
-  if (!history.front().views.empty()) history.front().views.front().object_id += 7;
-  EXPECT_EQ(save(&cache), save(nullptr)) << "a keyframe corrected, a view relabelled";
-  // A new keyframe whose depth reuses a freed address would be encoded afresh: the cache holds a
-  // reference to every image it has encoded, so a freed address cannot be reused while cached.
-  history.clear();
-  history.push_back(makeRecord(5, CV_16UC1));
-  EXPECT_EQ(save(&cache), save(nullptr)) << "the history replaced";
 }
 
 }  // namespace

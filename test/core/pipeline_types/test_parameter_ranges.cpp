@@ -45,6 +45,8 @@ TEST(ParameterRangesTest, EveryRangeIsAParameterWhoseDefaultLiesInside) {
       EXPECT_STREQ(range.unit, "s");
     } else if (name.size() > 3 && name.compare(name.size() - 3, 3, "_hz") == 0) {
       EXPECT_STREQ(range.unit, "Hz");
+    } else if (name.size() > 3 && name.compare(name.size() - 3, 3, "_mb") == 0) {
+      EXPECT_STREQ(range.unit, "MB");
     } else {
       EXPECT_STREQ(range.unit, "");
     }

@@ -19,6 +19,7 @@
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
 #include "multiview_object_detection/simulation/synthetic_scene.h"
+#include "run_tool.h"
 #include "shared_data.h"
 #include "test_files.h"
 
@@ -34,36 +35,10 @@ std::string priorsPath() { return kSourceDir + "/config/class_priors.yaml"; }
 
 std::string sharedDir() { return test::sharedPath(); }
 
-std::string quote(const std::string& arg) {
-  std::string quoted = "'";
-  for (const char c : arg) {
-    if (c == '\'') {
-      quoted += "'\\''";
-    } else {
-      quoted += c;
-    }
-  }
-  return quoted + "'";
-}
-
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
 RunResult runTool(const std::vector<std::string>& args, const fs::path& work_dir) {
-  std::string command = quote(kBinary);
-  for (const std::string& arg : args) command += " " + quote(arg);
-  const fs::path out = work_dir / "stdout.txt";
-  const fs::path err = work_dir / "stderr.txt";
-  command += " > " + quote(out.string()) + " 2> " + quote(err.string()) + " < /dev/null";
-  const int status = std::system(command.c_str());
-  RunResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = test::readText(out);
-  result.err = test::readText(err);
-  return result;
+  return test::runTool(kBinary, args, work_dir);
 }
 
 class OfflineRunnerTest : public ::testing::Test {

@@ -9,7 +9,8 @@
 // Memory: per keyframe its depth image (the frame's own buffer: 0.6 MB for 640 x 480 16-bit, 1.2 MB
 // for 32-bit) and per detection that made it into the map its cut (a point, 12 bytes, and a normal,
 // 12 bytes, per cut point; the cut is voxel-filtered, so about one point per cubic centimetre of
-// surface) and the voxel keys it voted against (8 bytes each).
+// surface) and the voxel keys it voted against (8 bytes each). Config::max_memory_mb bounds the
+// whole (memoryBytes()); past it the oldest keyframes degrade (see Config).
 #pragma once
 
 #include <cstdint>
@@ -58,7 +59,13 @@ struct KeyframeRecord {
   Eigen::Isometry3d T_W_D = Eigen::Isometry3d::Identity();           // the pose now
   Eigen::Isometry3d T_C_D = Eigen::Isometry3d::Identity();           // depth -> colour camera
   CameraIntrinsics K_depth;
-  cv::Mat depth;  // a copy of the frame's depth (CV_16UC1 mm or CV_32FC1 m)
+  cv::Mat depth;  // a copy of the frame's depth (CV_16UC1 mm or CV_32FC1 m); empty: given up
+  bool depth_coarse = false;  // depth (and K_depth) at half resolution (KeyframeHistory's bound)
+  // Which data this is, for a map writer that writes each keyframe's data once: a record gets an
+  // id unique in the process when it joins a history, and a new revision whenever its depth
+  // changes (copies share both, and the data they stand for).
+  std::uint64_t uid = 0;
+  int revision = 0;
   // A point of the floor layer this keyframe saw, in the depth camera's frame (the floor's height
   // follows the keyframe's pose); valid when has_floor.
   bool has_floor = false;
@@ -85,10 +92,13 @@ class KeyframeHistory {
     bool enable = true;
     // A correction's stamp matches a keyframe whose stamp is within this (s).
     double stamp_tolerance_s = 0.005;
-    // At most this many keyframes keep their depth (the oldest give it up first): the memory bound
-    // of a long run. A keyframe without depth still moves its views; what its depth told the map
-    // (surface band, free space) is not measured again.
-    int max_keyframes_with_depth = 1000;
+    // The history's memory bound (MB, memoryBytes()). Past it the oldest keyframes degrade until
+    // it holds again. While the depth images take more than a quarter of it, the older half of the
+    // keyframes that keep one have it at half resolution (16-bit mm, a quarter of the bytes), and
+    // the oldest give theirs up (they still move their views; what their depth told the map,
+    // surface band, free space, existence votes, is not measured again). Then the oldest
+    // keyframes are forgotten (the objects only they saw stay, but no longer move).
+    double max_memory_mb = 1024.0;
     Status isValid() const;
     std::string print() const;
   };
@@ -98,11 +108,15 @@ class KeyframeHistory {
   const Config& config() const { return config_; }
   void setConfig(const Config& config);
 
+  // Records `record` as the newest keyframe, then degrades the oldest until the bound holds.
   void add(KeyframeRecord record);
   const std::deque<KeyframeRecord>& records() const { return records_; }
   std::deque<KeyframeRecord>& mutableRecords() { return records_; }
   bool empty() const { return records_.empty(); }
-  void clear() { records_.clear(); }
+  void clear() {
+    records_.clear();
+    forgotten_ = 0;
+  }
 
   // Sets the corrected poses of the keyframes the corrections name (by stamp; several corrections
   // of one keyframe: the last). Returns the indices (into records()) of the keyframes whose pose
@@ -111,10 +125,33 @@ class KeyframeHistory {
                                    std::vector<PoseCorrection>* unmatched);
   std::size_t memoryBytes() const;
 
+  // What the history holds and how far it degraded (for /diagnostics and the tools' reports).
+  struct Usage {
+    std::size_t bytes = 0;        // memoryBytes()
+    std::size_t depth_bytes = 0;  // of that, depth images
+    std::size_t cut_bytes = 0;    // cut points, normals and voxel keys
+    int keyframes = 0;
+    int full_depth = 0;    // keyframes with their depth as recorded
+    int coarse_depth = 0;  // with it at half resolution
+    int views_only = 0;    // without depth
+    int forgotten = 0;     // keyframes dropped since the start (or the last clear())
+  };
+  Usage usage() const;
+
  private:
+  // Degrades the oldest keyframes until memoryBytes() <= the bound (Config::max_memory_mb).
+  void enforceBound();
+  // The oldest depth image: coarsened (`coarsen`, the oldest full one), else given up.
+  void degradeOldestDepth(bool coarsen);
+
   Config config_;
   std::deque<KeyframeRecord> records_;  // keyframe (processing) order
+  int forgotten_ = 0;
 };
+
+// `record`'s depth at half resolution (every second pixel of every second row, as 16-bit mm) and
+// its intrinsics to match; a depth already coarse (record.depth_coarse) or none is left as it is.
+void coarsenDepth(KeyframeRecord* record);
 
 // A recorded view moved by `correction` (the keyframe's), as the fusion takes it: its cut, normals
 // and box moved rigidly, its keys on the fusion grid (the cut's from its moved points; the voxels

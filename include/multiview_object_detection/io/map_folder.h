@@ -1,0 +1,84 @@
+// The node's map on disk: a folder <name>.mvmap that holds the objects in one small file and the
+// keyframe history beside it, one file per keyframe, so that a save writes only the keyframes that
+// are new or changed since the last one and no file grows with the length of the run:
+//
+//   <name>.mvmap/map.json                      the objects (with clouds and evidence) and the
+//                                              summary, as objects.json, and "keyframe_files":
+//                                              per keyframe its file, pose now and object ids
+//   <name>.mvmap/keyframes/kf<N>-<id>.kf       a keyframe's data, never changed once written:
+//                                              "MVODKF01", the header's size (8 bytes, little-
+//                                              endian), the header (JSON: the record as the single-
+//                                              file map has it, its arrays as [offset, size]),
+//                                              then the arrays (depth PNG or float32, cut points
+//                                              and normals float32, voxel keys int64)
+//
+// map.json is written last and atomically: the folder always holds a whole map, the old or the
+// new, whenever a save is killed. Keyframe files of other saves are removed only after map.json no
+// longer names them. Saves to one folder, by threads or processes, take turns, and a load waits
+// for a save in progress (flock on <name>.mvmap/.lock: exclusive to save, shared to load). Nothing
+// is written or read through a symbolic link.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "multiview_object_detection/io/json_io.h"
+
+namespace mvod {
+
+constexpr char kMapFolderExtension[] = ".mvmap";
+// A keyframe file larger than this is refused on reading (a 4096 x 4096 depth image is 64 MiB as
+// float32; a keyframe is bounded by corrections/max_memory_mb as a whole).
+constexpr std::size_t kMaxKeyframeFileBytes = std::size_t{1} << 30;
+// A single-file map of 0.9.x: its history is base64 inside the JSON, and the node wrote files past
+// 1 GiB. Reading one needs about three times its size in memory, once.
+constexpr std::size_t kMaxSingleFileMapBytes = std::size_t{4} << 30;
+
+// Where a map asked for as `path` is saved: `path` itself when it ends in .mvmap, else `path` with
+// a trailing ".json" replaced by (or, without one, followed by) ".mvmap".
+std::string mapFolderPath(const std::string& path);
+
+// Which map `path` names for loading: the folder mapFolderPath(path), or a single file at `path`
+// (the format of 0.9.x and before); where both exist, the one written last. Empty when neither
+// exists.
+std::string mapToLoad(const std::string& path);
+
+// Writes maps to folders. Keeps which keyframe files it wrote, so that saving the same history
+// again (the autosave) writes only the records that are new or changed (a new record, a depth
+// coarsened or given up); the rest of the folder's files are reused while they exist. One writer
+// per saving thread.
+class MapFolderWriter {
+ public:
+  MapFolderWriter();
+  struct Report {
+    std::size_t bytes_written = 0;  // map.json and the new keyframe files
+    std::size_t folder_bytes = 0;   // the whole map as saved
+    int keyframe_files_written = 0;
+    int keyframe_files_reused = 0;
+    int keyframe_files_removed = 0;  // of earlier saves, no longer part of the map
+  };
+  // `folder`: resolved and absolute (resolveMapPath), ending in .mvmap. `report` may be null.
+  Status write(const std::string& folder, const std::vector<MapObject>& objects,
+               const MapSummary& summary, const std::deque<KeyframeRecord>& history,
+               Report* report = nullptr);
+
+ private:
+  std::string session_;  // in the names of this writer's files: never another save's name
+  std::string folder_;   // the folder written_ refers to
+  // (record uid, revision) -> the keyframe file written for it.
+  std::map<std::pair<std::uint64_t, int>, std::string> written_;
+  std::uint64_t next_file_ = 0;  // in every new file's name: unique within the session
+};
+
+// Reads the map at `path`, a map folder or a single-file map (objectsFromJson), whichever it is.
+// Every file is read within its limit; the files inside a folder never through a symbolic link,
+// `path` itself not either with Links::kRefuse (the node's maps). A malformed map is an error
+// naming the file and field, and leaves the outputs untouched. The outputs may be null.
+Status loadMap(const std::string& path, Links links, std::vector<MapObject>* objects,
+               MapSummary* summary, std::deque<KeyframeRecord>* history);
+
+}  // namespace mvod
