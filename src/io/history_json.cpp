@@ -328,6 +328,11 @@ Status readRecord(const json& value, const std::string& path, KeyframeRecord* re
     }
     record->has_floor = true;
   }
+  const auto refined = value.find("refined_after");
+  if (refined != value.end()) {
+    if (!refined->is_boolean()) return fieldError(p + "refined_after", "expected true or false");
+    record->refined_after = refined->get<bool>();
+  }
   const json* depth = nullptr;
   if (!(status = json_fields::member(value, p, "depth", &depth))) return status;
   if (!(status = readDepth(*depth, p + "depth", &record->depth))) return status;
@@ -373,6 +378,7 @@ json historyToJson(const std::deque<KeyframeRecord>& records, EncodingCache* cac
                {"depth", cachedDepth(record.depth, cache)},
                {"views", views}};
     if (record.has_floor) entry["floor_point"] = json_fields::vectorToJson(record.floor_point_D);
+    if (record.refined_after) entry["refined_after"] = true;
     out.push_back(std::move(entry));
   }
   if (cache != nullptr) cache->dropUnused();

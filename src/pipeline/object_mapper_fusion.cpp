@@ -182,6 +182,7 @@ bool ObjectMapper::processFused(const std::string& class_name, const PointCloud&
 
 ObjectMapper::RefinementReport ObjectMapper::refine() {
   refined_ = true;
+  if (!history_.empty()) history_.mutableRecords().back().refined_after = true;
   const RefinementReport report = refineDatabase();
   // A merged duplicate's views are the kept object's now.
   for (const auto& merged : report.merged_ids) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include "multiview_object_detection/pipeline/map/output_frame.h"
@@ -213,6 +214,7 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
   }
   stats_->update([&report](ObjectDetectionStatistics& stats) {
     stats.removed_gone += report.objects_gone;
+    stats.removed_by_corrections += static_cast<int>(report.removed.size());
     ++stats.corrections_applied;
     stats.keyframes_corrected += report.keyframes_moved;
     stats.keyframe_poses_unmatched += report.unmatched;
@@ -220,11 +222,27 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
   });
   if (report.keyframes_moved == 0) return;
   ROS_INFO(
-      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d "
-      "(%.1f ms)",
+      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d, "
+      "%zu removed (%.1f ms)",
       report.keyframes_moved, report.views_replayed, report.objects_before, report.objects_after,
-      report.time_ms);
-  publishMap(ros::Time::now());
+      report.removed.size(), report.time_ms);
+  std::vector<MapObject> removed;
+  std::vector<std::string> reasons;
+  for (const ObjectMapper::RemovedObject& entry : report.removed) {
+    ROS_INFO("keyframe poses corrected: %s #%d removed: %s", entry.object.class_name.c_str(),
+             entry.object.id, entry.reason.c_str());
+    removed.push_back(entry.object);
+    reasons.push_back(entry.reason);
+  }
+  if (report.objects_restored > 0) {
+    ROS_INFO(
+        "keyframe poses corrected: %d objects kept as they were (none of their views moved, so "
+        "the correction cannot explain their removal)",
+        report.objects_restored);
+  }
+  const ros::Time now = ros::Time::now();
+  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
+  publishMap(now);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -394,11 +412,14 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
             what.c_str(), report.detections, report.above_threshold, report.with_box,
             report.inserted, report.fused, report.times.total_ms);
   if (!report.removed.empty()) {
-    std::vector<int> ids;
-    for (const MapObject& object : report.removed) ids.push_back(object.id);
-    ROS_INFO("%s: %zu objects gone (their places seen through, or not detected where seen): %s",
-             what.c_str(), ids.size(), idList(ids).c_str());
-    publishers_->publishRemoved(report.removed, snapshot()->T_W_O, header.stamp);
+    const ExistenceModel existence(mapper_->config().database.existence);
+    std::vector<std::string> reasons;
+    for (const MapObject& object : report.removed) {
+      reasons.push_back(existence.goneReason(object.existence));
+      ROS_INFO("%s: %s #%d gone: %s", what.c_str(), object.class_name.c_str(), object.id,
+               reasons.back().c_str());
+    }
+    publishers_->publishRemoved(report.removed, reasons, snapshot()->T_W_O, header.stamp);
   }
   stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
     ++stats.keyframes_processed;

@@ -121,6 +121,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"latency ms", stats.latency_ms},
       {"latency median ms", stats.latency_median_ms},
       {"removed gone", stats.removed_gone},
+      {"removed by corrections", stats.removed_by_corrections},
       {"keyframe pose messages", stats.keyframe_pose_messages},
       {"keyframe poses refused", stats.keyframe_poses_refused},
       {"keyframe poses unmatched", stats.keyframe_poses_unmatched},

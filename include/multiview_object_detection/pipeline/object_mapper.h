@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -102,6 +103,12 @@ class ObjectMapper {
     double time_ms = 0.0;
   };
 
+  // An object of the map that a correction took out, as it was, and why (in the user's words).
+  struct RemovedObject {
+    MapObject object;
+    std::string reason;
+  };
+
   // What one correctPoses() did.
   struct CorrectionReport {
     bool ignored = false;     // the paper's method, or corrections off: nothing changes
@@ -111,7 +118,14 @@ class ObjectMapper {
     int objects_before = 0;
     int objects_after = 0;
     int objects_kept_unmoved = 0;  // objects without recorded views (e.g. from an older map file)
-    int objects_gone = 0;          // shown gone by the existence evidence while fused again
+    // Of removed: those the existence evidence showed gone at the corrected poses.
+    int objects_gone = 0;
+    // Objects of the map before that the rebuilt map no longer holds. Only objects with a view
+    // in a moved keyframe, or fused into an object with one, can go: the moved poses explain it.
+    std::vector<RemovedObject> removed;
+    // Objects the rebuild would have removed although none of their views moved (nor those of
+    // what they were fused into): kept as they were.
+    int objects_restored = 0;
     double time_ms = 0.0;
   };
 
@@ -250,7 +264,8 @@ class ObjectMapper {
   // again (its box re-estimated when the correction tilted it off gravity).
   void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
                       std::vector<SingleView>* views);
-  void rebuildFromHistory(CorrectionReport* report);
+  // moved: the indices (into the history's records) of the keyframes the correction moved.
+  void rebuildFromHistory(const std::vector<std::size_t>& moved, CorrectionReport* report);
   // What a record's replay needs that depends on that record alone: its depth view and its views
   // moved to the keyframe's current pose (built beside the replay of the record before it).
   struct ReplayInput {
@@ -258,19 +273,31 @@ class ObjectMapper {
     std::vector<ObjectObservation> observations;  // one per recorded view
   };
   ReplayInput prepareReplay(const KeyframeRecord& record) const;
-  // One history record fused again from its prepared input; the rebuilt object of each view
-  // appended to rebuilt_ids.
-  void replayRecord(const KeyframeRecord& record, ReplayInput* input, std::vector<int>* rebuilt_ids,
+  // What a rebuild made of the recorded views, in the rebuilt database's ids.
+  struct ReplayOutcome {
+    std::vector<int> rebuilt_ids;  // the rebuilt object of each recorded view, in history order
+    std::set<int> gone_ids;        // rebuilt objects the existence evidence removed
+    std::set<int> refined_ids;     // rebuilt objects the refinement removed
+  };
+  // One history record fused again from its prepared input.
+  void replayRecord(const KeyframeRecord& record, ReplayInput* input, ReplayOutcome* outcome,
                     CorrectionReport* report);
+  // The refinement of the rebuilt map, where it ran before.
+  void refineRebuilt(ReplayOutcome* outcome);
   // A replayed view's box estimated again where the correction tilted it off gravity (grounded on
   // the floor as the replay has it so far), and its yaw.
   void alignReplayedBox(const KeyframeRecord& record, ObjectObservation* observation) const;
   // The ids of the rebuilt objects: each takes the id most of its views had before (the better
   // supported objects choose first), else a new one; objects of the old map that no view made are
-  // kept as they were.
-  // rebuilt_ids: the rebuilt object of each recorded view, in history order.
-  void adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,
-                       CorrectionReport* report);
+  // kept as they were, and so are those whose removal no moved keyframe explains.
+  // moved_record: per history record, whether the correction moved it.
+  void adoptRebuiltIds(ObjectDatabase* previous, const ReplayOutcome& outcome,
+                       const std::vector<bool>& moved_record, CorrectionReport* report);
+  // Why each object of the previous map that the rebuilt map lacks went (final_id: the rebuilt
+  // objects' ids); *restore: those no moved keyframe explains, to be kept as they were.
+  void explainRemoved(const ObjectDatabase& previous, const ReplayOutcome& outcome,
+                      const std::vector<bool>& moved_record, const std::map<int, int>& final_id,
+                      std::set<int>* restore, CorrectionReport* report) const;
 
   bool processFused(const std::string& class_name, const PointCloud& points_W,
                     const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,

@@ -164,4 +164,14 @@ bool ExistenceModel::apply(Vote vote, ExistenceEvidence* evidence) const {
          evidence->detected < config_.min_detected_share * votes;
 }
 
+std::string ExistenceModel::goneReason(const ExistenceEvidence& evidence) const {
+  const std::uint32_t showed = evidence.detected + evidence.missed;
+  if (evidence.log_odds > config_.remove_below) {
+    return "a detection that did not repeat: detected in " + std::to_string(evidence.detected) +
+           " of the " + std::to_string(showed) + " keyframes whose depth showed it";
+  }
+  return "its place was seen through: by " + std::to_string(evidence.seen_through) +
+         " keyframes (detected in " + std::to_string(evidence.detected) + ")";
+}
+
 }  // namespace mvod

@@ -86,6 +86,8 @@ class ExistenceModel {
             bool detected) const;
   // Adds a vote to the evidence (clamped); true when the object is gone.
   bool apply(Vote vote, ExistenceEvidence* evidence) const;
+  // Why an object with this evidence is gone, in the user's words.
+  std::string goneReason(const ExistenceEvidence& evidence) const;
 
  private:
   // False when no corner of the box projects into the view's image in front of the camera.
