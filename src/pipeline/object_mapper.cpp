@@ -263,7 +263,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     return Status::Error(label + ": cancelled");
   }
   fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
-  recordKeyframe(frame, keyframe, clouds.floor_layer_m, &views);
+  recordKeyframe(frame, keyframe, clouds.floor_layer_m, out.depth_fault, &views);
   out.times.total_ms = msSince(start);
   return Status::Ok();
 }

@@ -33,6 +33,17 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
   database_.setGravityUp(gravity().up);
+  // A keyframe whose depth contradicts most of the map is a fault: its views are not fused (their
+  // clouds come from that depth) and it does not vote.
+  const ExistenceModel::DepthCheck check = checkKeyframeDepth(depth_view.get());
+  out->depth_fault = ExistenceModel::isFault(check);
+  if (out->depth_fault) {
+    out->warnings.push_back(
+        label + ": its depth sees through " + std::to_string(check.seen_through) + " of the " +
+        std::to_string(check.on_surface + check.seen_through) +
+        " confirmed objects whose place it shows: taken for a sensor or SLAM fault (its depth or "
+        "pose is wrong); it does not vote and its detections are not fused");
+  }
   for (size_t k = 0; k < kept.detections.size(); ++k) {
     const Detection2D& detection = kept.detections[k];
     SingleView& view = (*views)[k];
@@ -52,6 +63,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     observation.keyframe = keyframe;
     observation.stamp_s = frame.stamp_s;
     observation.depth_view = depth_view;
+    if (out->depth_fault) continue;  // kept in the history: a correction may fuse it
     const ObjectDatabase::FusionResult result =
         fuseObservation(observation, defer_rebox, &out->times);
     view.object_id = result.object_id;
@@ -62,7 +74,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     }
   }
   if (!database_.pendingRebox().empty()) reboxPending(&out->times);
-  if (existenceActive()) {
+  if (existenceActive() && !out->depth_fault) {
     std::vector<int> detected_ids;
     for (const SingleView& view : *views) {
       if (view.status && view.object_id >= 0) detected_ids.push_back(view.object_id);
@@ -71,6 +83,11 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     updateExistence(depth_view.get(), detected_ids, &out->removed);
     out->times.existence_ms += msSince(t);
   }
+}
+
+ExistenceModel::DepthCheck ObjectMapper::checkKeyframeDepth(const DepthView* view) const {
+  if (view == nullptr || !existenceActive()) return ExistenceModel::DepthCheck();
+  return database_.checkDepth(*view);
 }
 
 void ObjectMapper::updateExistence(const DepthView* view, const std::vector<int>& detected_ids,

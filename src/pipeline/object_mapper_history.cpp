@@ -27,7 +27,7 @@ bool isRigid(const PoseCorrection& correction) {
 }  // namespace
 
 void ObjectMapper::recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
-                                  std::vector<SingleView>* views) {
+                                  bool depth_fault, std::vector<SingleView>* views) {
   if (!config_.corrections.enable || config_.database.fusion != "evidence") return;
   KeyframeRecord record;
   record.keyframe = keyframe;
@@ -47,7 +47,7 @@ void ObjectMapper::recordKeyframe(const RgbdFrame& frame, int keyframe, double f
     record.floor_point_D = frame.T_W_D.inverse() * floor_W;
   }
   for (SingleView& view : *views) {
-    if (!view.status || view.object_id < 0) continue;
+    if (!view.status || (view.object_id < 0 && !depth_fault)) continue;
     ObjectObservation& observation = view.observation;
     RecordedView recorded;
     recorded.class_id = observation.class_id;
@@ -204,6 +204,11 @@ void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input
   if (record.views.empty() && !existenceActive()) return;
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
+  // A fault at its (corrected) pose, as when it was made: neither fused nor voting.
+  if (ExistenceModel::isFault(checkKeyframeDepth(input->depth_view.get()))) {
+    outcome->rebuilt_ids.insert(outcome->rebuilt_ids.end(), input->observations.size(), -1);
+    return;
+  }
   StageTimes times;
   std::vector<int> detected_ids;
   for (ObjectObservation& observation : input->observations) {

@@ -423,6 +423,7 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
   }
   stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
     ++stats.keyframes_processed;
+    if (report.depth_fault) ++stats.keyframes_faulty;
     stats.removed_gone += static_cast<int>(report.removed.size());
     stats.waiting_for_gravity = report.waiting_for_gravity;
     stats.detection_ms = detection_ms;

@@ -109,20 +109,21 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
   const mvod::StageTimes& med = summary.stage_ms_median;
   const mvod::MapSummary::Counts& counts = summary.counts;
   std::fprintf(stderr,
-               "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
+               "%zu frames, %d keyframes (%zu with detections, %d taken for sensor or SLAM "
+               "faults), %d errors; %zu objects "
                "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
                "%d gone by the existence evidence)\n"
                "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
                "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f  refinement %.1f\n"
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
-               num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
-               refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
-               refinement.merged_ids.size(), stats.removed_gone, median(stats.detection_ms),
-               med.extraction_ms, med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms,
-               med.existence_ms, med.total_ms, med.refinement_ms, counts.detections,
-               counts.above_threshold, counts.with_box, counts.inserted, counts.fused,
-               counts.before_refinement);
+               num_frames, stats.keyframes, stats.stage_times.size(), stats.keyframes_faulty,
+               stats.errors, num_objects, refinement.atypical_ids.size(),
+               refinement.intersecting_ids.size(), refinement.merged_ids.size(), stats.removed_gone,
+               median(stats.detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
+               med.manhattan_ms, med.fusion_ms, med.existence_ms, med.total_ms, med.refinement_ms,
+               counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
+               counts.fused, counts.before_refinement);
 }
 
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame) {

@@ -50,6 +50,10 @@ struct KeyframeReport {
   int inserted = 0;
   int fused = 0;
   bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
+  // The keyframe's depth saw through most of the mapped objects it could see: a sensor or SLAM
+  // fault (ExistenceModel::isFault). It did not vote and its detections were not fused; a warning
+  // says so.
+  bool depth_fault = false;
   // Objects this keyframe's votes showed gone (existence evidence), as they were; removed.
   std::vector<MapObject> removed;
   std::vector<std::string>
@@ -251,6 +255,10 @@ class ObjectMapper {
   // depth (detected_ids: fused or inserted in it); the gone are removed (into *removed if given).
   void updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
                        std::vector<MapObject>* removed);
+  // What the keyframe's depth (view, may be null) says of the map's confirmed objects before its
+  // fusion (nothing when the existence evidence is off): ExistenceModel::isFault tells a sensor
+  // or SLAM fault, which neither votes nor is fused.
+  ExistenceModel::DepthCheck checkKeyframeDepth(const DepthView* view) const;
   // Not in the single-frame baseline (disable_fusion): its objects are single detections.
   bool existenceActive() const {
     return config_.database.existence.enable && config_.database.fusion == "evidence" &&
@@ -262,7 +270,8 @@ class ObjectMapper {
   // The history (object_mapper_history.cpp): what the keyframe contributed, kept after its fusion;
   // the map rebuilt from it at the keyframes' current poses; a recorded view as the fusion takes it
   // again (its box re-estimated when the correction tilted it off gravity).
-  void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
+  // depth_fault: its views were not fused (isDepthFault), but are kept for a correction.
+  void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m, bool depth_fault,
                       std::vector<SingleView>* views);
   // moved: the indices (into the history's records) of the keyframes the correction moved.
   void rebuildFromHistory(const std::vector<std::size_t>& moved, CorrectionReport* report);
