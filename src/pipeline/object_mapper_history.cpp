@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <limits>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <set>
 #include <utility>
 
@@ -106,10 +108,40 @@ Status ObjectMapper::correctPoses(const std::vector<PoseCorrection>& corrections
   const std::vector<std::size_t> moved = history_.correct(corrections, &unmatched);
   report.unmatched = static_cast<int>(unmatched.size());
   report.keyframes_moved = static_cast<int>(moved.size());
-  if (!moved.empty()) rebuildFromHistory(moved, &report);
+  if (!moved.empty()) {
+    rebuildFromHistory(moved, &report);
+    for (RemovedObject& removed : report.removed) {
+      removed.reason = "pose correction: " + removed.reason + " at the corrected poses";
+    }
+  }
   report.objects_after = static_cast<int>(database_.size());
   report.time_ms = msSince(start);
   return Status::Ok();
+}
+
+void ObjectMapper::fuseAgainAtNewGrid(ReconfigureReport* report) {
+  const Clock::time_point start = Clock::now();
+  report->objects_before = static_cast<int>(database_.size());
+  report->objects_after = report->objects_before;
+  if (!config_.corrections.enable || config_.database.fusion != "evidence" || history_.empty()) {
+    report->next_fusions_only = true;
+    return;
+  }
+  // Every view's voxels change: every keyframe counts as moved (what goes, the new grid explains).
+  std::vector<std::size_t> all(history_.records().size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  CorrectionReport rebuilt;
+  rebuildFromHistory(all, &rebuilt);
+  report->fused_again = true;
+  for (RemovedObject& removed : rebuilt.removed) {
+    char grid[64];
+    std::snprintf(grid, sizeof(grid), "fused again at database/fusion_voxel_size_m %g m: ",
+                  config_.database.fusion_voxel_size_m);
+    removed.reason = grid + removed.reason;
+    report->removed.push_back(std::move(removed));
+  }
+  report->objects_after = static_cast<int>(database_.size());
+  report->time_ms = msSince(start);
 }
 
 void ObjectMapper::alignReplayedBox(const KeyframeRecord& record,
@@ -205,7 +237,8 @@ void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
   // A fault at its (corrected) pose, as when it was made: neither fused nor voting.
-  if (ExistenceModel::isFault(checkKeyframeDepth(input->depth_view.get()))) {
+  std::string why;
+  if (isKeyframeFault(record.T_W_D, input->depth_view.get(), &why)) {
     outcome->rebuilt_ids.insert(outcome->rebuilt_ids.end(), input->observations.size(), -1);
     return;
   }
@@ -341,15 +374,13 @@ void ObjectMapper::explainRemoved(const ObjectDatabase& previous, const ReplayOu
     RemovedObject removed;
     removed.object = entry.second;
     if (fused_into >= 0) {
-      removed.reason = "pose correction: fused into #" + std::to_string(fused_into) +
-                       ", which its views now overlap";
-    } else if (gone) {
       removed.reason =
-          "pose correction: the keyframes' depth at the corrected poses sees through its place";
+          "fused into #" + std::to_string(fused_into) + ", which its views now overlap";
+    } else if (gone) {
+      removed.reason = "the keyframes' depth sees through its place";
       ++report->objects_gone;
     } else {
-      removed.reason = "pose correction: removed by the refinement at the corrected poses " +
-                       std::string("(an atypical size, or inside another object)");
+      removed.reason = "removed by the refinement (an atypical size, or inside another object)";
     }
     report->removed.push_back(std::move(removed));
   }

@@ -253,11 +253,21 @@ void KeyframeWorker::applyPendingReconfigure() {
   bool segmenter_changed = false;
   const RuntimeConfig::Config config = config_->takeChanges(&mapper_changed, &segmenter_changed);
   if (mapper_changed) {
-    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
-    ObjectMapper::Config mapper_config = config.mapperConfig();
-    mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
-    const Status updated = mapper_->updateConfig(mapper_config);
-    if (!updated) ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
+    ObjectMapper::ReconfigureReport report;
+    double old_grid_m = 0.0;
+    double new_grid_m = 0.0;
+    {
+      std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
+      ObjectMapper::Config mapper_config = config.mapperConfig();
+      mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
+      old_grid_m = mapper_->config().database.fusion_voxel_size_m;
+      new_grid_m = mapper_config.database.fusion_voxel_size_m;
+      const Status updated = mapper_->updateConfig(mapper_config, &report);
+      if (!updated)
+        ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
+      if (report.fused_again) updateSnapshotLocked();
+    }
+    reportNewGrid(report, old_grid_m, new_grid_m);
   }
   if (segmenter_changed && config.detector != "topic" && !segmenter_injected_) {
     std::unique_ptr<InstanceSegmenter> segmenter;
@@ -269,6 +279,34 @@ void KeyframeWorker::applyPendingReconfigure() {
       ROS_ERROR("detector reload failed, the previous one is kept: %s", created.message().c_str());
     }
   }
+}
+
+void KeyframeWorker::reportNewGrid(const ObjectMapper::ReconfigureReport& report, double old_grid_m,
+                                   double new_grid_m) {
+  if (report.next_fusions_only) {
+    ROS_WARN(
+        "database/fusion_voxel_size_m %g -> %g m applies to the next keyframes only: there is no "
+        "keyframe history to fuse the map again from (the paper's method, or corrections/enable "
+        "false); each object moves to the new voxel size when a detection is next fused into it",
+        old_grid_m, new_grid_m);
+    return;
+  }
+  if (!report.fused_again) return;
+  ROS_INFO(
+      "database/fusion_voxel_size_m %g -> %g m: the map was fused again from the keyframe history "
+      "at the new voxel size, as if it had been used from the start: objects %d -> %d (%.1f ms)",
+      old_grid_m, new_grid_m, report.objects_before, report.objects_after, report.time_ms);
+  std::vector<MapObject> removed;
+  std::vector<std::string> reasons;
+  for (const ObjectMapper::RemovedObject& entry : report.removed) {
+    ROS_INFO("%s #%d removed: %s", entry.object.class_name.c_str(), entry.object.id,
+             entry.reason.c_str());
+    removed.push_back(entry.object);
+    reasons.push_back(entry.reason);
+  }
+  const ros::Time now = ros::Time::now();
+  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
+  publishMap(now);
 }
 
 bool KeyframeWorker::updateGravityFromTf(const std::string& what) {

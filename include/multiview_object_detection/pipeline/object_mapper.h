@@ -53,7 +53,7 @@ struct KeyframeReport {
   // The keyframe's depth saw through most of the mapped objects it could see: a sensor or SLAM
   // fault (ExistenceModel::isFault). It did not vote and its detections were not fused; a warning
   // says so.
-  bool depth_fault = false;
+  bool depth_fault = false;  // also: its pose upside down relative to gravity
   // Objects this keyframe's votes showed gone (existence evidence), as they were; removed.
   std::vector<MapObject> removed;
   std::vector<std::string>
@@ -107,7 +107,8 @@ class ObjectMapper {
     double time_ms = 0.0;
   };
 
-  // An object of the map that a correction took out, as it was, and why (in the user's words).
+  // An object of the map that a correction or a new fusion grid took out, as it was, and why (in
+  // the user's words).
   struct RemovedObject {
     MapObject object;
     std::string reason;
@@ -135,11 +136,27 @@ class ObjectMapper {
 
   ObjectMapper(const Config& config, const ClassPriors& priors);
   const Config& config() const { return config_; }
+  // What updateConfig did to the map. A new fusion grid (database/fusion_voxel_size_m) changes what
+  // the objects' evidence is counted on: with a keyframe history (evidence fusion) the map is fused
+  // again from it at the new grid, as if that grid had been used from the start (the same
+  // keyframes, views and ids; objects that now coincide become one). Without one (the paper's
+  // method, corrections/enable false) the new grid applies to the next fusions only: each object
+  // moves to it when a detection is next fused into it.
+  struct ReconfigureReport {
+    bool fused_again = false;
+    bool next_fusions_only = false;  // the grid changed and there was no history to fuse from
+    int objects_before = 0;
+    int objects_after = 0;
+    std::vector<RemovedObject> removed;  // objects the new grid fused into others or removed
+    double time_ms = 0.0;
+  };
+
   // Replaces the configuration at run time (the ROS node's dynamic reconfigure, gravity from TF):
-  // the stage objects are rebuilt, the database keeps its objects and ids, the gravity estimator
-  // keeps its state (new gravity settings apply from the next reset()). An invalid config returns
-  // the isValid() error and changes nothing.
-  Status updateConfig(const Config& config);
+  // the stage objects are rebuilt, the database keeps its objects and ids (fused again from the
+  // history when the fusion grid changes: ReconfigureReport), the gravity estimator keeps its
+  // state (new gravity settings apply from the next reset()). An invalid config returns the
+  // isValid() error and changes nothing.
+  Status updateConfig(const Config& config, ReconfigureReport* report = nullptr);
 
   // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes
   // nothing; problems with single detections are warnings in the report. Warnings name the frame.
@@ -259,6 +276,11 @@ class ObjectMapper {
   // fusion (nothing when the existence evidence is off): ExistenceModel::isFault tells a sensor
   // or SLAM fault, which neither votes nor is fused.
   ExistenceModel::DepthCheck checkKeyframeDepth(const DepthView* view) const;
+  // A keyframe at pose T_W_D with this depth (may be null) that is a sensor or SLAM fault: its
+  // pose upside down relative to gravity, or its depth contradicting most of the map
+  // (checkKeyframeDepth); *why says so in the user's words.
+  bool isKeyframeFault(const Eigen::Isometry3d& T_W_D, const DepthView* view,
+                       std::string* why) const;
   // Not in the single-frame baseline (disable_fusion): its objects are single detections.
   bool existenceActive() const {
     return config_.database.existence.enable && config_.database.fusion == "evidence" &&
@@ -273,6 +295,9 @@ class ObjectMapper {
   // depth_fault: its views were not fused (isDepthFault), but are kept for a correction.
   void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m, bool depth_fault,
                       std::vector<SingleView>* views);
+  // updateConfig with a new fusion grid: the map fused again from the history (every keyframe
+  // counts as moved), or, without a history, nothing (the grid applies to the next fusions).
+  void fuseAgainAtNewGrid(ReconfigureReport* report);
   // moved: the indices (into the history's records) of the keyframes the correction moved.
   void rebuildFromHistory(const std::vector<std::size_t>& moved, CorrectionReport* report);
   // What a record's replay needs that depends on that record alone: its depth view and its views
