@@ -335,6 +335,11 @@ Status recordFromJson(const json& value, const std::string& path, const std::str
     }
     record->has_floor = true;
   }
+  const auto refined = value.find("refined_after");
+  if (refined != value.end()) {
+    if (!refined->is_boolean()) return fieldError(p + "refined_after", "expected true or false");
+    record->refined_after = refined->get<bool>();
+  }
   const json* depth = nullptr;
   if (!(status = json_fields::member(value, p, "depth", &depth))) return status;
   if (!(status = readDepth(*depth, p + "depth", blobs, &record->depth))) return status;
@@ -371,6 +376,7 @@ json recordToJson(const KeyframeRecord& record, std::string* blobs) {
              {"views", views}};
   if (record.has_floor) entry["floor_point"] = json_fields::vectorToJson(record.floor_point_D);
   if (record.depth_coarse && !record.depth.empty()) entry["depth_coarse"] = true;
+  if (record.refined_after) entry["refined_after"] = true;
   return entry;
 }
 

@@ -196,15 +196,17 @@ std::string randomSession() {
   return out.str();
 }
 
-// One manifest entry: the keyframe's file, its pose now and the objects of its views (both change
-// without the keyframe's data changing).
+// One manifest entry: the keyframe's file, its pose now, the objects of its views and whether the
+// refinement ran after it (all change without the keyframe's data changing).
 json manifestEntry(const KeyframeRecord& record, const std::string& file) {
   json object_ids = json::array();
   for (const RecordedView& view : record.views) object_ids.push_back(view.object_id);
-  return json{{"file", file},
-              {"keyframe", record.keyframe},
-              {"T_W_D", history_json::poseToJson(record.T_W_D)},
-              {"object_ids", object_ids}};
+  json entry{{"file", file},
+             {"keyframe", record.keyframe},
+             {"T_W_D", history_json::poseToJson(record.T_W_D)},
+             {"object_ids", object_ids}};
+  if (record.refined_after) entry["refined_after"] = true;
+  return entry;
 }
 
 Status readManifestEntry(const json& entry, const std::string& folder, const std::string& path,
@@ -248,6 +250,11 @@ Status readManifestEntry(const json& entry, const std::string& folder, const std
     }
     read.views[i].object_id = id.get<int>();
   }
+  const auto refined = entry.find("refined_after");  // absent: false
+  if (refined != entry.end() && !refined->is_boolean()) {
+    return fieldError(p + "refined_after", "expected true or false");
+  }
+  read.refined_after = refined != entry.end() && refined->get<bool>();
   read.T_W_D = T_W_D;
   *record = std::move(read);
   return Status::Ok();

@@ -173,9 +173,13 @@ ObjectMapper::ObjectMapper(const Config& config, const ClassPriors& priors)
       gravity_estimator_(config.gravity),
       history_(config.corrections) {}
 
-Status ObjectMapper::updateConfig(const Config& config) {
+Status ObjectMapper::updateConfig(const Config& config, ReconfigureReport* report) {
   const Status valid = config.isValid();
   if (!valid) return valid;
+  ReconfigureReport local;
+  ReconfigureReport& out = report != nullptr ? *report : local;
+  out = ReconfigureReport();
+  const bool new_grid = config.database.fusion_voxel_size_m != config_.database.fusion_voxel_size_m;
   config_ = config;
   extractor_ = ObjectCloudExtractor(extractorConfig(config));
   filter_ = PointCloudFilter(filterConfig(config));
@@ -189,6 +193,7 @@ Status ObjectMapper::updateConfig(const Config& config) {
   prior_filter_ = PriorSizeFilter(config.prior_filter);
   intersection_filter_ = IntersectionFilter(config.intersection_filter);
   history_.setConfig(config.corrections);
+  if (new_grid && database_.size() > 0) fuseAgainAtNewGrid(&out);
   return Status::Ok();
 }
 
@@ -265,7 +270,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     return Status::Error(label + ": cancelled");
   }
   fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
-  recordKeyframe(frame, keyframe, clouds.floor_layer_m, &views);
+  recordKeyframe(frame, keyframe, clouds.floor_layer_m, out.depth_fault, &views);
   out.times.total_ms = msSince(start);
   return Status::Ok();
 }

@@ -2,6 +2,7 @@
 // database, existence evidence, re-boxing fused objects, and Algorithm 1's refinement.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 #include <utility>
@@ -33,6 +34,11 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
   database_.setGravityUp(gravity().up);
+  // A keyframe whose depth contradicts most of the map, or whose pose is upside down, is a fault:
+  // its views are not fused (their clouds come from that depth and pose) and it does not vote.
+  std::string why;
+  out->depth_fault = isKeyframeFault(frame.T_W_D, depth_view.get(), &why);
+  if (out->depth_fault) out->warnings.push_back(label + ": " + why);
   for (size_t k = 0; k < kept.detections.size(); ++k) {
     const Detection2D& detection = kept.detections[k];
     SingleView& view = (*views)[k];
@@ -52,6 +58,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     observation.keyframe = keyframe;
     observation.stamp_s = frame.stamp_s;
     observation.depth_view = depth_view;
+    if (out->depth_fault) continue;  // kept in the history: a correction may fuse it
     const ObjectDatabase::FusionResult result =
         fuseObservation(observation, defer_rebox, &out->times);
     view.object_id = result.object_id;
@@ -65,7 +72,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     }
   }
   if (!database_.pendingRebox().empty()) reboxPending(&out->times);
-  if (existenceActive()) {
+  if (existenceActive() && !out->depth_fault) {
     std::vector<int> detected_ids;
     for (const SingleView& view : *views) {
       if (view.status && view.object_id >= 0) detected_ids.push_back(view.object_id);
@@ -74,6 +81,38 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     updateExistence(depth_view.get(), detected_ids, &out->removed);
     out->times.existence_ms += msSince(t);
   }
+}
+
+bool ObjectMapper::isKeyframeFault(const Eigen::Isometry3d& T_W_D, const DepthView* view,
+                                   std::string* why) const {
+  // The image's "down" (the optical frame's y) pointing up: the camera is upside down relative to
+  // gravity, and whatever it maps would lie upside down, below the floor (a wrong gravity_down,
+  // or a pose flipped). More than 60 degrees from down: no robot or hand-held RGB-D camera looks
+  // so; one mounted upside down has its images flipped by its driver.
+  const double down_up = T_W_D.linear().col(1).dot(gravity().up);
+  if (down_up > 0.5) {
+    char text[320];
+    std::snprintf(text, sizeof(text),
+                  "the camera is upside down relative to gravity (its image's down points %.0f "
+                  "degrees from up): a wrong gravity_down or a flipped pose? Objects mapped from "
+                  "it would lie upside down, below the floor; it does not vote and its detections "
+                  "are not fused",
+                  std::acos(std::min(1.0, down_up)) * 180.0 / M_PI);
+    *why = text;
+    return true;
+  }
+  const ExistenceModel::DepthCheck check = checkKeyframeDepth(view);
+  if (!ExistenceModel::isFault(check)) return false;
+  *why = "its depth sees through " + std::to_string(check.seen_through) + " of the " +
+         std::to_string(check.on_surface + check.seen_through) +
+         " confirmed objects whose place it shows: taken for a sensor or SLAM fault (its depth or "
+         "pose is wrong); it does not vote and its detections are not fused";
+  return true;
+}
+
+ExistenceModel::DepthCheck ObjectMapper::checkKeyframeDepth(const DepthView* view) const {
+  if (view == nullptr || !existenceActive()) return ExistenceModel::DepthCheck();
+  return database_.checkDepth(*view);
 }
 
 void ObjectMapper::updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
@@ -185,6 +224,7 @@ bool ObjectMapper::processFused(const std::string& class_name, const PointCloud&
 
 ObjectMapper::RefinementReport ObjectMapper::refine() {
   refined_ = true;
+  if (!history_.empty()) history_.mutableRecords().back().refined_after = true;
   const RefinementReport report = refineDatabase();
   // A merged duplicate's views are the kept object's now.
   for (const auto& merged : report.merged_ids) {

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <limits>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <set>
 #include <utility>
 
@@ -27,7 +29,7 @@ bool isRigid(const PoseCorrection& correction) {
 }  // namespace
 
 void ObjectMapper::recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
-                                  std::vector<SingleView>* views) {
+                                  bool depth_fault, std::vector<SingleView>* views) {
   if (!config_.corrections.enable || config_.database.fusion != "evidence") return;
   KeyframeRecord record;
   record.keyframe = keyframe;
@@ -47,7 +49,7 @@ void ObjectMapper::recordKeyframe(const RgbdFrame& frame, int keyframe, double f
     record.floor_point_D = frame.T_W_D.inverse() * floor_W;
   }
   for (SingleView& view : *views) {
-    if (!view.status || view.object_id < 0) continue;
+    if (!view.status || (view.object_id < 0 && !depth_fault)) continue;
     ObjectObservation& observation = view.observation;
     RecordedView recorded;
     recorded.class_id = observation.class_id;
@@ -106,10 +108,40 @@ Status ObjectMapper::correctPoses(const std::vector<PoseCorrection>& corrections
   const std::vector<std::size_t> moved = history_.correct(corrections, &unmatched);
   report.unmatched = static_cast<int>(unmatched.size());
   report.keyframes_moved = static_cast<int>(moved.size());
-  if (!moved.empty()) rebuildFromHistory(&report);
+  if (!moved.empty()) {
+    rebuildFromHistory(moved, &report);
+    for (RemovedObject& removed : report.removed) {
+      removed.reason = "pose correction: " + removed.reason + " at the corrected poses";
+    }
+  }
   report.objects_after = static_cast<int>(database_.size());
   report.time_ms = msSince(start);
   return Status::Ok();
+}
+
+void ObjectMapper::fuseAgainAtNewGrid(ReconfigureReport* report) {
+  const Clock::time_point start = Clock::now();
+  report->objects_before = static_cast<int>(database_.size());
+  report->objects_after = report->objects_before;
+  if (!config_.corrections.enable || config_.database.fusion != "evidence" || history_.empty()) {
+    report->next_fusions_only = true;
+    return;
+  }
+  // Every view's voxels change: every keyframe counts as moved (what goes, the new grid explains).
+  std::vector<std::size_t> all(history_.records().size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  CorrectionReport rebuilt;
+  rebuildFromHistory(all, &rebuilt);
+  report->fused_again = true;
+  for (RemovedObject& removed : rebuilt.removed) {
+    char grid[64];
+    std::snprintf(grid, sizeof(grid), "fused again at database/fusion_voxel_size_m %g m: ",
+                  config_.database.fusion_voxel_size_m);
+    removed.reason = grid + removed.reason;
+    report->removed.push_back(std::move(removed));
+  }
+  report->objects_after = static_cast<int>(database_.size());
+  report->time_ms = msSince(start);
 }
 
 void ObjectMapper::alignReplayedBox(const KeyframeRecord& record,
@@ -131,35 +163,49 @@ void ObjectMapper::alignReplayedBox(const KeyframeRecord& record,
   observation->yaw_rad = gravity_frame.yawOf(observation->box.rotation.col(0));
 }
 
-void ObjectMapper::rebuildFromHistory(CorrectionReport* report) {
+void ObjectMapper::rebuildFromHistory(const std::vector<std::size_t>& moved,
+                                      CorrectionReport* report) {
   ObjectDatabase previous = std::move(database_);
   database_ = ObjectDatabase(config_.database, previous.priors());
   database_.setGravityUp(gravity().up);
   // The floor as the keyframes saw it so far, at their current poses (the single views' floor).
   floor_.reset();
-  // The rebuilt object of each view, in history order.
-  std::vector<int> rebuilt_ids;
+  ReplayOutcome outcome;
   // The replay is sequential (each record fuses into the map the records before it made); what
   // the next record's replay needs of that record alone is prepared beside it.
   const std::deque<KeyframeRecord>& records = history_.records();
+  // The refinement where it ran (a history loaded from an older map file says not where: then
+  // once at the end, if it ran at all).
+  const bool refined_where_recorded =
+      std::any_of(records.begin(), records.end(),
+                  [](const KeyframeRecord& record) { return record.refined_after; });
   ReplayInput next;
   if (!records.empty()) next = prepareReplay(records.front());
   for (std::size_t i = 0; i < records.size(); ++i) {
     ReplayInput input = std::move(next);
     next = ReplayInput();
     parallelInvoke(
-        threadCount(), [&] { replayRecord(records[i], &input, &rebuilt_ids, report); },
+        threadCount(), [&] { replayRecord(records[i], &input, &outcome, report); },
         [&] {
           if (i + 1 < records.size()) next = prepareReplay(records[i + 1]);
         });
+    if (records[i].refined_after) refineRebuilt(&outcome);
   }
-  if (refined_) {
-    const RefinementReport refinement = refineDatabase();
-    for (const auto& merged : refinement.merged_ids) {
-      std::replace(rebuilt_ids.begin(), rebuilt_ids.end(), merged.first, merged.second);
-    }
+  if (refined_ && !refined_where_recorded) refineRebuilt(&outcome);
+  std::vector<bool> moved_record(records.size(), false);
+  for (const std::size_t index : moved) moved_record[index] = true;
+  adoptRebuiltIds(&previous, outcome, moved_record, report);
+}
+
+void ObjectMapper::refineRebuilt(ReplayOutcome* outcome) {
+  const RefinementReport refinement = refineDatabase();
+  for (const auto& merged : refinement.merged_ids) {
+    std::replace(outcome->rebuilt_ids.begin(), outcome->rebuilt_ids.end(), merged.first,
+                 merged.second);
   }
-  adoptRebuiltIds(&previous, rebuilt_ids, report);
+  outcome->refined_ids.insert(refinement.atypical_ids.begin(), refinement.atypical_ids.end());
+  outcome->refined_ids.insert(refinement.intersecting_ids.begin(),
+                              refinement.intersecting_ids.end());
 }
 
 ObjectMapper::ReplayInput ObjectMapper::prepareReplay(const KeyframeRecord& record) const {
@@ -181,7 +227,7 @@ ObjectMapper::ReplayInput ObjectMapper::prepareReplay(const KeyframeRecord& reco
 }
 
 void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input,
-                                std::vector<int>* rebuilt_ids, CorrectionReport* report) {
+                                ReplayOutcome* outcome, CorrectionReport* report) {
   if (config_.floor.enable && record.has_floor) {
     const Eigen::Vector3d up = gravity().up;
     const double height_m = up.dot(record.T_W_D * record.floor_point_D);
@@ -190,24 +236,32 @@ void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input
   if (record.views.empty() && !existenceActive()) return;
   database_.setFloorHeight(floorCutActive() ? floor_.floorHeight_m()
                                             : std::numeric_limits<double>::quiet_NaN());
+  // A fault at its (corrected) pose, as when it was made: neither fused nor voting.
+  std::string why;
+  if (isKeyframeFault(record.T_W_D, input->depth_view.get(), &why)) {
+    outcome->rebuilt_ids.insert(outcome->rebuilt_ids.end(), input->observations.size(), -1);
+    return;
+  }
   StageTimes times;
   std::vector<int> detected_ids;
   for (ObjectObservation& observation : input->observations) {
     alignReplayedBox(record, &observation);  // the floor as the records before it left it
     detected_ids.push_back(fuseObservation(observation, true, &times).object_id);
-    rebuilt_ids->push_back(detected_ids.back());
+    outcome->rebuilt_ids.push_back(detected_ids.back());
     ++report->views_replayed;
   }
   if (!database_.pendingRebox().empty()) reboxPending(&times);
   if (existenceActive()) {
     std::vector<MapObject> gone;
     updateExistence(input->depth_view.get(), detected_ids, &gone);
-    report->objects_gone += static_cast<int>(gone.size());
+    for (const MapObject& object : gone) outcome->gone_ids.insert(object.id);
   }
 }
 
-void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,
+void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const ReplayOutcome& outcome,
+                                   const std::vector<bool>& moved_record,
                                    CorrectionReport* report) {
+  const std::vector<int>& rebuilt_ids = outcome.rebuilt_ids;
   // Each rebuilt object's views, and the ids they had.
   std::map<int, int> support;
   std::map<int, std::map<int, int>> votes;
@@ -242,6 +296,8 @@ void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<i
     final_id[rebuilt] = best >= 0 ? best : next_id++;
     taken.insert(final_id[rebuilt]);
   }
+  std::set<int> restore;
+  explainRemoved(*previous, outcome, moved_record, final_id, &restore, report);
   std::vector<MapObject> objects;
   objects.reserve(database_.size());
   for (const auto& entry : database_.objects()) {
@@ -249,8 +305,13 @@ void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<i
     object.id = final_id[entry.first];
     objects.push_back(std::move(object));
   }
-  // Objects no view made (a map loaded from a file without history) cannot move: kept as they are.
   for (const auto& entry : previous->objects()) {
+    // Objects no view made (a map loaded from a file without history) cannot move: kept as they
+    // are; so are those whose removal no moved keyframe explains.
+    if (restore.count(entry.first) != 0) {
+      objects.push_back(entry.second);
+      continue;
+    }
     if (referenced.count(entry.first) != 0 || taken.count(entry.first) != 0) continue;
     objects.push_back(entry.second);
     ++report->objects_kept_unmoved;
@@ -260,9 +321,68 @@ void ObjectMapper::adoptRebuiltIds(ObjectDatabase* previous, const std::vector<i
   k = 0;
   for (KeyframeRecord& record : history_.mutableRecords()) {
     for (RecordedView& view : record.views) {
-      const auto it = final_id.find(rebuilt_ids[k++]);
+      const int rebuilt = rebuilt_ids[k++];
+      if (restore.count(view.object_id) != 0) continue;  // the object kept as it was
+      const auto it = final_id.find(rebuilt);
       if (it != final_id.end()) view.object_id = it->second;  // else refined away: keeps its id
     }
+  }
+}
+
+void ObjectMapper::explainRemoved(const ObjectDatabase& previous, const ReplayOutcome& outcome,
+                                  const std::vector<bool>& moved_record,
+                                  const std::map<int, int>& final_id, std::set<int>* restore,
+                                  CorrectionReport* report) const {
+  // Per object of the previous map: whether a view of it moved, and what its views became; per
+  // rebuilt object: whether a view of it moved.
+  std::map<int, bool> object_moved;
+  std::map<int, std::set<int>> became;
+  std::set<int> rebuilt_moved;
+  std::size_t k = 0;
+  const std::deque<KeyframeRecord>& records = history_.records();
+  for (std::size_t r = 0; r < records.size(); ++r) {
+    for (const RecordedView& view : records[r].views) {
+      const int rebuilt = outcome.rebuilt_ids[k++];
+      if (moved_record[r]) rebuilt_moved.insert(rebuilt);
+      if (view.object_id < 0) continue;
+      object_moved[view.object_id] = object_moved[view.object_id] || moved_record[r];
+      became[view.object_id].insert(rebuilt);
+    }
+  }
+  std::set<int> kept;
+  for (const auto& entry : final_id) kept.insert(entry.second);
+  for (const auto& entry : previous.objects()) {
+    const int id = entry.first;
+    if (kept.count(id) != 0 || became.count(id) == 0) continue;  // still there, or has no views
+    // Fused into another object, seen gone, or refined away at the corrected poses.
+    int fused_into = -1;
+    bool into_moved = false;
+    bool gone = false;
+    for (const int rebuilt : became[id]) {
+      const auto it = final_id.find(rebuilt);
+      if (it != final_id.end()) {
+        fused_into = it->second;
+        into_moved = into_moved || rebuilt_moved.count(rebuilt) != 0;
+      }
+      gone = gone || outcome.gone_ids.count(rebuilt) != 0;
+    }
+    if (!object_moved[id] && !into_moved) {
+      restore->insert(id);
+      ++report->objects_restored;
+      continue;
+    }
+    RemovedObject removed;
+    removed.object = entry.second;
+    if (fused_into >= 0) {
+      removed.reason =
+          "fused into #" + std::to_string(fused_into) + ", which its views now overlap";
+    } else if (gone) {
+      removed.reason = "the keyframes' depth sees through its place";
+      ++report->objects_gone;
+    } else {
+      removed.reason = "removed by the refinement (an atypical size, or inside another object)";
+    }
+    report->removed.push_back(std::move(removed));
   }
 }
 

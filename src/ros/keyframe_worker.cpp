@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include "multiview_object_detection/pipeline/map/output_frame.h"
@@ -213,6 +214,7 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
   }
   stats_->update([&report](ObjectDetectionStatistics& stats) {
     stats.removed_gone += report.objects_gone;
+    stats.removed_by_corrections += static_cast<int>(report.removed.size());
     ++stats.corrections_applied;
     stats.keyframes_corrected += report.keyframes_moved;
     stats.keyframe_poses_unmatched += report.unmatched;
@@ -220,11 +222,27 @@ void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
   });
   if (report.keyframes_moved == 0) return;
   ROS_INFO(
-      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d "
-      "(%.1f ms)",
+      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d, "
+      "%zu removed (%.1f ms)",
       report.keyframes_moved, report.views_replayed, report.objects_before, report.objects_after,
-      report.time_ms);
-  publishMap(ros::Time::now());
+      report.removed.size(), report.time_ms);
+  std::vector<MapObject> removed;
+  std::vector<std::string> reasons;
+  for (const ObjectMapper::RemovedObject& entry : report.removed) {
+    ROS_INFO("keyframe poses corrected: %s #%d removed: %s", entry.object.class_name.c_str(),
+             entry.object.id, entry.reason.c_str());
+    removed.push_back(entry.object);
+    reasons.push_back(entry.reason);
+  }
+  if (report.objects_restored > 0) {
+    ROS_INFO(
+        "keyframe poses corrected: %d objects kept as they were (none of their views moved, so "
+        "the correction cannot explain their removal)",
+        report.objects_restored);
+  }
+  const ros::Time now = ros::Time::now();
+  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
+  publishMap(now);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -235,11 +253,21 @@ void KeyframeWorker::applyPendingReconfigure() {
   bool segmenter_changed = false;
   const RuntimeConfig::Config config = config_->takeChanges(&mapper_changed, &segmenter_changed);
   if (mapper_changed) {
-    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
-    ObjectMapper::Config mapper_config = config.mapperConfig();
-    mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
-    const Status updated = mapper_->updateConfig(mapper_config);
-    if (!updated) ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
+    ObjectMapper::ReconfigureReport report;
+    double old_grid_m = 0.0;
+    double new_grid_m = 0.0;
+    {
+      std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
+      ObjectMapper::Config mapper_config = config.mapperConfig();
+      mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
+      old_grid_m = mapper_->config().database.fusion_voxel_size_m;
+      new_grid_m = mapper_config.database.fusion_voxel_size_m;
+      const Status updated = mapper_->updateConfig(mapper_config, &report);
+      if (!updated)
+        ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
+      if (report.fused_again) updateSnapshotLocked();
+    }
+    reportNewGrid(report, old_grid_m, new_grid_m);
   }
   if (segmenter_changed && config.detector != "topic" && !segmenter_injected_) {
     std::unique_ptr<InstanceSegmenter> segmenter;
@@ -252,6 +280,34 @@ void KeyframeWorker::applyPendingReconfigure() {
       ROS_ERROR("detector reload failed, the previous one is kept: %s", created.message().c_str());
     }
   }
+}
+
+void KeyframeWorker::reportNewGrid(const ObjectMapper::ReconfigureReport& report, double old_grid_m,
+                                   double new_grid_m) {
+  if (report.next_fusions_only) {
+    ROS_WARN(
+        "database/fusion_voxel_size_m %g -> %g m applies to the next keyframes only: there is no "
+        "keyframe history to fuse the map again from (the paper's method, or corrections/enable "
+        "false); each object moves to the new voxel size when a detection is next fused into it",
+        old_grid_m, new_grid_m);
+    return;
+  }
+  if (!report.fused_again) return;
+  ROS_INFO(
+      "database/fusion_voxel_size_m %g -> %g m: the map was fused again from the keyframe history "
+      "at the new voxel size, as if it had been used from the start: objects %d -> %d (%.1f ms)",
+      old_grid_m, new_grid_m, report.objects_before, report.objects_after, report.time_ms);
+  std::vector<MapObject> removed;
+  std::vector<std::string> reasons;
+  for (const ObjectMapper::RemovedObject& entry : report.removed) {
+    ROS_INFO("%s #%d removed: %s", entry.object.class_name.c_str(), entry.object.id,
+             entry.reason.c_str());
+    removed.push_back(entry.object);
+    reasons.push_back(entry.reason);
+  }
+  const ros::Time now = ros::Time::now();
+  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
+  publishMap(now);
 }
 
 bool KeyframeWorker::updateGravityFromTf(const std::string& what) {
@@ -396,14 +452,18 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
             what.c_str(), report.detections, report.above_threshold, report.with_box,
             report.inserted, report.fused, report.times.total_ms);
   if (!report.removed.empty()) {
-    std::vector<int> ids;
-    for (const MapObject& object : report.removed) ids.push_back(object.id);
-    ROS_INFO("%s: %zu objects gone (their places seen through, or not detected where seen): %s",
-             what.c_str(), ids.size(), idList(ids).c_str());
-    publishers_->publishRemoved(report.removed, snapshot()->T_W_O, header.stamp);
+    const ExistenceModel existence(mapper_->config().database.existence);
+    std::vector<std::string> reasons;
+    for (const MapObject& object : report.removed) {
+      reasons.push_back(existence.goneReason(object.existence));
+      ROS_INFO("%s: %s #%d gone: %s", what.c_str(), object.class_name.c_str(), object.id,
+               reasons.back().c_str());
+    }
+    publishers_->publishRemoved(report.removed, reasons, snapshot()->T_W_O, header.stamp);
   }
   stats_->update([&report, detection_ms](ObjectDetectionStatistics& stats) {
     ++stats.keyframes_processed;
+    if (report.depth_fault) ++stats.keyframes_faulty;
     stats.removed_gone += static_cast<int>(report.removed.size());
     stats.waiting_for_gravity = report.waiting_for_gravity;
     stats.detection_ms = detection_ms;

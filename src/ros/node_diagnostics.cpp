@@ -77,6 +77,10 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   } else if (stats.callback_exceptions > exceptions_at_last_) {
     status.summary(DiagnosticStatus::WARN,
                    "a callback failed with an exception (input dropped; see the log)");
+  } else if (stats.keyframes_faulty > faulty_at_last_) {
+    status.summary(DiagnosticStatus::WARN,
+                   "a keyframe's depth contradicted most of the map (a sensor or SLAM fault): "
+                   "not fused, no votes (see the log)");
   } else if (stats.stamps_refused > refused_at_last_) {
     status.summary(DiagnosticStatus::WARN,
                    "input refused for its stamp (past 2038 or far ahead of the clock)");
@@ -86,6 +90,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   dropped_at_last_ = stats.keyframes_dropped;
   exceptions_at_last_ = stats.callback_exceptions;
   refused_at_last_ = stats.stamps_refused;
+  faulty_at_last_ = stats.keyframes_faulty;
   autosave_failures_at_last_ = stats.autosave_failures;
   const std::pair<const char*, double> values[] = {
       {"frames received", stats.frames_received},
@@ -105,6 +110,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"keyframes cancelled", stats.keyframes_cancelled},
       {"keyframes processed", stats.keyframes_processed},
       {"keyframes failed", stats.keyframes_failed},
+      {"keyframes taken for faults", stats.keyframes_faulty},
       {"queue length", stats.queue_length},
       {"objects", stats.objects},
       {"removed atypical", stats.removed_atypical},
@@ -122,6 +128,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"latency ms", stats.latency_ms},
       {"latency median ms", stats.latency_median_ms},
       {"removed gone", stats.removed_gone},
+      {"removed by corrections", stats.removed_by_corrections},
       {"keyframe pose messages", stats.keyframe_pose_messages},
       {"keyframe poses refused", stats.keyframe_poses_refused},
       {"keyframe poses unmatched", stats.keyframe_poses_unmatched},

@@ -62,13 +62,19 @@ void ObjectDetectionPublishers::sendOutputFrame(const Eigen::Isometry3d& T_W_O) 
 }
 
 void ObjectDetectionPublishers::publishRemoved(const std::vector<MapObject>& objects_W,
+                                               const std::vector<std::string>& reasons,
                                                const Eigen::Isometry3d& T_W_O,
                                                const ros::Time& stamp) {
   if (objects_W.empty()) return;
   std_msgs::Header header;
   header.stamp = stamp;
   header.frame_id = outputFrame();
-  removed_objects_pub_.publish(objectsToMsg(inOutputFrame(objects_W, T_W_O, false), header));
+  multiview_object_detection::ObjectArray msg =
+      objectsToMsg(inOutputFrame(objects_W, T_W_O, false), header);
+  for (std::size_t i = 0; i < msg.objects.size() && i < reasons.size(); ++i) {
+    msg.objects[i].removed_reason = reasons[i];
+  }
+  removed_objects_pub_.publish(msg);
 }
 
 void ObjectDetectionPublishers::publishMap(const std::vector<MapObject>& objects_W,

@@ -446,6 +446,7 @@ class KeyframeLoop {
       counts.inserted += keyframe.inserted;
       counts.fused += keyframe.fused;
       stats_.removed_gone += static_cast<int>(keyframe.removed.size());
+      if (keyframe.depth_fault) ++stats_.keyframes_faulty;
       if (keyframe.above_threshold > 0 && !keyframe.waiting_for_gravity) {
         stats_.stage_times.push_back(keyframe.times);
         stats_.stage_detection_ms.push_back(stats_.detection_ms.back());

@@ -129,7 +129,8 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
     keyframe_ms.push_back(stats.stage_detection_ms[k] + stats.stage_times[k].total_ms);
   }
   std::fprintf(stderr,
-               "%zu frames, %d keyframes (%zu with detections), %d errors; %zu objects "
+               "%zu frames, %d keyframes (%zu with detections, %d taken for sensor or SLAM "
+               "faults), %d errors; %zu objects "
                "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
                "%d gone by the existence evidence)\n"
                "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
@@ -137,11 +138,12 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                "detection %.1f)  refinement %.1f\n"
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
-               num_frames, stats.keyframes, stats.stage_times.size(), stats.errors, num_objects,
-               refinement.atypical_ids.size(), refinement.intersecting_ids.size(),
-               refinement.merged_ids.size(), stats.removed_gone, median(stats.detection_ms),
-               med.extraction_ms, med.filter_ms, med.lccp_ms, med.manhattan_ms, med.fusion_ms,
-               med.existence_ms, med.total_ms, median(keyframe_ms), med.refinement_ms,
+               num_frames, stats.keyframes, stats.stage_times.size(), stats.keyframes_faulty,
+               stats.errors, num_objects, refinement.atypical_ids.size(),
+               refinement.intersecting_ids.size(), refinement.merged_ids.size(), stats.removed_gone,
+               median(stats.detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
+               med.manhattan_ms, med.fusion_ms, med.existence_ms, med.total_ms, median(keyframe_ms),
+               med.refinement_ms,
                counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
                counts.fused, counts.before_refinement);
 }

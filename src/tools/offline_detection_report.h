@@ -22,7 +22,8 @@ struct RunStats {
   mvod::MapSummary::Counts counts;
   std::vector<double> correction_ms;  // --corrected-poses: each correction's time
   int keyframes_corrected = 0;
-  int removed_gone = 0;  // by the existence evidence
+  int removed_gone = 0;      // by the existence evidence
+  int keyframes_faulty = 0;  // taken for sensor or SLAM faults (KeyframeReport::depth_fault)
 };
 
 // The map's summary; Table 5's split as medians per keyframe (over the keyframes that had

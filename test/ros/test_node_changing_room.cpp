@@ -7,8 +7,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/MapFile.h"
@@ -230,6 +233,39 @@ TEST_F(NodeChangingRoomTest, ASavedMapKeepsItsExistenceInASecondNode) {
     if (object.views_detected > 1) ++with_evidence;
   }
   EXPECT_GT(with_evidence, 0) << "no object gathered evidence:\n" << describe(first);
+}
+
+// Three keyframes of depth 9.9 m everywhere (a valid value) at the map's own poses: a sensor
+// fault, not an empty room. No object goes, the keyframes are counted on /diagnostics.
+TEST_F(NodeChangingRoomTest, ThreeKeyframesOfFarDepthRemoveNothing) {
+  const ObjectArray before = getObjects(kNode);
+  ASSERT_FALSE(before.objects.empty());
+  const size_t announced = removed().objects.size();
+  const ros::Time start = ros::Time::now() + ros::Duration(1.0);
+  for (int i = 0; i < 3; ++i) {
+    const ros::Time stamp = start + ros::Duration(0.5 * i);
+    FrameMsgs msgs = after_->make(i, stamp);
+    ASSERT_EQ(msgs.depth.encoding, "16UC1");
+    for (size_t k = 0; k + 1 < msgs.depth.data.size(); k += 2) {
+      const std::uint16_t far_mm = 9900;
+      std::memcpy(&msgs.depth.data[k], &far_mm, sizeof(far_mm));
+    }
+    inputs_->publish(msgs);
+    ASSERT_TRUE(outputs_->waitForObjectsAt(stamp, 20.0)) << "keyframe " << i << " not processed";
+  }
+  const ObjectArray after = getObjects(kNode);
+  for (const Object& object : before.objects) {
+    const auto same = std::find_if(after.objects.begin(), after.objects.end(),
+                                   [&](const Object& o) { return o.id == object.id; });
+    EXPECT_NE(same, after.objects.end())
+        << "#" << object.id << " " << object.class_name << " removed:\n"
+        << describe(after);
+  }
+  EXPECT_EQ(after.objects.size(), before.objects.size()) << describe(after);
+  EXPECT_EQ(removed().objects.size(), announced);
+  EXPECT_TRUE(outputs_->waitFor([] { return diagnostic("keyframes taken for faults") >= 3; }, 10.0))
+      << "/diagnostics 'keyframes taken for faults' is "
+      << diagnostic("keyframes taken for faults");
 }
 
 }  // namespace

@@ -10,6 +10,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
 
 #include "multiview_object_detection/GetObjects.h"
 #include "multiview_object_detection/MapFile.h"
@@ -26,6 +30,9 @@ using multiview_object_detection::ObjectArray;
 
 constexpr char kNode[] = "/object_detection";
 constexpr char kSecondNode[] = "/object_detection_2";
+// Maps the same stream as kNode, refining every 10 keyframes (the default), and takes its own
+// ~keyframes path back on /slam_3/keyframe_poses.
+constexpr char kOwnPathNode[] = "/object_detection_3";
 constexpr int kFramesPerLap = 12;
 
 std::string describe(const ObjectArray& objects) {
@@ -93,13 +100,34 @@ class NodeCorrectionsTest : public ::testing::Test {
     inputs_ = new InputPublisher(*nh_);
     outputs_ = new NodeOutputs(*nh_, kNode);
     second_outputs_ = new NodeOutputs(*nh_, kSecondNode);
+    own_outputs_ = new NodeOutputs(*nh_, kOwnPathNode);
     corrections_ = nh_->advertise<nav_msgs::Path>("/slam/keyframe_poses", 2);
     second_corrections_ = nh_->advertise<nav_msgs::Path>("/slam_2/keyframe_poses", 2);
+    own_corrections_ = nh_->advertise<nav_msgs::Path>("/slam_3/keyframe_poses", 2);
+    own_removed_ = nh_->subscribe<ObjectArray>(std::string(kOwnPathNode) + "/removed_objects", 10,
+                                               [&](const ObjectArray::ConstPtr& msg) {
+                                                 std::lock_guard<std::mutex> lock(own_mutex_);
+                                                 for (const Object& object : msg->objects)
+                                                   own_removed_objects_.push_back(object);
+                                               });
+    own_diagnostics_ = nh_->subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+          for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+            if (status.name.rfind(std::string(kOwnPathNode + 1) + ":", 0) != 0) continue;
+            std::lock_guard<std::mutex> lock(own_mutex_);
+            for (const diagnostic_msgs::KeyValue& kv : status.values) {
+              own_counters_[kv.key] = kv.value;
+            }
+          }
+        });
     connected_ = outputs_->waitFor(
         [] {
-          return inputs_->connected() && outputs_->connected() && second_outputs_->connected() &&
+          // Two nodes (kNode, kOwnPathNode) take the stream.
+          return inputs_->connected(2, 2) && outputs_->connected() &&
+                 second_outputs_->connected() && own_outputs_->connected() &&
                  corrections_.getNumSubscribers() > 0 &&
-                 second_corrections_.getNumSubscribers() > 0;
+                 second_corrections_.getNumSubscribers() > 0 &&
+                 own_corrections_.getNumSubscribers() > 0;
         },
         30.0);
     if (!connected_) return;
@@ -115,6 +143,7 @@ class NodeCorrectionsTest : public ::testing::Test {
       }
       inputs_->publish(msgs);
       all_processed_ = outputs_->waitForObjectsAt(stamp, 60.0) && all_processed_;
+      all_processed_ = own_outputs_->waitForObjectsAt(stamp, 60.0) && all_processed_;
     }
     drifted_ = getObjects(kNode);
   }
@@ -122,6 +151,10 @@ class NodeCorrectionsTest : public ::testing::Test {
   static void TearDownTestSuite() {
     corrections_.shutdown();
     second_corrections_.shutdown();
+    own_corrections_.shutdown();
+    own_removed_.shutdown();
+    own_diagnostics_.shutdown();
+    delete own_outputs_;
     delete second_outputs_;
     delete outputs_;
     delete inputs_;
@@ -152,7 +185,16 @@ class NodeCorrectionsTest : public ::testing::Test {
   static InputPublisher* inputs_;
   static NodeOutputs* outputs_;
   static NodeOutputs* second_outputs_;
-  static ros::Publisher corrections_, second_corrections_;
+  static NodeOutputs* own_outputs_;
+  static ros::Publisher corrections_, second_corrections_, own_corrections_;
+  static ros::Subscriber own_removed_, own_diagnostics_;
+  static std::mutex own_mutex_;
+  static std::vector<Object> own_removed_objects_;
+  static std::map<std::string, std::string> own_counters_;
+  static int ownCounter(const std::string& key) {
+    std::lock_guard<std::mutex> lock(own_mutex_);
+    return own_counters_.count(key) != 0 ? std::stoi(own_counters_[key]) : 0;
+  }
   static bool connected_;
   static bool all_processed_;
   static std::vector<geometry_msgs::PoseStamped> truth_;
@@ -164,12 +206,79 @@ SyntheticStream* NodeCorrectionsTest::stream_ = nullptr;
 InputPublisher* NodeCorrectionsTest::inputs_ = nullptr;
 NodeOutputs* NodeCorrectionsTest::outputs_ = nullptr;
 NodeOutputs* NodeCorrectionsTest::second_outputs_ = nullptr;
+NodeOutputs* NodeCorrectionsTest::own_outputs_ = nullptr;
 ros::Publisher NodeCorrectionsTest::corrections_;
 ros::Publisher NodeCorrectionsTest::second_corrections_;
+ros::Publisher NodeCorrectionsTest::own_corrections_;
+ros::Subscriber NodeCorrectionsTest::own_removed_;
+ros::Subscriber NodeCorrectionsTest::own_diagnostics_;
+std::mutex NodeCorrectionsTest::own_mutex_;
+std::vector<Object> NodeCorrectionsTest::own_removed_objects_;
+std::map<std::string, std::string> NodeCorrectionsTest::own_counters_;
 bool NodeCorrectionsTest::connected_ = false;
 bool NodeCorrectionsTest::all_processed_ = true;
 std::vector<geometry_msgs::PoseStamped> NodeCorrectionsTest::truth_;
 ObjectArray NodeCorrectionsTest::drifted_;
+
+// Two maps object for object, as ~get_objects gives them.
+void expectSameObjects(const ObjectArray& expected, const ObjectArray& actual,
+                       const std::string& what) {
+  ASSERT_EQ(expected.objects.size(), actual.objects.size()) << what << "\nbefore:\n"
+                                                            << describe(expected) << "after:\n"
+                                                            << describe(actual);
+  for (size_t i = 0; i < expected.objects.size(); ++i) {
+    const Object& a = expected.objects[i];
+    const Object& b = actual.objects[i];
+    EXPECT_EQ(a.id, b.id) << what;
+    EXPECT_EQ(a.class_name, b.class_name) << what << ": #" << a.id;
+    EXPECT_EQ(a.observations, b.observations) << what << ": #" << a.id;
+    EXPECT_LT((centerOf(a) - centerOf(b)).norm(), 1e-5) << what << ": #" << a.id;
+    EXPECT_NEAR(a.size.x, b.size.x, 1e-5) << what << ": #" << a.id;
+    EXPECT_NEAR(a.size.y, b.size.y, 1e-5) << what << ": #" << a.id;
+    EXPECT_NEAR(a.size.z, b.size.z, 1e-5) << what << ": #" << a.id;
+    EXPECT_EQ(a.views_seen_through, b.views_seen_through) << what << ": #" << a.id;
+  }
+}
+
+// The node's own ~keyframes path sent back on keyframe_poses moves nothing: the map stays what it
+// was, object for object (it used to be rebuilt, refined only at the end, and lose the cup). A
+// wrong correction followed by the right poses (the own path again) ends where it started.
+TEST_F(NodeCorrectionsTest, TheNodesOwnKeyframePathChangesNothing) {
+  ASSERT_TRUE(all_processed_) << "not every keyframe was processed";
+  const ObjectArray before = getObjects(kOwnPathNode);
+  ASSERT_GE(before.objects.size(), 6u);
+  const nav_msgs::Path own = own_outputs_->lastPath();
+  ASSERT_EQ(own.poses.size(), 2u * kFramesPerLap) << "one pose per keyframe";
+  const int applied = ownCounter("corrections applied");
+  own_corrections_.publish(own);
+  ASSERT_TRUE(
+      own_outputs_->waitFor([&] { return ownCounter("corrections applied") > applied; }, 30.0))
+      << "the node did not take its own path";
+  expectSameObjects(before, getObjects(kOwnPathNode), "the own path back");
+  EXPECT_EQ(ownCounter("keyframes corrected"), 0);
+  EXPECT_EQ(ownCounter("removed by corrections"), 0);
+
+  // The first lap 0.5 m off, then the node's own path again.
+  nav_msgs::Path wrong = own;
+  for (int i = 0; i < kFramesPerLap; ++i) wrong.poses[i].pose.position.x += 0.5;
+  size_t received = own_outputs_->objectsReceived();
+  own_corrections_.publish(wrong);
+  ASSERT_TRUE(own_outputs_->waitForObjectsCount(received + 1, 60.0)) << "no ~objects after it";
+  const ObjectArray off = getObjects(kOwnPathNode);
+  received = own_outputs_->objectsReceived();
+  own_corrections_.publish(own);
+  ASSERT_TRUE(own_outputs_->waitForObjectsCount(received + 1, 60.0)) << "no ~objects after it";
+  std::printf("own path: %zu objects; %zu after a wrong correction, %zu after the own path\n",
+              before.objects.size(), off.objects.size(), getObjects(kOwnPathNode).objects.size());
+  expectSameObjects(before, getObjects(kOwnPathNode), "a wrong correction, then the own path");
+  // What the corrections removed was announced, each with its reason.
+  std::lock_guard<std::mutex> lock(own_mutex_);
+  for (const Object& object : own_removed_objects_) {
+    EXPECT_FALSE(object.removed_reason.empty()) << "#" << object.id;
+    std::printf("  removed #%d %s: %s\n", object.id, object.class_name.c_str(),
+                object.removed_reason.c_str());
+  }
+}
 
 TEST_F(NodeCorrectionsTest, CorrectedPosesRemoveTheDriftsDuplicates) {
   ASSERT_TRUE(all_processed_) << "not every keyframe was processed";

@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,6 +53,10 @@ struct KeyframeReport {
   // was not mapped (under λ, no box). An id the existence evidence removed is still named.
   std::vector<int> object_ids;
   bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
+  // The keyframe's depth saw through most of the mapped objects it could see: a sensor or SLAM
+  // fault (ExistenceModel::isFault). It did not vote and its detections were not fused; a warning
+  // says so.
+  bool depth_fault = false;  // also: its pose upside down relative to gravity
   // Objects this keyframe's votes showed gone (existence evidence), as they were; removed.
   std::vector<MapObject> removed;
   std::vector<std::string>
@@ -105,6 +110,13 @@ class ObjectMapper {
     double time_ms = 0.0;
   };
 
+  // An object of the map that a correction or a new fusion grid took out, as it was, and why (in
+  // the user's words).
+  struct RemovedObject {
+    MapObject object;
+    std::string reason;
+  };
+
   // What one correctPoses() did.
   struct CorrectionReport {
     bool ignored = false;     // the paper's method, or corrections off: nothing changes
@@ -114,17 +126,40 @@ class ObjectMapper {
     int objects_before = 0;
     int objects_after = 0;
     int objects_kept_unmoved = 0;  // objects without recorded views (e.g. from an older map file)
-    int objects_gone = 0;          // shown gone by the existence evidence while fused again
+    // Of removed: those the existence evidence showed gone at the corrected poses.
+    int objects_gone = 0;
+    // Objects of the map before that the rebuilt map no longer holds. Only objects with a view
+    // in a moved keyframe, or fused into an object with one, can go: the moved poses explain it.
+    std::vector<RemovedObject> removed;
+    // Objects the rebuild would have removed although none of their views moved (nor those of
+    // what they were fused into): kept as they were.
+    int objects_restored = 0;
     double time_ms = 0.0;
   };
 
   ObjectMapper(const Config& config, const ClassPriors& priors);
   const Config& config() const { return config_; }
+  // What updateConfig did to the map. A new fusion grid (database/fusion_voxel_size_m) changes what
+  // the objects' evidence is counted on: with a keyframe history (evidence fusion) the map is fused
+  // again from it at the new grid, as if that grid had been used from the start (the same
+  // keyframes, views and ids; objects that now coincide become one). Without one (the paper's
+  // method, corrections/enable false) the new grid applies to the next fusions only: each object
+  // moves to it when a detection is next fused into it.
+  struct ReconfigureReport {
+    bool fused_again = false;
+    bool next_fusions_only = false;  // the grid changed and there was no history to fuse from
+    int objects_before = 0;
+    int objects_after = 0;
+    std::vector<RemovedObject> removed;  // objects the new grid fused into others or removed
+    double time_ms = 0.0;
+  };
+
   // Replaces the configuration at run time (the ROS node's dynamic reconfigure, gravity from TF):
-  // the stage objects are rebuilt, the database keeps its objects and ids, the gravity estimator
-  // keeps its state (new gravity settings apply from the next reset()). An invalid config returns
-  // the isValid() error and changes nothing.
-  Status updateConfig(const Config& config);
+  // the stage objects are rebuilt, the database keeps its objects and ids (fused again from the
+  // history when the fusion grid changes: ReconfigureReport), the gravity estimator keeps its
+  // state (new gravity settings apply from the next reset()). An invalid config returns the
+  // isValid() error and changes nothing.
+  Status updateConfig(const Config& config, ReconfigureReport* report = nullptr);
 
   // Runs Sec. 3.1-3.4 on one keyframe and its detections. A bad frame returns an error and changes
   // nothing; problems with single detections are warnings in the report. Warnings name the frame.
@@ -240,6 +275,15 @@ class ObjectMapper {
   // depth (detected_ids: fused or inserted in it); the gone are removed (into *removed if given).
   void updateExistence(const DepthView* view, const std::vector<int>& detected_ids,
                        std::vector<MapObject>* removed);
+  // What the keyframe's depth (view, may be null) says of the map's confirmed objects before its
+  // fusion (nothing when the existence evidence is off): ExistenceModel::isFault tells a sensor
+  // or SLAM fault, which neither votes nor is fused.
+  ExistenceModel::DepthCheck checkKeyframeDepth(const DepthView* view) const;
+  // A keyframe at pose T_W_D with this depth (may be null) that is a sensor or SLAM fault: its
+  // pose upside down relative to gravity, or its depth contradicting most of the map
+  // (checkKeyframeDepth); *why says so in the user's words.
+  bool isKeyframeFault(const Eigen::Isometry3d& T_W_D, const DepthView* view,
+                       std::string* why) const;
   // Not in the single-frame baseline (disable_fusion): its objects are single detections.
   bool existenceActive() const {
     return config_.database.existence.enable && config_.database.fusion == "evidence" &&
@@ -251,9 +295,14 @@ class ObjectMapper {
   // The history (object_mapper_history.cpp): what the keyframe contributed, kept after its fusion;
   // the map rebuilt from it at the keyframes' current poses; a recorded view as the fusion takes it
   // again (its box re-estimated when the correction tilted it off gravity).
-  void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m,
+  // depth_fault: its views were not fused (isDepthFault), but are kept for a correction.
+  void recordKeyframe(const RgbdFrame& frame, int keyframe, double floor_layer_m, bool depth_fault,
                       std::vector<SingleView>* views);
-  void rebuildFromHistory(CorrectionReport* report);
+  // updateConfig with a new fusion grid: the map fused again from the history (every keyframe
+  // counts as moved), or, without a history, nothing (the grid applies to the next fusions).
+  void fuseAgainAtNewGrid(ReconfigureReport* report);
+  // moved: the indices (into the history's records) of the keyframes the correction moved.
+  void rebuildFromHistory(const std::vector<std::size_t>& moved, CorrectionReport* report);
   // What a record's replay needs that depends on that record alone: its depth view and its views
   // moved to the keyframe's current pose (built beside the replay of the record before it).
   struct ReplayInput {
@@ -261,19 +310,31 @@ class ObjectMapper {
     std::vector<ObjectObservation> observations;  // one per recorded view
   };
   ReplayInput prepareReplay(const KeyframeRecord& record) const;
-  // One history record fused again from its prepared input; the rebuilt object of each view
-  // appended to rebuilt_ids.
-  void replayRecord(const KeyframeRecord& record, ReplayInput* input, std::vector<int>* rebuilt_ids,
+  // What a rebuild made of the recorded views, in the rebuilt database's ids.
+  struct ReplayOutcome {
+    std::vector<int> rebuilt_ids;  // the rebuilt object of each recorded view, in history order
+    std::set<int> gone_ids;        // rebuilt objects the existence evidence removed
+    std::set<int> refined_ids;     // rebuilt objects the refinement removed
+  };
+  // One history record fused again from its prepared input.
+  void replayRecord(const KeyframeRecord& record, ReplayInput* input, ReplayOutcome* outcome,
                     CorrectionReport* report);
+  // The refinement of the rebuilt map, where it ran before.
+  void refineRebuilt(ReplayOutcome* outcome);
   // A replayed view's box estimated again where the correction tilted it off gravity (grounded on
   // the floor as the replay has it so far), and its yaw.
   void alignReplayedBox(const KeyframeRecord& record, ObjectObservation* observation) const;
   // The ids of the rebuilt objects: each takes the id most of its views had before (the better
   // supported objects choose first), else a new one; objects of the old map that no view made are
-  // kept as they were.
-  // rebuilt_ids: the rebuilt object of each recorded view, in history order.
-  void adoptRebuiltIds(ObjectDatabase* previous, const std::vector<int>& rebuilt_ids,
-                       CorrectionReport* report);
+  // kept as they were, and so are those whose removal no moved keyframe explains.
+  // moved_record: per history record, whether the correction moved it.
+  void adoptRebuiltIds(ObjectDatabase* previous, const ReplayOutcome& outcome,
+                       const std::vector<bool>& moved_record, CorrectionReport* report);
+  // Why each object of the previous map that the rebuilt map lacks went (final_id: the rebuilt
+  // objects' ids); *restore: those no moved keyframe explains, to be kept as they were.
+  void explainRemoved(const ObjectDatabase& previous, const ReplayOutcome& outcome,
+                      const std::vector<bool>& moved_record, const std::map<int, int>& final_id,
+                      std::set<int>* restore, CorrectionReport* report) const;
 
   bool processFused(const std::string& class_name, const PointCloud& points_W,
                     const std::vector<Eigen::Vector3f>& normals_W, PointCloud* segment_W,

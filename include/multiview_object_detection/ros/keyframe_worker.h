@@ -103,6 +103,10 @@ class KeyframeWorker {
   void workerLoop();
   void processKeyframe(const KeyframeJob& job);
   void applyCorrections(std::vector<PoseCorrection> corrections);
+  // After a new database/fusion_voxel_size_m: says whether the map was fused again from the
+  // history or the new grid applies to the next keyframes only, and publishes a map fused again.
+  void reportNewGrid(const ObjectMapper::ReconfigureReport& report, double old_grid_m,
+                     double new_grid_m);
   void applyPendingReconfigure();
   // Keeps the max_detections highest-scoring detections (in their order), counted and warned.
   void capDetections(int max_detections, const std::string& what,

@@ -41,6 +41,7 @@ class NodeDiagnostics {
   int dropped_at_last_ = 0;
   int exceptions_at_last_ = 0;
   int refused_at_last_ = 0;
+  int faulty_at_last_ = 0;
   int autosave_failures_at_last_ = 0;
 };
 

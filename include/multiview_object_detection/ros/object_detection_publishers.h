@@ -12,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/map/object_database.h"
@@ -36,9 +37,11 @@ class ObjectDetectionPublishers {
   void publishMap(const std::vector<MapObject>& objects_W, const Eigen::Isometry3d& T_W_O,
                   const ros::Time& stamp);
   void publishKeyframePath(const nav_msgs::Path& path);
-  // The objects the existence evidence removed, as they were last (~removed_objects), so that a
-  // task planner learns of them; their markers go with the next publishMap.
-  void publishRemoved(const std::vector<MapObject>& objects_W, const Eigen::Isometry3d& T_W_O,
+  // The objects the existence evidence or a pose correction removed, as they were last, each with
+  // why (~removed_objects), so that a task planner learns of them; their markers go with the next
+  // publishMap. reasons: one per object.
+  void publishRemoved(const std::vector<MapObject>& objects_W,
+                      const std::vector<std::string>& reasons, const Eigen::Isometry3d& T_W_O,
                       const ros::Time& stamp);
   // TF world_frame -> output_frame alone (publishMap sends it too).
   void publishOutputFrame(const Eigen::Isometry3d& T_W_O);

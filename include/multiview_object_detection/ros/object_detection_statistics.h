@@ -26,7 +26,11 @@ struct ObjectDetectionStatistics {
   int objects = 0;
   int removed_atypical = 0;
   int removed_intersecting = 0;
-  int removed_gone = 0;  // the existence evidence showed them gone
+  int removed_gone = 0;            // the existence evidence showed them gone
+  int removed_by_corrections = 0;  // a pose correction fused them into others or showed them gone
+  // Keyframes whose depth contradicted most of the map (a sensor or SLAM fault): not fused, no
+  // votes.
+  int keyframes_faulty = 0;
   bool waiting_for_gravity = false;
   // SLAM corrections (keyframe_poses): messages received, poses refused (NaN, not unit, unknown
   // frame), corrections applied, keyframes moved, poses that matched no keyframe; the last

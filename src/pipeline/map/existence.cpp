@@ -133,7 +133,27 @@ ExistenceModel::Vote ExistenceModel::vote(const PointCloud& voxels_W, const Orie
   return Vote::kMissed;
 }
 
-bool ExistenceModel::apply(Vote vote, ExistenceEvidence* evidence) const {
+double ExistenceModel::faultOdds(const DepthCheck& check) {
+  constexpr double kFaultContradicts = 0.5;  // q
+  return kFaultOdds * std::pow(kFaultContradicts / kChangeRate, check.seen_through) *
+         std::pow((1.0 - kFaultContradicts) / (1.0 - kChangeRate), check.on_surface);
+}
+
+bool ExistenceModel::apply(Vote vote, ExistenceEvidence* evidence, const DepthView* view) const {
+  if (vote == Vote::kSeenThrough && view != nullptr) {
+    const Eigen::Isometry3d T_W_D = view->T_D_W.inverse();
+    const Eigen::Vector3d camera_W = T_W_D.translation();
+    const Eigen::Vector3d axis_W = T_W_D.linear().col(2);
+    if (evidence->has_seen_through_view &&
+        (camera_W - evidence->seen_through_camera_W).norm() < kSameViewpoint_m &&
+        axis_W.dot(evidence->seen_through_axis_W) > std::cos(kSameViewpoint_deg * M_PI / 180.0)) {
+      vote = Vote::kNone;  // the same look again
+    } else {
+      evidence->has_seen_through_view = true;
+      evidence->seen_through_camera_W = camera_W;
+      evidence->seen_through_axis_W = axis_W;
+    }
+  }
   double change = 0.0;
   switch (vote) {
     case Vote::kDetected:
@@ -162,6 +182,16 @@ bool ExistenceModel::apply(Vote vote, ExistenceEvidence* evidence) const {
   return evidence->detected <= static_cast<std::uint32_t>(config_.fade_max_detected) &&
          votes >= static_cast<std::uint32_t>(config_.min_votes_for_share) &&
          evidence->detected < config_.min_detected_share * votes;
+}
+
+std::string ExistenceModel::goneReason(const ExistenceEvidence& evidence) const {
+  const std::uint32_t showed = evidence.detected + evidence.missed;
+  if (evidence.log_odds > config_.remove_below) {
+    return "a detection that did not repeat: detected in " + std::to_string(evidence.detected) +
+           " of the " + std::to_string(showed) + " keyframes whose depth showed it";
+  }
+  return "its place was seen through: by " + std::to_string(evidence.seen_through) +
+         " keyframes (detected in " + std::to_string(evidence.detected) + ")";
 }
 
 }  // namespace mvod

@@ -128,6 +128,12 @@ void KeyframeHistory::degradeOldestDepth(bool coarsen) {
   }
 }
 
+bool isSamePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  // The Frobenius norm of the rotations' difference is sqrt(8) sin(angle / 2): about 1.4 angle.
+  return (a.translation() - b.translation()).norm() <= kSamePoseTranslation_m &&
+         (a.linear() - b.linear()).norm() <= std::sqrt(2.0) * kSamePoseRotation_rad;
+}
+
 std::vector<std::size_t> KeyframeHistory::correct(const std::vector<PoseCorrection>& corrections,
                                                   std::vector<PoseCorrection>* unmatched) {
   // The records by stamp (they are in keyframe order, which a replayed bag need not keep).
@@ -154,8 +160,11 @@ std::vector<std::size_t> KeyframeHistory::correct(const std::vector<PoseCorrecti
       continue;
     }
     KeyframeRecord& record = records_[best];
-    const Eigen::Isometry3d T_W_D = correction.T_W_C * record.T_C_D;
-    if (T_W_D.matrix() == record.T_W_D.matrix()) continue;
+    Eigen::Isometry3d T_W_D = correction.T_W_C * record.T_C_D;
+    // The recorded pose, as a path or a pose file carries it: the recorded pose itself, so that
+    // the views are fused again exactly as they were made.
+    if (isSamePose(T_W_D, record.T_W_D_recorded)) T_W_D = record.T_W_D_recorded;
+    if (isSamePose(T_W_D, record.T_W_D)) continue;
     record.T_W_D = T_W_D;
     changed.push_back(best);
   }

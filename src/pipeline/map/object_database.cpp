@@ -505,9 +505,30 @@ std::vector<int> ObjectDatabase::updateExistence(const DepthView* view,
     const ExistenceModel::Vote vote =
         detected ? ExistenceModel::Vote::kDetected
                  : model.vote(object.segment_W, object.seenBox(), *view, false);
-    if (model.apply(vote, &object.existence)) gone.push_back(object.id);
+    if (model.apply(vote, &object.existence, view)) gone.push_back(object.id);
   }
   return gone;
+}
+
+ExistenceModel::DepthCheck ObjectDatabase::checkDepth(const DepthView& view) const {
+  ExistenceModel::DepthCheck check;
+  const ExistenceModel model(config_.existence);
+  for (const auto& entry : objects_) {
+    const MapObject& object = entry.second;
+    // A detection that has not repeated says little of the map (it may be what a fault made).
+    if (object.existence.detected < ExistenceModel::kConfirmedDetections) continue;
+    switch (model.vote(object.segment_W, object.seenBox(), view, false)) {
+      case ExistenceModel::Vote::kMissed:
+        ++check.on_surface;
+        break;
+      case ExistenceModel::Vote::kSeenThrough:
+        ++check.seen_through;
+        break;
+      default:
+        break;
+    }
+  }
+  return check;
 }
 
 }  // namespace mvod

@@ -42,6 +42,7 @@ inline KeyframeRecord makeRecord(int keyframe, int depth_type) {
   }
   record.has_floor = keyframe % 2 == 0;
   if (record.has_floor) record.floor_point_D = Eigen::Vector3d(0.1, 1.2, 2.3);
+  record.refined_after = keyframe % 2 == 1;
   RecordedView view;
   view.class_id = 56;
   view.class_name = "chair";
@@ -97,6 +98,7 @@ inline void expectSameHistory(const std::deque<KeyframeRecord>& a,
     EXPECT_EQ(x.K_depth.width, y.K_depth.width);
     EXPECT_EQ(x.K_depth.height, y.K_depth.height);
     EXPECT_EQ(x.has_floor, y.has_floor);
+    EXPECT_EQ(x.refined_after, y.refined_after);
     if (x.has_floor) {
       EXPECT_EQ(x.floor_point_D, y.floor_point_D);
     }

@@ -46,6 +46,7 @@ TEST(HistoryJson, RoundTripsExactly) {
     if (a.has_floor) {
       EXPECT_EQ(a.floor_point_D, b.floor_point_D);
     }
+    EXPECT_EQ(a.refined_after, b.refined_after);
     ASSERT_EQ(a.depth.type(), b.depth.type());
     ASSERT_EQ(a.depth.size(), b.depth.size());
     EXPECT_EQ(std::memcmp(a.depth.data, b.depth.data, a.depth.total() * a.depth.elemSize()), 0);
@@ -103,6 +104,8 @@ TEST(HistoryJson, MalformedHistoriesAreRefused) {
       {"huge depth", [](nlohmann::json* k) { (*k)["depth"]["width"] = 100000; }, "depth"},
       {"views not array", [](nlohmann::json* k) { (*k)["views"] = 3; }, "views"},
       {"no stamp", [](nlohmann::json* k) { k->erase("stamp"); }, "stamp"},
+      {"refined not boolean", [](nlohmann::json* k) { (*k)["refined_after"] = 1; },
+       "refined_after"},
   };
   for (const Case& c : cases) {
     nlohmann::json doc = valid;

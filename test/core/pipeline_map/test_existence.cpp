@@ -120,6 +120,50 @@ TEST(ExistenceModelTest, SeveralViewsMustAgreeBeforeAnObjectGoes) {
   EXPECT_DOUBLE_EQ(kept.log_odds, off.min_log_odds);
 }
 
+// A keyframe that sees through one object, or a few among many it shows on their surface, votes:
+// the room changed. One that contradicts most of what it shows is a sensor or SLAM fault.
+TEST(ExistenceModelTest, AKeyframeThatContradictsMostOfTheMapIsAFault) {
+  using Check = ExistenceModel::DepthCheck;
+  const auto fault = [](int on_surface, int seen_through) {
+    Check check;
+    check.on_surface = on_surface;
+    check.seen_through = seen_through;
+    return ExistenceModel::isFault(check);
+  };
+  EXPECT_FALSE(fault(0, 0));
+  EXPECT_FALSE(fault(0, 1));  // a chair carried out, alone in view
+  EXPECT_FALSE(fault(5, 2));  // a moved chair and a removed couch among five that stay
+  EXPECT_FALSE(fault(5, 3));
+  EXPECT_TRUE(fault(0, 2));  // depth of 9.9 m everywhere
+  EXPECT_TRUE(fault(0, 9));
+  EXPECT_TRUE(fault(4, 4));  // images from another place than the pose
+  EXPECT_TRUE(fault(2, 6));
+  // The odds grow tenfold with each object seen through.
+  Check one, two;
+  one.seen_through = 1;
+  two.seen_through = 2;
+  EXPECT_NEAR(ExistenceModel::faultOdds(two) / ExistenceModel::faultOdds(one), 10.0, 1e-9);
+}
+
+// A camera standing still that sees through an object again and again counts once; from another
+// viewpoint (10 cm or 7.5 degrees away) the see-through counts again.
+TEST(ExistenceModelTest, SeeThroughsFromOneViewpointCountOnce) {
+  const ExistenceModel model;
+  ExistenceEvidence evidence;
+  for (int i = 0; i < 5; ++i) model.apply(Vote::kDetected, &evidence);
+  const DepthView here = wallView(4.0f);
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(model.apply(Vote::kSeenThrough, &evidence, &here));
+  EXPECT_EQ(evidence.seen_through, 1u);
+  DepthView moved = here;
+  moved.T_D_W.translation() = Eigen::Vector3d(0.15, 0.0, 0.0);
+  DepthView turned = here;
+  turned.T_D_W.linear() =
+      Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  EXPECT_FALSE(model.apply(Vote::kSeenThrough, &evidence, &moved));
+  EXPECT_TRUE(model.apply(Vote::kSeenThrough, &evidence, &turned));
+  EXPECT_EQ(evidence.seen_through, 3u);
+}
+
 TEST(ExistenceModelTest, ConfigRefusesValuesOutOfRange) {
   EXPECT_TRUE(ExistenceModel::Config().isValid().ok());
   ExistenceModel::Config c;

@@ -30,6 +30,17 @@ TEST(IntrinsicsCheckTest, RealRgbdCamerasAreAccepted) {
   EXPECT_TRUE(checkIntrinsicsForImage({910.0, 910.0, 640.0, 360.0, 1280, 720}, 1280, 720).ok());
   EXPECT_TRUE(checkIntrinsicsForImage({300.0, 300.0, 424.0, 240.0, 848, 480}, 848, 480).ok());
   EXPECT_TRUE(checkIntrinsicsForImage({131.25, 131.25, 79.5, 59.5, 160, 120}, 160, 120).ok());
+  // The widest: Azure Kinect's depth camera in WFOV mode, 120 x 120 degrees on 1024x1024.
+  EXPECT_TRUE(checkIntrinsicsForImage({295.6, 295.6, 511.5, 511.5, 1024, 1024}, 1024, 1024).ok());
+}
+
+// fx = fy = 100 px on 640x480: 145 x 135 degrees, wider than any RGB-D camera (Azure Kinect WFOV:
+// 120); it used to be accepted and a keyframe then took 1.5-2.5 s.
+TEST(IntrinsicsCheckTest, WiderThanTheWidestRgbdCameraIsRefused) {
+  EXPECT_TRUE(refusedWith({100.0, 100.0, 319.5, 239.5, 640, 480}, 640, 480,
+                          {"field of view", "145", "640x480"}));
+  // 131 degrees across (fx 146 px on 640): just past the bound.
+  EXPECT_TRUE(refusedWith({146.0, 146.0, 319.5, 239.5, 640, 480}, 640, 480, {"field of view"}));
 }
 
 TEST(IntrinsicsCheckTest, FieldsOfViewNoRgbdCameraHasAreRefused) {

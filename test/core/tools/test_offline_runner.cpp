@@ -317,6 +317,62 @@ TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
   EXPECT_GT(moved_m, 0.1);
 }
 
+// --corrected-poses holding the dataset's own poses, written as a SLAM's text export writes them
+// (six significant digits): the map is the one without corrections, object for object (it used to
+// be rebuilt from poses that differ in the sixth digit).
+TEST_F(OfflineRunnerTest, CorrectedPosesEqualToThePosesChangeNothing) {
+  SyntheticSceneConfig scene_config;
+  scene_config.num_frames = 24;
+  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  const fs::path dataset = work_ / "dataset";
+  const fs::path detections = work_ / "detections";
+  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
+  const fs::path same = work_ / "same";
+  fs::create_directories(same);
+  for (int i = 0; i < scene_config.num_frames; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", i);
+    Eigen::Isometry3d T_W_D;
+    ASSERT_TRUE(SevenScenesDataset::readPose((dataset / name).string(), &T_W_D).ok());
+    std::ofstream pose(same / name);
+    pose << T_W_D.matrix() << "\n";
+  }
+  const auto run = [&](const std::string& tag, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"--dataset",      dataset.string(),
+                                     "--detections",   detections.string(),
+                                     "--every",        "2",
+                                     "--priors",       priorsPath(),
+                                     "--output",       (work_ / (tag + ".json")).string(),
+                                     "--output-frame", "world"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return runTool(args, work_);
+  };
+  const RunResult plain = run("plain", {});
+  const RunResult at_end = run("at_end", {"--corrected-poses", same.string()});
+  const RunResult midway =
+      run("midway", {"--corrected-poses", same.string(), "--correct-at", "12"});
+  for (const RunResult* result : {&plain, &at_end, &midway}) {
+    ASSERT_EQ(result->exit_code, 0) << result->err;
+  }
+  EXPECT_NE(at_end.err.find("0 keyframes moved"), std::string::npos) << at_end.err;
+  std::vector<MapObject> expected;
+  MapSummary summary;
+  ASSERT_TRUE(loadObjects(work_ / "plain.json", &expected, &summary).ok());
+  ASSERT_GE(expected.size(), 5u);
+  for (const std::string tag : {"at_end", "midway"}) {
+    std::vector<MapObject> actual;
+    ASSERT_TRUE(loadObjects(work_ / (tag + ".json"), &actual, &summary).ok());
+    ASSERT_EQ(actual.size(), expected.size()) << tag;
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+      EXPECT_EQ(actual[i].id, expected[i].id) << tag;
+      EXPECT_EQ(actual[i].class_name, expected[i].class_name) << tag;
+      EXPECT_EQ(actual[i].observations, expected[i].observations) << tag;
+      EXPECT_EQ(actual[i].box.center_m, expected[i].box.center_m) << tag << " #" << actual[i].id;
+      EXPECT_EQ(actual[i].box.size_m, expected[i].box.size_m) << tag << " #" << actual[i].id;
+    }
+  }
+}
+
 // 7-Scenes redkitchen, hand-written box detections (test/data): the dining table's top lies ~0.73 m
 // above the floor (data README). The floor comes from the depth data: the lowest large horizontal
 // plane.

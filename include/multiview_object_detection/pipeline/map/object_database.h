@@ -184,6 +184,9 @@ class ObjectDatabase {
   // (view may be null: only the detections vote). Returns the ids of the objects that are gone
   // (not removed here).
   std::vector<int> updateExistence(const DepthView* view, const std::vector<int>& detected_ids);
+  // What the keyframe's depth says of the confirmed objects before it votes
+  // (ExistenceModel::DepthCheck).
+  ExistenceModel::DepthCheck checkDepth(const DepthView& view) const;
   // Objects waiting for reboxPending().
   const std::vector<int>& pendingRebox() const { return pending_rebox_; }
   // Evidence fusion: one object mapped twice (the refinement's duplicates) becomes one. The votes,
