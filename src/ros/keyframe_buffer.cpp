@@ -77,10 +77,14 @@ void KeyframeBuffer::addFrame(PendingFrame frame) {
   if (!last_input_stamp_.isZero() && header.stamp <= last_input_stamp_) {
     const double back_s = (last_input_stamp_ - header.stamp).toSec();
     if (back_s <= kTimeJumpBackS) {
-      errorThrottled("RGB-D input dropped: " + describeInput(topics_.color, header) +
-                     " is older than or as old as the last frame (stamp " +
-                     stampText(last_input_stamp_) + "): out-of-order or repeated stamp");
-      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
+      const std::string text = "RGB-D input dropped: " + describeInput(topics_.color, header) +
+                               " is older than or as old as the last frame (stamp " +
+                               stampText(last_input_stamp_) + "): out-of-order or repeated stamp";
+      errorThrottled(text);
+      stats_->update([&text](ObjectDetectionStatistics& stats) {
+        ++stats.frames_rejected;
+        stats.last_frame_rejection = text;
+      });
       return;
     }
     handleTimeJumpBack(header.stamp, back_s);
@@ -89,10 +93,14 @@ void KeyframeBuffer::addFrame(PendingFrame frame) {
   pending_.push_back(std::move(frame));
   while (pending_.size() > kMaxPendingFrames) {
     const PendingFrame& oldest = pending_.front();
-    errorThrottled("frame " + describeInput(topics_.color, oldest.msgs.color->header) +
-                   " dropped: too many frames waiting for their camera pose");
+    const std::string text = "frame " + describeInput(topics_.color, oldest.msgs.color->header) +
+                             " dropped: too many frames waiting for their camera pose";
+    errorThrottled(text);
     pending_.pop_front();
-    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.pose_failures; });
+    stats_->update([&text](ObjectDetectionStatistics& stats) {
+      ++stats.pose_failures;
+      stats.last_pose_failure = text;
+    });
   }
   resolvePendingFrames();
 }
@@ -285,7 +293,10 @@ void KeyframeBuffer::resolvePendingFrames() {
     if (lookup == Lookup::kFailed) {
       errorThrottled(error);
       pending_.pop_front();
-      stats_->update([](ObjectDetectionStatistics& stats) { ++stats.pose_failures; });
+      stats_->update([&error](ObjectDetectionStatistics& stats) {
+        ++stats.pose_failures;
+        stats.last_pose_failure = error;
+      });
       continue;
     }
     const ros::Time stamp = frame.msgs.color->header.stamp;

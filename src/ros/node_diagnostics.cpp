@@ -18,8 +18,9 @@ NodeDiagnostics::NodeDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandl
       updater_(std::make_unique<diagnostic_updater::Updater>(nh, nh_private)),
       nh_(nh),
       period_s_(period_s) {
-  // A software node: no device of its own (the camera is the driver's).
-  updater_->setHardwareID("none");
+  // A software node: no device of its own (the camera is the driver's); the node's name tells
+  // which of several mappers a status is from.
+  updater_->setHardwareID(nh_private.getNamespace());
   updater_->add("map", this, &NodeDiagnostics::mapStatus);
 }
 
@@ -86,6 +87,13 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
                    "input refused for its stamp (past 2038 or far ahead of the clock)");
   } else if (stats.waiting_for_gravity) {
     status.summary(DiagnosticStatus::WARN, "waiting for gravity");
+  }
+  rejections_.add(ros::WallTime::now().toSec(),
+                  {stats.frames_received, stats.frames_rejected, stats.pose_failures});
+  const RejectionWindow::Report rejected =
+      rejections_.report(stats.last_frame_rejection, stats.last_pose_failure);
+  if (rejected.level != RejectionWindow::kOk) {
+    status.mergeSummary(static_cast<unsigned char>(rejected.level), rejected.message);
   }
   dropped_at_last_ = stats.keyframes_dropped;
   exceptions_at_last_ = stats.callback_exceptions;

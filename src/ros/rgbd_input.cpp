@@ -87,7 +87,10 @@ void RgbdInput::rgbdCallback(const sensor_msgs::ImageConstPtr& color,
   stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_received; });
   auto reject = [this](const std::string& text) {
     errorThrottled(text);
-    stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_rejected; });
+    stats_->update([&text](ObjectDetectionStatistics& stats) {
+      ++stats.frames_rejected;
+      stats.last_frame_rejection = text;
+    });
   };
   PendingFrame frame;
   frame.msgs.color = color;

@@ -25,6 +25,7 @@
 #include "multiview_object_detection/ros/markers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/reconfigure_names.h"
+#include "multiview_object_detection/ros/rejection_window.h"
 #include "multiview_object_detection/ros/ros_params.h"
 
 namespace mvod {
@@ -849,6 +850,49 @@ TEST(RosConversionsTest, EveryReconfigureNameHasItsYamlNameInTheConfigFile) {
 
 // Dead and slow inputs: an input silent for timeout_s (or since the start) is an error naming it, a
 // slow one a warning, a steady one ok with its rate; unexpected topics are not tracked.
+// The cases: 74 of 74 frames rejected (mono8 colour) and 91 of 92 pose lookups failed
+// (no TF) left /diagnostics at "ok".
+TEST(RejectionWindowTest, RejectedInputIsAWarningAndMostlyRejectedAnError) {
+  RejectionWindow window(10.0);
+  EXPECT_EQ(window.report("", "").level, RejectionWindow::kOk);  // nothing yet
+  // 30 good frames a second for 3 s.
+  for (int s = 0; s <= 3; ++s) window.add(s, {30L * s, 0, 0});
+  EXPECT_EQ(window.report("", "").level, RejectionWindow::kOk);
+  // One rejected frame among them: a warning naming the reason.
+  window.add(4.0, {120, 1, 0});
+  RejectionWindow::Report report = window.report("wrong encoding 'mono8'", "");
+  EXPECT_EQ(report.level, RejectionWindow::kWarn);
+  EXPECT_NE(report.message.find("1 of 120 frames rejected"), std::string::npos) << report.message;
+  EXPECT_NE(report.message.find("mono8"), std::string::npos) << report.message;
+
+  // Every frame rejected from then on: an error once the rejected are at least half.
+  RejectionWindow all(10.0);
+  all.add(0.0, {0, 0, 0});
+  all.add(1.0, {15, 15, 0});
+  report = all.report("wrong encoding 'mono8'", "");
+  EXPECT_EQ(report.level, RejectionWindow::kError);
+  EXPECT_NE(report.message.find("15 of 15 frames rejected"), std::string::npos) << report.message;
+  // Two rejected frames are a warning, not yet an error.
+  RejectionWindow two(10.0);
+  two.add(0.0, {0, 0, 0});
+  two.add(1.0, {2, 2, 0});
+  EXPECT_EQ(two.report("", "").level, RejectionWindow::kWarn);
+
+  // 91 of 92 camera poses failed (pose_source tf without TF).
+  RejectionWindow poses(10.0);
+  poses.add(0.0, {0, 0, 0});
+  poses.add(5.0, {92, 0, 91});
+  report = poses.report("", "no transform 'map' <- 'camera_rgb_optical_frame'");
+  EXPECT_EQ(report.level, RejectionWindow::kError);
+  EXPECT_NE(report.message.find("91 of 92 camera poses failed"), std::string::npos)
+      << report.message;
+  EXPECT_NE(report.message.find("camera_rgb_optical_frame"), std::string::npos) << report.message;
+
+  // The window moves on: good frames for longer than it, and the status is ok again.
+  for (int s = 6; s <= 20; ++s) poses.add(s, {92L + 30L * (s - 5), 0, 91});
+  EXPECT_EQ(poses.report("", "").level, RejectionWindow::kOk) << poses.report("", "").message;
+}
+
 TEST(InputMonitorTest, SilentInputsAreErrorsSlowOnesWarningsAndTheyRecover) {
   using Clock = InputMonitor::Clock;
   const Clock::time_point t0 = Clock::now();

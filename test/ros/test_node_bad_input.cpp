@@ -2,6 +2,7 @@
 // reported on /rosout (WARN or ERROR, naming the problem), the frame is not processed, the services
 // keep answering, and good frames afterwards are still mapped. Two nodes run: /object_detection
 // takes its pose from a topic, /object_detection_tf from TF (for the missing-TF case).
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <std_srvs/Trigger.h>
 #include <sys/stat.h>
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <string>
 
 #include "multiview_object_detection/GetObjects.h"
@@ -421,6 +423,65 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
 
 // The node's parameters (read in one place, ros_params.cpp): paper_method applies first, and every
 // single setting given as a parameter overrides it, wherever it is read; a wrong type is reported.
+// Waits for `node`'s map status on /diagnostics at `level` or above whose message holds `words`;
+// returns the message seen last ("" if none came).
+std::string waitForMapStatus(ros::NodeHandle& nh, const std::string& node, int level,
+                             const std::vector<std::string>& words, double timeout_s) {
+  std::mutex mutex;
+  std::string seen;
+  bool found = false;
+  const std::string name = node.substr(1) + ": map";  // diagnostic_updater: "<node>: <task>"
+  ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name != name) continue;
+          std::lock_guard<std::mutex> lock(mutex);
+          seen = std::to_string(status.level) + " '" + status.message + "' (hardware_id '" +
+                 status.hardware_id + "')";
+          bool all = status.level >= level && status.hardware_id == node;
+          for (const std::string& word : words)
+            all = all && status.message.find(word) != std::string::npos;
+          found = found || all;
+        }
+      });
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::ok() && ros::WallTime::now() < deadline) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (found) return "found: " + seen;
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  sub.shutdown();
+  std::lock_guard<std::mutex> lock(mutex);
+  return seen;
+}
+
+// /diagnostics was "ok" while every frame was rejected (issue 47): now the map status is an ERROR
+// with the share rejected and the reason, for frames and for camera poses.
+TEST_F(NodeBadInputTest, DiagnosticsAreAnErrorWhileMostInputIsRejected) {
+  // 30 at 10 Hz: most of the window's frames, whatever the tests before sent (10 s).
+  for (int i = 0; i < 30; ++i) {
+    FrameMsgs frame = stream_->make(0, stampAt(200 + i));
+    cv::Mat gray(frame.rgb.height, frame.rgb.width, CV_8UC1, cv::Scalar(128));
+    frame.rgb = toImageMsg(gray, "mono8", frame.rgb.header);
+    inputs_->publish(frame, true, true, false);
+    ros::WallDuration(0.08).sleep();
+  }
+  const std::string frames = waitForMapStatus(
+      *nh_, kPoseNode, diagnostic_msgs::DiagnosticStatus::ERROR, {"frames rejected", "mono8"}, 5.0);
+  EXPECT_EQ(frames.rfind("found: ", 0), 0u) << "last map status of " << kPoseNode << ": " << frames;
+  // The TF node gets no TF for these stamps: its poses fail (it rejected the mono8 frames too).
+  for (int i = 0; i < 5; ++i) {
+    inputs_->publish(stream_->make(0, stampAt(240 + i)), true, true, false);
+    ros::WallDuration(0.1).sleep();
+  }
+  const std::string poses = waitForMapStatus(*nh_, kTfNode, diagnostic_msgs::DiagnosticStatus::WARN,
+                                             {"camera poses failed"}, 8.0);
+  EXPECT_EQ(poses.rfind("found: ", 0), 0u) << "last map status of " << kTfNode << ": " << poses;
+  EXPECT_TRUE(answers(kPoseNode));
+}
+
 TEST(NodeParametersTest, PaperMethodFirstThenEachSettingGivenOverridesIt) {
   const auto read = [](const std::string& ns, std::vector<std::string>* errors) {
     return mvod::getObjectDetectionConfigFromRosParam(ros::NodeHandle(ns), errors);

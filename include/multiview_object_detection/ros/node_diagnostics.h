@@ -1,7 +1,8 @@
 // /diagnostics with diagnostic_updater, every diagnostic_period (wall time, so a paused bag still
 // shows):
 // "<node>: map" (queue, drops, failures, stage times; WARN on drops, failed autosaves, callback
-// exceptions, refused stamps, waiting for gravity) and "<node>: input <topic>" per expected input
+// exceptions, refused stamps, waiting for gravity; WARN or ERROR with the share of frames rejected
+// and camera poses failed over the last 10 s and the last reason: RejectionWindow) and "<node>: input <topic>" per expected input
 // (InputMonitor: ERROR when it is silent, WARN when slow). An input going silent is also logged
 // once, and its return.
 #pragma once
@@ -14,6 +15,7 @@
 #include <string>
 
 #include "multiview_object_detection/ros/object_detection_statistics.h"
+#include "multiview_object_detection/ros/rejection_window.h"
 
 namespace mvod {
 
@@ -43,6 +45,7 @@ class NodeDiagnostics {
   int refused_at_last_ = 0;
   int faulty_at_last_ = 0;
   int autosave_failures_at_last_ = 0;
+  RejectionWindow rejections_;
 };
 
 }  // namespace mvod

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mutex>
+#include <string>
 
 #include "multiview_object_detection/pipeline/object_mapper.h"
 #include "multiview_object_detection/ros/input_monitor.h"
@@ -13,6 +14,9 @@ struct ObjectDetectionStatistics {
   int frames_received = 0;
   int frames_rejected = 0;      // bad encoding, size, camera_info, out-of-order stamp
   int pose_failures = 0;        // no TF / pose in time, or an invalid pose
+  // The last reasons given for those two (the map status on /diagnostics names them).
+  std::string last_frame_rejection;
+  std::string last_pose_failure;
   int time_jumps = 0;           // input stamps jumped back by more than 1 s (buffers cleared)
   int detections_capped = 0;    // detections beyond max_detections_per_frame, dropped
   int stamps_refused = 0;       // any input stamped past 2038 or far ahead of the clock
