@@ -26,9 +26,9 @@ double secondsSince(Clock::time_point start) {
 }  // namespace
 
 KeyframeBuffer::KeyframeBuffer(const ObjectDetectionRosConfig& config, const RgbdTopics& topics,
-                               const tf2_ros::Buffer& tf_buffer,
-                               ObjectDetectionPublishers* publishers, SharedStatistics* stats,
-                               const std::atomic<bool>& shut_down, KeyframeCallback on_keyframe)
+                               tf2_ros::Buffer& tf_buffer, ObjectDetectionPublishers* publishers,
+                               SharedStatistics* stats, const std::atomic<bool>& shut_down,
+                               KeyframeCallback on_keyframe)
     : config_(config),
       topics_(topics),
       tf_buffer_(tf_buffer),
@@ -130,6 +130,9 @@ void KeyframeBuffer::reset() {
   std::lock_guard<std::mutex> lock(mutex_);
   pending_.clear();
   poses_.clear();
+  // A bag replayed after ~reset sends the same stamps again: tf2 would keep the old transforms
+  // and warn TF_REPEATED_DATA for each new one. Static transforms are kept (tf2 keeps them).
+  tf_buffer_.clear();
   if (on_time_jump_) on_time_jump_(ros::Time());  // all detections
   selector_.reset();
   last_input_stamp_ = ros::Time();  // a restarted bag may begin again

@@ -482,6 +482,31 @@ TEST_F(NodeBadInputTest, DiagnosticsAreAnErrorWhileMostInputIsRejected) {
   EXPECT_TRUE(answers(kPoseNode));
 }
 
+// A bag replayed after ~reset sends the same TF stamps again: the node's TF buffer is cleared on
+// reset, so the new transforms are used (not the old ones at the same stamps) and tf2 does not
+// warn TF_REPEATED_DATA for each (issue 47).
+TEST_F(NodeBadInputTest, ResetClearsTheTfBufferSoTheSameStampsGetTheirNewPoses) {
+  const ros::Time stamp = stampAt(300);
+  inputs_->publish(stream_->make(0, stamp), false, true, true);
+  ASSERT_TRUE(tf_node_->waitForObjectsAt(stamp, 20.0)) << tf_node_->allLogs();
+  std_srvs::Trigger reset;
+  ASSERT_TRUE(ros::service::call(std::string(kTfNode) + "/reset", reset));
+  ASSERT_TRUE(reset.response.success) << reset.response.message;
+  ASSERT_TRUE(tf_node_->waitFor([] { return tf_node_->keyframePoses() == 0; }, 5.0));
+  const ros::Time since = ros::Time::now();
+  // The same stamp, another pose (frame 6 of the stream: elsewhere on its path).
+  const FrameMsgs moved = stream_->make(6, stamp);
+  inputs_->publish(moved, false, true, true);
+  ASSERT_TRUE(tf_node_->waitFor([] { return tf_node_->keyframePoses() == 1; }, 20.0))
+      << tf_node_->allLogs();
+  const geometry_msgs::Pose keyframe = tf_node_->lastPath().poses.back().pose;
+  EXPECT_NEAR(keyframe.position.x, moved.pose.pose.position.x, 1e-6);
+  EXPECT_NEAR(keyframe.position.y, moved.pose.pose.position.y, 1e-6);
+  EXPECT_NEAR(keyframe.position.z, moved.pose.pose.position.z, 1e-6);
+  ros::WallDuration(0.5).sleep();
+  EXPECT_TRUE(tf_node_->findLogs({"TF_REPEATED_DATA"}, {}, since).empty()) << tf_node_->allLogs();
+}
+
 TEST(NodeParametersTest, PaperMethodFirstThenEachSettingGivenOverridesIt) {
   const auto read = [](const std::string& ns, std::vector<std::string>* errors) {
     return mvod::getObjectDetectionConfigFromRosParam(ros::NodeHandle(ns), errors);

@@ -34,7 +34,7 @@ class KeyframeBuffer {
   using TimeJumpCallback = std::function<void(const ros::Time& stamp)>;
 
   KeyframeBuffer(const ObjectDetectionRosConfig& config, const RgbdTopics& topics,
-                 const tf2_ros::Buffer& tf_buffer, ObjectDetectionPublishers* publishers,
+                 tf2_ros::Buffer& tf_buffer, ObjectDetectionPublishers* publishers,
                  SharedStatistics* stats, const std::atomic<bool>& shut_down,
                  KeyframeCallback on_keyframe);
 
@@ -54,8 +54,9 @@ class KeyframeBuffer {
   // last one (out of order); more than 1 s older is a jump back in time (a restarted bag, or a
   // bogus future stamp before): the buffers are cleared and the frame is taken.
   void addFrame(PendingFrame frame);
-  // Forgets the waiting frames, the buffered poses and detections, the selector's state, the last
-  // stamp (a restarted bag may begin again) and the keyframe path, and publishes the empty path.
+  // Forgets the waiting frames, the buffered poses and detections, the TF buffer's transforms (the
+  // static ones stay), the selector's state, the last stamp (a restarted bag may begin again) and
+  // the keyframe path, and publishes the empty path.
   void reset();
   // Keyframe thresholds changed by dynamic reconfigure.
   void setKeyframeConfig(const KeyframeSelector::Config& keyframes);
@@ -82,7 +83,7 @@ class KeyframeBuffer {
 
   const ObjectDetectionRosConfig config_;  // fixed fields only (frames, pose source, timeouts)
   const RgbdTopics topics_;
-  const tf2_ros::Buffer& tf_buffer_;
+  tf2_ros::Buffer& tf_buffer_;  // cleared on reset
   ObjectDetectionPublishers* publishers_;
   SharedStatistics* stats_;
   const std::atomic<bool>& shut_down_;
