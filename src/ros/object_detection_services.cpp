@@ -6,6 +6,8 @@
 
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/map_folder.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
+#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/map_autosaver.h"
 
 namespace mvod {
@@ -49,12 +51,25 @@ bool ObjectDetectionServices::getObjects(
     multiview_object_detection::GetObjects::Request& request,
     multiview_object_detection::GetObjects::Response& response) {
   const std::set<int> ids(request.ids.begin(), request.ids.end());
+  // The COCO spelling of the class asked for ("sofa" -> "couch", as the detectors' label files
+  // spell it); a name of no COCO class stays as given (a custom detector's class).
+  const int coco_id = cocoClassId(request.class_name);
+  const std::string class_name = coco_id < 0 ? request.class_name : cocoClassNames()[coco_id];
   const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
   std::vector<MapObject> selected;
+  bool class_known = coco_id >= 0;
   for (const MapObject& object : map->objects) {
-    if (!request.class_name.empty() && object.class_name != request.class_name) continue;
+    class_known = class_known || object.class_name == class_name;
+    if (!class_name.empty() && object.class_name != class_name) continue;
     if (!ids.empty() && ids.count(object.id) == 0) continue;
     selected.push_back(object);
+  }
+  if (!class_name.empty() && !class_known) {
+    ROS_WARN_THROTTLE(5.0,
+                      "get_objects: '%s' is no COCO class name and no object of the map has it "
+                      "(COCO spells e.g. \"couch\", \"dining table\", \"tv\"; see "
+                      "config/class_priors.yaml)",
+                      class_name.c_str());
   }
   std_msgs::Header header;
   header.frame_id = publishers_->outputFrame();

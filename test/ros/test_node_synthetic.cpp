@@ -528,6 +528,14 @@ TEST_F(NodeSyntheticTest, GetObjectsFiltersByClassAndId) {
   EXPECT_EQ(idsOf(getObjects("chair", {first})), std::set<int>{first});
   EXPECT_TRUE(getObjects("couch", {first}).objects.empty());
   EXPECT_TRUE(getObjects("giraffe", {}).objects.empty());
+  // The spellings the detectors' label files use name the COCO class: "sofa" is the couch.
+  std::set<int> couch_ids;
+  for (const Object& object : objects_.objects) {
+    if (object.class_name == "couch") couch_ids.insert(object.id);
+  }
+  ASSERT_FALSE(couch_ids.empty());
+  EXPECT_EQ(idsOf(getObjects("sofa", {})), couch_ids);
+  EXPECT_EQ(idsOf(getObjects("couch", {})), couch_ids);
   EXPECT_TRUE(getObjects("", {1000000}).objects.empty());
 }
 
