@@ -128,7 +128,7 @@ if [[ -n "$gravity" ]]; then replay+=(--gravity-down "$gravity"); else replay+=(
 
 echo
 if [[ -n "$ground_truth" ]]; then
-  echo "== 4/4 accuracy against the ground truth (evaluate; see README, Evaluation)"
+  echo "== 4/4 accuracy against the ground truth (evaluate; see README, Offline tools)"
   "$bin/evaluate" --objects "$out/map.mvmap" --ground-truth "$ground_truth" \
     --markdown "$out/accuracy.md" --csv "$out/accuracy.csv" --plot "$out/map.png"
 else

@@ -34,6 +34,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "offline_detection_options.h"
 #include "offline_detection_report.h"
+#include "offline_detection_warnings.h"
 
 namespace fs = std::filesystem;
 using offline_detection::kExitFailure;
@@ -42,8 +43,8 @@ using offline_detection::kExitUsage;
 using offline_detection::Options;
 using offline_detection::parseArguments;
 using offline_detection::printCostGrowth;
-using offline_detection::printRefinementRemovals;
 using offline_detection::printHistoryUsage;
+using offline_detection::printRefinementRemovals;
 using offline_detection::printRunReport;
 using offline_detection::printTable;
 using offline_detection::RunStats;
@@ -384,7 +385,7 @@ class KeyframeLoop {
         segmenter_.detect(frame.color_bgr, frame.name, detections, &warnings);
     stats_.detection_ms.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    for (const std::string& warning : warnings) report(name + ": warning: " + warning, false);
+    for (const std::string& warning : warnings) warn(name + ": warning: " + warning);
     if (!detected) {
       ++stats_.errors;
       report(name + ": error: detection failed: " + detected.message(), true);
@@ -453,7 +454,7 @@ class KeyframeLoop {
         stats_.stage_frames.push_back(name);
       }
     }
-    for (const std::string& warning : keyframe.warnings) report("warning: " + warning, false);
+    for (const std::string& warning : keyframe.warnings) warn("warning: " + warning);
     for (const mvod::MapObject& object : keyframe.removed) {
       const mvod::ExistenceEvidence& e = object.existence;
       report(name + ": #" + std::to_string(object.id) + " " + object.class_name +
@@ -463,6 +464,13 @@ class KeyframeLoop {
              false);
     }
     return keyframe.object_ids;
+  }
+
+  // A dropped detection or skipped keyframe: counted by its plain reason for the summary, the line
+  // itself shown with --verbose.
+  void warn(const std::string& line) {
+    ++stats_.warnings[offline_detection::plainReason(line)];
+    if (options_.verbose) report(line, false);
   }
 
   // A line on stderr (not with --quiet unless it is an error), below the progress line.

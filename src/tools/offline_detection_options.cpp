@@ -105,6 +105,8 @@ const char* const kUsage =
     "  --correct-at N         apply --corrected-poses just before frame N (default: after the\n"
     "                         last frame)\n"
     "  --quiet                no progress bar and no per-frame warnings (errors are still shown)\n"
+    "  --verbose              a line for each dropped detection and skipped keyframe, with the\n"
+    "                         mapper's words (default: counted by plain reason in the summary)\n"
     "  --help                 this text\n"
     "\n"
     "exit status: 0 ok, 1 dataset or another input cannot be opened, the output cannot be\n"
@@ -180,6 +182,7 @@ void addInputOptions(CLI::App* app, Options* options) {
                   std::numeric_limits<int>::max(), &options->correct_at,
                   "--correct-at needs an integer");
   cli::addFlag(app, "--quiet", &options->quiet);
+  cli::addFlag(app, "--verbose", &options->verbose);
   cli::addFlag(app, "--registered", &options->registered);
 }
 

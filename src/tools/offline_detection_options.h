@@ -61,6 +61,7 @@ struct Options {
   std::string corrected_poses;
   int correct_at = std::numeric_limits<int>::max();
   bool quiet = false;
+  bool verbose = false;  // every dropped detection's line (default: counted by reason)
 };
 
 // -1 when the arguments are fine, else the exit status (usage printed; 0 for --help).

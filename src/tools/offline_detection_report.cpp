@@ -143,9 +143,14 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                refinement.intersecting_ids.size(), refinement.merged_ids.size(), stats.removed_gone,
                median(stats.detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
                med.manhattan_ms, med.fusion_ms, med.existence_ms, med.total_ms, median(keyframe_ms),
-               med.refinement_ms,
-               counts.detections, counts.above_threshold, counts.with_box, counts.inserted,
-               counts.fused, counts.before_refinement);
+               med.refinement_ms, counts.detections, counts.above_threshold, counts.with_box,
+               counts.inserted, counts.fused, counts.before_refinement);
+  if (!stats.warnings.empty()) {
+    int total = 0;
+    for (const auto& entry : stats.warnings) total += entry.second;
+    std::fprintf(stderr, "dropped detections and skipped keyframes (%d; each with --verbose): %s\n",
+                 total, describeTally(stats.warnings).c_str());
+  }
 }
 
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame) {

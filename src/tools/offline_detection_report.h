@@ -7,6 +7,7 @@
 
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/pipeline/object_mapper.h"
+#include "offline_detection_warnings.h"
 
 namespace offline_detection {
 
@@ -24,6 +25,8 @@ struct RunStats {
   int keyframes_corrected = 0;
   int removed_gone = 0;      // by the existence evidence
   int keyframes_faulty = 0;  // taken for sensor or SLAM faults (KeyframeReport::depth_fault)
+  // Dropped detections and skipped keyframes by plain reason (offline_detection_warnings.h).
+  WarningTally warnings;
 };
 
 // The map's summary; Table 5's split as medians per keyframe (over the keyframes that had

@@ -376,6 +376,55 @@ TEST_F(OfflineRunnerTest, CorrectedPosesEqualToThePosesChangeNothing) {
 // 7-Scenes redkitchen, hand-written box detections (test/data): the dining table's top lies ~0.73 m
 // above the floor (data README). The floor comes from the depth data: the lowest large horizontal
 // plane.
+// Dropped detections are counted in the summary by a plain reason; each one's line only with
+// --verbose (issue 47: about 60 "warning:" lines per 1000 frames in the mapper's words).
+TEST_F(OfflineRunnerTest, DroppedDetectionsAreCountedByReasonAndShownWithVerbose) {
+  SyntheticSceneConfig scene_config;
+  scene_config.num_frames = 20;
+  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  const fs::path dataset = work_ / "dataset";
+  const fs::path detections = work_ / "detections";
+  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
+  // Every frame's file gets a unicorn (no COCO class) and a detection scored 1.5.
+  int files = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(detections)) {
+    if (entry.path().extension() != ".json") continue;
+    nlohmann::json list = nlohmann::json::parse(test::readText(entry.path()));
+    if (list.empty()) continue;
+    nlohmann::json unicorn = list[0];
+    unicorn["class_name"] = "unicorn";
+    nlohmann::json over_one = list[0];
+    over_one["score"] = 1.5;
+    list.push_back(unicorn);
+    list.push_back(over_one);
+    std::ofstream(entry.path()) << list.dump();
+    ++files;
+  }
+  ASSERT_GT(files, 0);
+  const std::vector<std::string> args = {"--dataset",    dataset.string(),
+                                         "--detections", detections.string(),
+                                         "--every",      "5",
+                                         "--priors",     priorsPath(),
+                                         "--output",     (work_ / "objects.json").string()};
+  const RunResult counted = runTool(args, work_);
+  ASSERT_EQ(counted.exit_code, 0) << counted.err;
+  EXPECT_NE(counted.err.find("dropped detections and skipped keyframes ("), std::string::npos)
+      << counted.err;
+  EXPECT_NE(counted.err.find("4 detection's class is not a COCO class"), std::string::npos)
+      << counted.err;
+  EXPECT_NE(counted.err.find("4 detection's score outside [0, 1]"), std::string::npos)
+      << counted.err;
+  EXPECT_EQ(counted.err.find("unicorn"), std::string::npos) << counted.err;
+
+  std::vector<std::string> verbose_args = args;
+  verbose_args.push_back("--verbose");
+  const RunResult verbose = runTool(verbose_args, work_);
+  ASSERT_EQ(verbose.exit_code, 0) << verbose.err;
+  EXPECT_NE(verbose.err.find("unknown class 'unicorn'"), std::string::npos) << verbose.err;
+  EXPECT_NE(verbose.err.find("4 detection's class is not a COCO class"), std::string::npos)
+      << verbose.err;
+}
+
 TEST_F(OfflineRunnerTest, SevenScenesDiningTableHeight) {
   const std::string shared = sharedDir();
   const fs::path source = fs::path(shared) / "data" / "7scenes_redkitchen" / "data";
