@@ -51,7 +51,8 @@ Status readLabelledVertices(const fs::path& ply_path, std::map<int, PointCloud>*
 }  // namespace
 
 Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up_W,
-                              std::vector<GroundTruthObject>* objects) {
+                              std::vector<GroundTruthObject>* objects,
+                              std::vector<std::string>* skipped) {
   if (objects == nullptr) return Status::Error(path + ": no output");
   fs::path ply_path;
   fs::path xml_path;
@@ -62,12 +63,21 @@ Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up
   std::map<int, PointCloud> by_label;
   if (!(status = readLabelledVertices(ply_path, &by_label))) return status;
   std::vector<GroundTruthObject> parsed;
+  std::vector<std::string> left_out;
   for (const SceneNNLabel& label : labels) {
+    const std::string what = "'" + label.text + "' (" + label.nyu_class + ")";
     std::string name = sceneNNClassName(label.nyu_class);
     if (name.empty()) name = sceneNNClassName(label.text);
-    if (name.empty()) continue;
+    if (name.empty()) {
+      left_out.push_back(what +
+                         ": not one of the 9 classes COCO and NYU share (the paper's Table 1)");
+      continue;
+    }
     const auto it = by_label.find(label.id);
-    if (it == by_label.end() || it->second.empty()) continue;
+    if (it == by_label.end() || it->second.empty()) {
+      left_out.push_back(what + ": no vertex of the mesh carries its label");
+      continue;
+    }
     GroundTruthObject object;
     object.class_name = name;
     object.points_W = it->second;
@@ -75,6 +85,7 @@ Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up
     parsed.push_back(std::move(object));
   }
   *objects = std::move(parsed);
+  if (skipped != nullptr) *skipped = std::move(left_out);
   return Status::Ok();
 }
 

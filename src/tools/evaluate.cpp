@@ -216,6 +216,7 @@ int resolveGroundTruth(Options* options, mvod::EvaluationOptions* evaluation) {
 
 struct SceneCounts {
   size_t ground_truth = 0;
+  std::vector<std::string> skipped_ground_truth;  // "<file>: <label>: <why>"
   size_t predictions = 0;
   int with_clouds = 0;
 };
@@ -225,14 +226,18 @@ int loadScene(const Options& options, size_t k, const mvod::EvaluationOptions& e
               mvod::EvaluationScene* scene, SceneCounts* counts) {
   if (!options.ground_truth.empty()) {
     const std::string& path = options.ground_truth[k];
+    std::vector<std::string> skipped;
     const mvod::Status loaded =
         endsWith(path, ".json")
             ? mvod::loadSyntheticGroundTruth(path, evaluation.surface_spacing_m, evaluation.up_W,
                                              &scene->ground_truth)
-            : mvod::loadSceneNNGroundTruth(path, evaluation.up_W, &scene->ground_truth);
+            : mvod::loadSceneNNGroundTruth(path, evaluation.up_W, &scene->ground_truth, &skipped);
     if (!loaded) {
       std::cerr << "evaluate: " << loaded.message() << "\n";
       return kExitFailure;
+    }
+    for (const std::string& label : skipped) {
+      counts->skipped_ground_truth.push_back(path + ": " + label);
     }
   }
   int clouds = 0;
@@ -291,13 +296,21 @@ bool writePerObject(const std::string& path, const mvod::EvaluationScene& scene,
 // The table on stdout (and --markdown, --csv). False when a file cannot be written.
 bool report(const Options& options, const mvod::EvaluationResult& result, const SceneCounts& counts,
             double voxel_size_m) {
-  const std::string markdown = mvod::evaluationToMarkdown(result);
+  std::string markdown = mvod::evaluationToMarkdown(result);
+  // Ground truth left out of the table is listed with the reason: two correctly placed cups must
+  // not look like false objects of a room said to hold none.
+  if (!counts.skipped_ground_truth.empty()) {
+    markdown += "\nGround truth not evaluated (" +
+                std::to_string(counts.skipped_ground_truth.size()) + "):\n\n";
+    for (const std::string& label : counts.skipped_ground_truth) markdown += "- " + label + "\n";
+  }
   std::fputs(markdown.c_str(), stdout);
   std::fprintf(stderr,
-               "%zu scene(s): %zu ground-truth objects, %zu predictions (%d with clouds; the "
-               "others segment the ground truth inside their box); voxel %.3f m\n",
-               options.objects.size(), counts.ground_truth, counts.predictions, counts.with_clouds,
-               voxel_size_m);
+               "%zu scene(s): %zu ground-truth objects (%zu annotated ones not evaluated, listed "
+               "below the table), %zu predictions (%d with clouds; the others segment the ground "
+               "truth inside their box); voxel %.3f m\n",
+               options.objects.size(), counts.ground_truth, counts.skipped_ground_truth.size(),
+               counts.predictions, counts.with_clouds, voxel_size_m);
   bool all_written = true;
   for (const auto& [path, text] : {std::make_pair(options.markdown, markdown),
                                    std::make_pair(options.csv, mvod::evaluationToCsv(result))}) {

@@ -32,7 +32,9 @@ Status readGroundTruthUp(const std::string& path, Eigen::Vector3d* up_W, bool* f
 // (the .xml next to it). Points: the mesh vertices of each label with an evaluated class; box: the
 // gravity-aligned box of those vertices (the XML obbox is documented as inaccurate). Labels with no
 // vertex are skipped. The mesh frame is y-up: pass up_W = (0, 1, 0).
+// skipped (optional): each annotated label left out, as "<its text> (<NYU class>): <why>".
 Status loadSceneNNGroundTruth(const std::string& path, const Eigen::Vector3d& up_W,
-                              std::vector<GroundTruthObject>* objects);
+                              std::vector<GroundTruthObject>* objects,
+                              std::vector<std::string>* skipped = nullptr);
 
 }  // namespace mvod

@@ -510,9 +510,14 @@ TEST_F(EvaluationFiles, LoadsSceneNNSequenceYUp) {
   EXPECT_NEAR(objects[0].box.size_m.z(), 0.0, 1e-6);
   EXPECT_NEAR(objects[0].box.center_m.x(), 0.5, 1e-6);
 
-  // The .ply path works too; a folder without the files is an error naming what is missing.
-  ASSERT_TRUE(loadSceneNNGroundTruth((dir_ / "011" / "011.ply").string(), up, &objects));
+  // The .ply path works too, and says what it left out and why (evaluate lists them); a folder
+  // without the files is an error naming what is missing.
+  std::vector<std::string> skipped;
+  ASSERT_TRUE(loadSceneNNGroundTruth((dir_ / "011" / "011.ply").string(), up, &objects, &skipped));
   EXPECT_EQ(objects.size(), 2u);
+  ASSERT_EQ(skipped.size(), 2u);
+  EXPECT_EQ(skipped[0].rfind("'wall' (): not one of the 9 classes", 0), 0u) << skipped[0];
+  EXPECT_EQ(skipped[1].rfind("'Fish & chips' (): not one of the 9 classes", 0), 0u) << skipped[1];
   fs::create_directories(dir_ / "012");
   const Status missing = loadSceneNNGroundTruth((dir_ / "012").string(), up, &objects);
   ASSERT_FALSE(missing);
