@@ -138,6 +138,23 @@ def view_transform(saved_map):
 
 # ---------------------------------------------------------------------------------------------------------
 
+# The colour image's name in a bag: dataset_to_bag's (the node's own name), or that of bags it made
+# before 2026-12-04, which a replay plugs on with rgb_topic:= and depth_topic:=.
+COLOUR_SUFFIXES = ('rgb/image_rect_color', 'rgb/image_raw')
+
+
+def image_topic_args(bag_path):
+    """replay.launch arguments for a bag that records its images under the raw names: none otherwise."""
+    import rosbag
+    with rosbag.Bag(bag_path) as bag:
+        topics = bag.get_type_and_topic_info().topics
+    raw = [t for t in topics if t.endswith('/rgb/image_raw')]
+    if not raw or any(t.endswith('/rgb/image_rect_color') for t in topics):
+        return []
+    camera = raw[0][:-len('/rgb/image_raw')]
+    return ['rgb_topic:=%s/rgb/image_raw' % camera, 'depth_topic:=%s/depth_registered/image_raw' % camera]
+
+
 class BagPlayer:
     """Plays a bag with its clock, like `rosbag play --clock`, but never more than MAX_AHEAD colour frames
     ahead of what the node reports received (/diagnostics "frames received", every diagnostic_period): on a
@@ -151,9 +168,10 @@ class BagPlayer:
         self.rate = rate
         self.demo = demo
         topics = self.bag.get_type_and_topic_info().topics
-        self.colour_topics = [t for t in topics if t.endswith('rgb/image_raw')]
+        self.colour_topics = [t for t in topics if t.endswith(COLOUR_SUFFIXES)]
         if len(self.colour_topics) != 1:
-            raise DemoError('the bag has %d colour topics (*/rgb/image_raw), not one' % len(self.colour_topics))
+            raise DemoError('the bag has %d colour topics (*/%s), not one' % (
+                len(self.colour_topics), ' or */'.join(COLOUR_SUFFIXES)))
         self.frames = self.bag.get_message_count(self.colour_topics)
 
     def play(self, tick):
@@ -312,7 +330,7 @@ class Demo:
                    'rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
                    'pose_source:=topic', 'keyframe_mode:=every_n', 'keyframe_every_n:=%d' % a.keyframe_every,
                    'processing_queue_size:=%d' % a.queue_size, 'diagnostic_period:=0.05',
-                   'map_directory:=' + os.path.abspath(a.output_dir)]
+                   'map_directory:=' + os.path.abspath(a.output_dir)] + image_topic_args(a.bag)
         if a.rviz_config:
             command.append('rviz_config:=' + a.rviz_config)
         if a.paper_method:

@@ -1,7 +1,7 @@
 // dataset_to_bag: a 7-Scenes-layout folder or a SceneNN sequence -> a rosbag with what a Kinect
 // driver and an ORB-SLAM2 wrapper would publish, so replay.launch can play it through the node:
-//   /<camera>/rgb/image_raw                  sensor_msgs/Image bgr8
-//   /<camera>/depth_registered/image_raw     sensor_msgs/Image 16UC1 (mm), in the colour camera
+//   /<camera>/rgb/image_rect_color          sensor_msgs/Image bgr8 (undistorted: the node's name)
+//   /<camera>/depth_registered/image_rect   sensor_msgs/Image 16UC1 (mm), in the colour camera
 //   /<camera>/rgb/camera_info                sensor_msgs/CameraInfo (colour K)
 //   /<camera>/depth_registered/camera_info   the same K (registered depth)
 //   /detections (with --detector)            InstanceDetections of the colour image, for the
@@ -318,8 +318,8 @@ class BagWriter {
     bag_->write(ns_ + "/rgb/camera_info", header.stamp, cameraInfoMsg(K_color, header));
     bag_->write(ns_ + "/depth_registered/camera_info", header.stamp,
                 cameraInfoMsg(K_color, header));
-    bag_->write(ns_ + "/rgb/image_raw", header.stamp, *colorImageToMsg(frame.color_bgr, header));
-    bag_->write(ns_ + "/depth_registered/image_raw", header.stamp,
+    bag_->write(ns_ + "/rgb/image_rect_color", header.stamp, *colorImageToMsg(frame.color_bgr, header));
+    bag_->write(ns_ + "/depth_registered/image_rect", header.stamp,
                 *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
                      .toImageMsg());
   }

@@ -79,10 +79,10 @@ BagContents readBag(const fs::path& path) {
     const std::string& topic = m.getTopic();
     ++contents.counts[topic];
     contents.types[topic] = m.getDataType();
-    if (topic == "/camera/rgb/image_raw") {
+    if (topic == "/camera/rgb/image_rect_color") {
       contents.color.push_back(*m.instantiate<sensor_msgs::Image>());
       contents.color_bag_times_s.push_back(m.getTime().toSec());
-    } else if (topic == "/camera/depth_registered/image_raw") {
+    } else if (topic == "/camera/depth_registered/image_rect") {
       contents.depth.push_back(*m.instantiate<sensor_msgs::Image>());
     } else if (topic == "/camera/rgb/camera_info") {
       contents.color_info.push_back(*m.instantiate<sensor_msgs::CameraInfo>());
@@ -170,8 +170,8 @@ void expectFrameMatches(const BagContents& bag, size_t i, const RgbdFrame& frame
 
 void expectTopicsAndCounts(const BagContents& bag, int frames) {
   const std::map<std::string, std::string> expected = {
-      {"/camera/rgb/image_raw", "sensor_msgs/Image"},
-      {"/camera/depth_registered/image_raw", "sensor_msgs/Image"},
+      {"/camera/rgb/image_rect_color", "sensor_msgs/Image"},
+      {"/camera/depth_registered/image_rect", "sensor_msgs/Image"},
       {"/camera/rgb/camera_info", "sensor_msgs/CameraInfo"},
       {"/camera/depth_registered/camera_info", "sensor_msgs/CameraInfo"},
       {"/orb_slam2_rgbd/pose", "geometry_msgs/PoseStamped"},
@@ -350,7 +350,7 @@ TEST_F(DatasetToBagTest, RecordsDetectionsForTheTopicDetector) {
       const auto msg = m.instantiate<multiview_object_detection::InstanceDetections>();
       ASSERT_TRUE(msg != nullptr) << m.getDataType();
       by_stamp[msg->header.stamp.toSec()] = *msg;
-    } else if (m.getTopic() == "/camera/rgb/image_raw") {
+    } else if (m.getTopic() == "/camera/rgb/image_rect_color") {
       color_stamps.push_back(m.instantiate<sensor_msgs::Image>()->header.stamp.toSec());
     }
   }
