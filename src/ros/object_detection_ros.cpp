@@ -114,16 +114,20 @@ bool ObjectDetectionRos::checkAndLoad(const Config& config, ClassPriors* priors,
 }
 
 void ObjectDetectionRos::logStart(const Config& config, const InstanceSegmenter* segmenter) const {
+  // One line; every setting at DEBUG (rosconsole), as voxblox_ros and pcl_ros do.
+  const std::string changes = config.printChanges(Config());
   ROS_INFO_STREAM("object detection: "
                   << (segmenter != nullptr ? segmenter->name() : "detections topic") << ", priors "
-                  << config.priors_file << "\n"
-                  << config.print()
-                  << "standard messages: " << (publishesVisionMsgs() ? "~detections_3d" : "")
+                  << config.priors_file << "; settings other than the defaults: "
+                  << (changes.empty() ? std::string("none") : changes)
+                  << " (all of them at DEBUG); standard messages: "
+                  << (publishesVisionMsgs() ? "~detections_3d" : "")
                   << (publishesJskRecognitionMsgs() ? " ~bounding_boxes" : "")
                   << (publishesVisionMsgs() || publishesJskRecognitionMsgs()
                           ? ""
                           : "none (built without vision_msgs and "
                             "jsk_recognition_msgs)"));
+  ROS_DEBUG_STREAM("object detection settings:\n" << config.print());
 }
 
 void ObjectDetectionRos::createStages(const Config& config, const ClassPriors& priors,

@@ -1,7 +1,9 @@
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 
 #include <cmath>
+#include <map>
 #include <sstream>
+#include <string>
 
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 
@@ -100,7 +102,10 @@ std::string ObjectDetectionRosConfig::print() const {
       << "keyframe_min_translation_m: " << keyframes.min_translation_m << "\n"
       << "keyframe_min_rotation_deg: " << keyframes.min_rotation_deg << "\n"
       << "detector: " << detector << "\n"
-      << "model_dir: " << (segmenter.model_dir.empty() ? "($MVOD_MODEL_DIR)" : segmenter.model_dir)
+      << "model_dir: "
+      << (segmenter.model_dir.empty()
+              ? "($MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models)"
+              : segmenter.model_dir)
       << "\n"
       << "score_threshold: " << segmenter.score_threshold << "\n"
       << "nms_threshold: " << segmenter.nms_threshold << "\n"
@@ -117,6 +122,34 @@ std::string ObjectDetectionRosConfig::print() const {
       << "publish_object_cloud: " << (publish_object_cloud ? "true" : "false") << "\n"
       << mapperConfig().print();
   return out.str();
+}
+
+namespace {
+
+// print()'s "key: value" lines as key -> value.
+std::map<std::string, std::string> printedSettings(const std::string& text) {
+  std::map<std::string, std::string> settings;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    const size_t colon = line.find(": ");
+    if (colon != std::string::npos) settings[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  return settings;
+}
+
+}  // namespace
+
+std::string ObjectDetectionRosConfig::printChanges(
+    const ObjectDetectionRosConfig& reference) const {
+  const std::map<std::string, std::string> defaults = printedSettings(reference.print());
+  std::string changes;
+  for (const auto& [key, value] : printedSettings(print())) {
+    const auto it = defaults.find(key);
+    if (it != defaults.end() && it->second == value) continue;
+    if (!changes.empty()) changes += ", ";
+    changes += key + " " + value;
+  }
+  return changes;
 }
 
 }  // namespace mvod

@@ -893,6 +893,20 @@ TEST(RejectionWindowTest, RejectedInputIsAWarningAndMostlyRejectedAnError) {
   EXPECT_EQ(poses.report("", "").level, RejectionWindow::kOk) << poses.report("", "").message;
 }
 
+// The start-up line names only the settings that differ from the defaults (issue 47: about 200
+// lines of configuration at every start).
+TEST(RosConversionsTest, ConfigPrintChangesListsOnlyWhatDiffersFromTheDefaults) {
+  const ObjectDetectionRosConfig defaults;
+  EXPECT_EQ(defaults.printChanges(defaults), "");
+  ObjectDetectionRosConfig config;
+  config.world_frame = "odom";
+  config.processing_queue_size = 5;
+  const std::string changes = config.printChanges(defaults);
+  EXPECT_EQ(changes, "processing_queue_size 5, world_frame odom");
+  const std::string all = config.print();
+  EXPECT_GT(std::count(all.begin(), all.end(), '\n'), 50);
+}
+
 TEST(InputMonitorTest, SilentInputsAreErrorsSlowOnesWarningsAndTheyRecover) {
   using Clock = InputMonitor::Clock;
   const Clock::time_point t0 = Clock::now();

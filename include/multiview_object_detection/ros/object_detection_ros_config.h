@@ -98,6 +98,9 @@ struct ObjectDetectionRosConfig {
   SegmenterOptions segmenterOptions() const;
   Status isValid() const;
   std::string print() const;
+  // The settings whose printed value differs from `reference`'s, as "key value, key value"
+  // (print()'s keys); "" when none does. The start-up line shows these; the whole print() is DEBUG.
+  std::string printChanges(const ObjectDetectionRosConfig& reference) const;
 };
 
 }  // namespace mvod
