@@ -56,7 +56,11 @@ using dataset_to_bag::segmenterOptions;
 
 // The dataset, with what a user must tell the node to replay it.
 Status openDataset(const Options& options, DatasetSource* source, std::vector<std::string>* notes) {
-  const Status status = openDatasetSource(options.dataset_dir, options.format, source);
+  ColorCameraFiles camera;
+  camera.color_intrinsics = options.color_intrinsics;
+  camera.depth_to_color = options.depth_to_color;
+  camera.registered = options.registered;
+  const Status status = openDatasetSource(options.dataset_dir, options.format, source, camera);
   if (!status) return status;
   *notes = source->notes;
   if (source->has_gravity) {
@@ -318,7 +322,8 @@ class BagWriter {
     bag_->write(ns_ + "/rgb/camera_info", header.stamp, cameraInfoMsg(K_color, header));
     bag_->write(ns_ + "/depth_registered/camera_info", header.stamp,
                 cameraInfoMsg(K_color, header));
-    bag_->write(ns_ + "/rgb/image_rect_color", header.stamp, *colorImageToMsg(frame.color_bgr, header));
+    bag_->write(ns_ + "/rgb/image_rect_color", header.stamp,
+                *colorImageToMsg(frame.color_bgr, header));
     bag_->write(ns_ + "/depth_registered/image_rect", header.stamp,
                 *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_16UC1, depth_mm)
                      .toImageMsg());

@@ -18,6 +18,13 @@ const char kUsage[] =
     "Options:\n"
     "  --format auto|7scenes|scenenn  dataset layout (auto: trajectory.log or depth/ -> SceneNN,\n"
     "                                 camera-intrinsics.txt -> 7-Scenes) [auto]\n"
+    "  --color-intrinsics FILE        7-Scenes layout: the colour camera's 3x3 K, instead of the\n"
+    "                                 folder's color-intrinsics.txt (nothing written into a\n"
+    "                                 read-only dataset)\n"
+    "  --depth-to-color FILE          7-Scenes layout: the depth -> colour camera pose (4x4),\n"
+    "                                 instead of the folder's depth-to-color.txt\n"
+    "  --registered                   7-Scenes layout: colour and depth are one camera (the\n"
+    "                                 folder's colour files are not read)\n"
     "  --camera NAME                  topic namespace and frame prefix [camera]\n"
     "  --world-frame FRAME            parent frame of the pose and TF [map]\n"
     "  --pose-topic TOPIC             [/orb_slam2_rgbd/pose]\n"
@@ -131,14 +138,17 @@ void addFrameNumber(CLI::App* app, const std::string& name, long* value) {
 }
 
 void addOptions(CLI::App* app, Options* options) {
-  for (const auto& [name, value] : {std::make_pair("--dataset", &options->dataset_dir),
-                                    std::make_pair("--output", &options->output_path),
-                                    std::make_pair("--detector", &options->detector),
-                                    std::make_pair("--detections", &options->detections_dir),
-                                    std::make_pair("--model-dir", &options->model_dir),
-                                    std::make_pair("--camera", &options->camera),
-                                    std::make_pair("--world-frame", &options->world_frame),
-                                    std::make_pair("--pose-topic", &options->pose_topic)}) {
+  for (const auto& [name, value] :
+       {std::make_pair("--dataset", &options->dataset_dir),
+        std::make_pair("--output", &options->output_path),
+        std::make_pair("--detector", &options->detector),
+        std::make_pair("--detections", &options->detections_dir),
+        std::make_pair("--model-dir", &options->model_dir),
+        std::make_pair("--camera", &options->camera),
+        std::make_pair("--world-frame", &options->world_frame),
+        std::make_pair("--pose-topic", &options->pose_topic),
+        std::make_pair("--color-intrinsics", &options->color_intrinsics),
+        std::make_pair("--depth-to-color", &options->depth_to_color)}) {
     cli::addText(app, name, value);
   }
   cli::addValue(app, "--format", [options](const std::string& text) {
@@ -159,6 +169,7 @@ void addOptions(CLI::App* app, Options* options) {
   addFrameNumber(app, "--first", &options->first);
   addFrameNumber(app, "--last", &options->last);
   cli::addFlag(app, "--lz4", &options->lz4);
+  cli::addFlag(app, "--registered", &options->registered);
   cli::addFlag(app, "--quiet", &options->quiet);
 }
 

@@ -25,6 +25,10 @@ struct Options {
   std::string camera = "camera";
   std::string world_frame = "map";
   std::string pose_topic = "/orb_slam2_rgbd/pose";
+  // 7-Scenes layout: the colour camera from outside the folder (offline_detection's options).
+  std::string color_intrinsics;
+  std::string depth_to_color;
+  bool registered = false;
   double rate_hz = 30.0;
   double time_offset_s = 1.0;
   long first = 0;

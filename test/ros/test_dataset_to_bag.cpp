@@ -255,6 +255,53 @@ TEST_F(DatasetToBagTest, SevenScenesTwoCamerasRegistersDepthAndSelectsFrames) {
   }
 }
 
+// The colour camera given from outside the dataset folder (a read-only mount), or the folder's
+// colour files ignored with --registered (issue 47, item 3), as offline_detection takes them.
+TEST_F(DatasetToBagTest, ColourCameraFromOutsideTheFolderOrRegistered) {
+  const fs::path data = dir_ / "data_outside";
+  ASSERT_TRUE(scene_->writeSevenScenes(data.string(), "").ok());
+  const fs::path outside = dir_ / "colour_camera";
+  fs::create_directories(outside);
+  std::ofstream(outside / "K.txt") << "240 0 160\n0 240 120\n0 0 1\n";
+  std::ofstream(outside / "T.txt") << "1 0 0 0.025\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  const fs::path bag_path = dir_ / "outside.bag";
+  ToolResult run = runDatasetToBag(
+      "--dataset " + data.string() + " --output " + bag_path.string() +
+          " --format 7scenes --first 1 --last 1 --rate-hz 10 --color-intrinsics " +
+          (outside / "K.txt").string() + " --depth-to-color " + (outside / "T.txt").string(),
+      dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  EXPECT_FALSE(fs::exists(data / "color-intrinsics.txt"));  // nothing written into the dataset
+  SevenScenesDataset dataset;
+  ColorCameraFiles camera;
+  camera.color_intrinsics = (outside / "K.txt").string();
+  camera.depth_to_color = (outside / "T.txt").string();
+  ASSERT_TRUE(SevenScenesDataset::open(data.string(), &dataset, camera).ok());
+  ASSERT_FALSE(dataset.registered());
+  RgbdFrame frame;
+  ASSERT_TRUE(dataset.load(1, &frame).ok());
+  cv::Mat registered;
+  ASSERT_TRUE(
+      registerDepthToColor(frame.depth, frame.K_depth, frame.K_color, frame.T_C_D, &registered)
+          .ok());
+  expectFrameMatches(readBag(bag_path), 0, frame, registered, frame.K_color, 1.1);
+
+  // The colour files in the folder, and --registered: they are not read; depth as recorded.
+  fs::copy_file(outside / "K.txt", data / "color-intrinsics.txt");
+  fs::copy_file(outside / "T.txt", data / "depth-to-color.txt");
+  const fs::path registered_bag = dir_ / "registered.bag";
+  run = runDatasetToBag("--dataset " + data.string() + " --output " + registered_bag.string() +
+                            " --format 7scenes --first 1 --last 1 --rate-hz 10 --registered",
+                        dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  ColorCameraFiles one_camera;
+  one_camera.registered = true;
+  ASSERT_TRUE(SevenScenesDataset::open(data.string(), &dataset, one_camera).ok());
+  ASSERT_TRUE(dataset.registered());
+  ASSERT_TRUE(dataset.load(1, &frame).ok());
+  expectFrameMatches(readBag(registered_bag), 0, frame, frame.depth, frame.K_depth, 1.1);
+}
+
 TEST_F(DatasetToBagTest, SceneNNLayoutUsesTimestampsAndTrajectory) {
   // The synthetic frames written as a SceneNN sequence: image/, depth/, trajectory.log (block k-1
   // for image0000k), timestamp.txt (microseconds), asus.ini.
