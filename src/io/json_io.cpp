@@ -156,8 +156,13 @@ json toJson(const std::vector<MapObject>& objects, const MapSummary& summary, bo
     doc["frame"] = frameToJson(summary.T_W_O);
   }
   json list = json::array();
-  for (const MapObject& object : summary.objects_in_gravity_frame ? objects_O : objects) {
-    list.push_back(object_json::objectToJson(object, include_clouds));
+  const std::vector<MapObject>& written = summary.objects_in_gravity_frame ? objects_O : objects;
+  for (size_t i = 0; i < written.size(); ++i) {
+    json entry = object_json::objectToJson(written[i], include_clouds);
+    // The object's fused points, also where the file leaves them out (objectsInFrame moves
+    // clouds only when they are written).
+    entry["num_points"] = objects[i].points_W.size();
+    list.push_back(std::move(entry));
   }
   doc["objects"] = std::move(list);
   doc["removed"] = {{"atypical", summary.removed_atypical},

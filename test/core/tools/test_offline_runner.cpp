@@ -186,6 +186,8 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
                                     raw["objects"][i]["center"][1].get<double>(),
                                     raw["objects"][i]["center"][2].get<double>());
       EXPECT_LT((summary.T_W_O * in_file - objects[i].box.center_m).norm(), 1e-6);
+      // The object's points are counted though the file leaves them out (issue 47: always 0).
+      EXPECT_GT(raw["objects"][i]["num_points"].get<int>(), 0) << i;
     }
   }
   // The table printed on stdout lists every object.
