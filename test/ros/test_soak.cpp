@@ -129,6 +129,12 @@ TEST_F(SoakTest, ReplaysReadTheNodesCountersFromDiagnostics) {
 }
 
 TEST_F(SoakTest, KillAndRestartResumesFromTheAutosave) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The kills come 1-5 s into each replay (wall time); the sanitized node has processed no keyframe
+  // by then, so nothing is ever autosaved to resume. make test runs it with the normal build.
+  GTEST_SKIP() << "timed for the normal build: under AddressSanitizer the node maps nothing before "
+                  "the kill";
+#endif
   ASSERT_TRUE(made_);
   std::string log;
   const int status = soak("kill_restart", "--kill-restart --replays 2", &log);
