@@ -528,7 +528,8 @@ TEST(NodeDiagnosticsTest, ADeadInputIsAnErrorAndOkWhenItResumes) {
   {
     std::lock_guard<std::mutex> lock(mutex);
     EXPECT_NE(statuses[colour].message.find(kRgbTopic), std::string::npos);
-    EXPECT_EQ(statuses[colour].hardware_id, "none");
+    // The node's name tells which of several mappers a status is from (issue 47: it was "none").
+    EXPECT_EQ(statuses[colour].hardware_id, node);
     EXPECT_EQ(statuses.count(node.substr(1) + ": map"), 1u) << describe();
   }
   // Frames at about 5 Hz until the status is OK (at most 15 s).
