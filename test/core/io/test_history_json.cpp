@@ -18,7 +18,6 @@ namespace mvod {
 namespace {
 
 using test::makeRecord;
-using test::sameFloats;
 
 std::string saveMap(const std::deque<KeyframeRecord>& history) {
   return objectsToJson({}, MapSummary(), true, &history);
@@ -29,44 +28,7 @@ TEST(HistoryJson, RoundTripsExactly) {
   const std::string text = saveMap(history);
   std::deque<KeyframeRecord> loaded;
   ASSERT_TRUE(objectsFromJson(text, nullptr, nullptr, &loaded).ok());
-  ASSERT_EQ(loaded.size(), history.size());
-  for (std::size_t i = 0; i < history.size(); ++i) {
-    const KeyframeRecord& a = history[i];
-    const KeyframeRecord& b = loaded[i];
-    EXPECT_EQ(a.keyframe, b.keyframe);
-    EXPECT_EQ(a.stamp_s, b.stamp_s);
-    EXPECT_EQ(a.name, b.name);
-    EXPECT_EQ(a.T_W_D_recorded.matrix(), b.T_W_D_recorded.matrix());
-    EXPECT_EQ(a.T_W_D.matrix(), b.T_W_D.matrix());
-    EXPECT_EQ(a.T_C_D.matrix(), b.T_C_D.matrix());
-    EXPECT_EQ(a.K_depth.fx, b.K_depth.fx);
-    EXPECT_EQ(a.K_depth.cy, b.K_depth.cy);
-    EXPECT_EQ(a.K_depth.width, b.K_depth.width);
-    EXPECT_EQ(a.has_floor, b.has_floor);
-    if (a.has_floor) {
-      EXPECT_EQ(a.floor_point_D, b.floor_point_D);
-    }
-    EXPECT_EQ(a.refined_after, b.refined_after);
-    ASSERT_EQ(a.depth.type(), b.depth.type());
-    ASSERT_EQ(a.depth.size(), b.depth.size());
-    EXPECT_EQ(std::memcmp(a.depth.data, b.depth.data, a.depth.total() * a.depth.elemSize()), 0);
-    ASSERT_EQ(b.views.size(), 1u);
-    const RecordedView& u = a.views[0];
-    const RecordedView& v = b.views[0];
-    EXPECT_EQ(u.class_name, v.class_name);
-    EXPECT_EQ(u.class_id, v.class_id);
-    EXPECT_EQ(u.probability, v.probability);
-    EXPECT_EQ(u.object_id, v.object_id);
-    EXPECT_EQ(u.yaw_rad, v.yaw_rad);
-    EXPECT_EQ(u.box.center_m, v.box.center_m);
-    EXPECT_EQ(u.box.size_m, v.box.size_m);
-    EXPECT_EQ(u.box.rotation, v.box.rotation);
-    ASSERT_NE(v.cut, nullptr);
-    EXPECT_TRUE(sameFloats(u.cut->cut_W, v.cut->cut_W));
-    EXPECT_TRUE(sameFloats(u.cut->normals_W, v.cut->normals_W));
-    EXPECT_EQ(u.cut->outside_keys, v.cut->outside_keys);
-    EXPECT_EQ(u.cut->voxel_size_m, v.cut->voxel_size_m);
-  }
+  test::expectSameHistory(history, loaded);
   // Saving is a fixed point.
   EXPECT_EQ(saveMap(loaded), text);
 }
