@@ -19,7 +19,6 @@ Needs the Python message packages (Debian's python3-{std,geometry,diagnostic,sen
 python3-std-srvs; deps/debian-packages.txt) and this package's own, generated in the catkin devel space.
 """
 import argparse
-import json
 import math
 import os
 import shutil
@@ -81,59 +80,6 @@ def start_xvfb():
         stop(xvfb, 'Xvfb')
         raise DemoError('Xvfb did not start')
     return xvfb, ':' + number
-
-
-# ---------------------------------------------------------------------------------------------------------
-# Geometry for the rviz view: a frame with z up (against gravity) and the map's objects around its origin.
-
-def rotation_to_z_up(gravity_down):
-    """Row-major 3x3 R with R * gravity_down = (0, 0, -1): the smallest rotation doing that."""
-    n = math.sqrt(sum(v * v for v in gravity_down))
-    up = [-v / n for v in gravity_down]
-    z = [0.0, 0.0, 1.0]
-    axis = [up[1] * z[2] - up[2] * z[1], up[2] * z[0] - up[0] * z[2], up[0] * z[1] - up[1] * z[0]]
-    s = math.sqrt(sum(v * v for v in axis))
-    c = sum(a * b for a, b in zip(up, z))
-    if s < 1e-9:
-        return [[1, 0, 0], [0, 1, 0], [0, 0, 1]] if c > 0 else [[1, 0, 0], [0, -1, 0], [0, 0, -1]]
-    k = [v / s for v in axis]
-    angle = math.atan2(s, c)
-    K = [[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]]
-    K2 = [[sum(K[i][m] * K[m][j] for m in range(3)) for j in range(3)] for i in range(3)]
-    return [[(1 if i == j else 0) + math.sin(angle) * K[i][j] + (1 - math.cos(angle)) * K2[i][j]
-             for j in range(3)] for i in range(3)]
-
-
-def quaternion(R):
-    """(x, y, z, w) of a rotation matrix."""
-    trace = R[0][0] + R[1][1] + R[2][2]
-    if trace > 0:
-        s = 2 * math.sqrt(trace + 1)
-        return ((R[2][1] - R[1][2]) / s, (R[0][2] - R[2][0]) / s, (R[1][0] - R[0][1]) / s, s / 4)
-    i = max(range(3), key=lambda k: R[k][k])
-    j, k = (i + 1) % 3, (i + 2) % 3
-    s = 2 * math.sqrt(1 + R[i][i] - R[j][j] - R[k][k])
-    q = [0.0] * 3
-    q[i] = s / 4
-    q[j] = (R[j][i] + R[i][j]) / s
-    q[k] = (R[k][i] + R[i][k]) / s
-    return (q[0], q[1], q[2], (R[k][j] - R[j][k]) / s)
-
-
-def view_transform(saved_map):
-    """Pose of the map frame in the demo_view frame: gravity along -z, the objects' centre above the origin,
-    the lowest box bottom at z = 0."""
-    R = rotation_to_z_up(saved_map.get('gravity_down', [0, 0, -1]))
-    rotate = lambda p: [sum(R[i][j] * p[j] for j in range(3)) for i in range(3)]
-    centres = [rotate(o['center']) for o in saved_map['objects']]
-    bottoms = []
-    for o, c in zip(saved_map['objects'], centres):
-        # Box axes are the rotation's columns; the half-extent along up of each.
-        axes = [rotate([o['rotation'][r][a] for r in range(3)]) for a in range(3)]
-        half_up = sum(abs(axes[a][2]) * o['size'][a] / 2 for a in range(3))
-        bottoms.append(c[2] - half_up)
-    centre = [sorted(c[i] for c in centres)[len(centres) // 2] for i in range(2)] + [min(bottoms)]
-    return R, [-v for v in centre]
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -427,33 +373,16 @@ class Demo:
             raise DemoError('the node found no objects (%s)' % self.progress())
 
         if rviz:
-            self.screenshot(objects_path)
+            self.screenshot()
         return 0
 
-    def screenshot(self, objects_path):
-        """Puts the map gravity-up in rviz's demo_view frame, republishes the markers, saves a screenshot."""
+    def screenshot(self):
+        """Has the node republish its markers, then saves a screenshot of rviz."""
         import rospy
-        from geometry_msgs.msg import TransformStamped
         from std_srvs.srv import Trigger
-        from tf2_msgs.msg import TFMessage
         from visualization_msgs.msg import Marker, MarkerArray
-        with open(objects_path) as f:
-            saved = json.load(f)
-        R, t = view_transform(saved)
-        transform = TransformStamped()
-        transform.header.stamp = rospy.Time.now()
-        transform.header.frame_id = 'demo_view'
-        transform.child_frame_id = 'map'
-        transform.transform.translation.x, transform.transform.translation.y, \
-            transform.transform.translation.z = t
-        q = quaternion(R)
-        r = transform.transform.rotation
-        r.x, r.y, r.z, r.w = q
-        publisher = rospy.Publisher('/tf_static', TFMessage, queue_size=1, latch=True)
-        publisher.publish(TFMessage(transforms=[transform]))
-        self.tf_publisher = publisher  # latched while we run
-        # Until now rviz had no transform to its fixed frame and queued the node's markers, dropping some
-        # (the DELETEs of merged and refined objects among them): clear them, then have the node republish.
+        # rviz may have dropped some of the node's markers while it was busy (the DELETEs of merged and refined
+        # objects among them): clear them all, then have the node republish the map.
         clear = rospy.Publisher(NODE + '/markers', MarkerArray, queue_size=1, latch=True)
         self.wait_for(lambda: clear.get_num_connections() > 0, 10, 'rviz to subscribe to the demo\'s markers')
         marker = Marker(action=3)  # DELETEALL

@@ -9,6 +9,7 @@
 
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/label_placement.h"
 
 namespace mvod {
 namespace {
@@ -79,6 +80,8 @@ std::string labelText(const MapObject& object) {
          (object.box_completed ? " (completed)" : "");
 }
 
+constexpr double kLabelHeightM = 0.15;  // text height: legible from 5-10 m in rviz
+
 }  // namespace
 
 std_msgs::ColorRGBA classColor(int class_id) {
@@ -95,8 +98,16 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
                                                  std::set<int>* published_ids) {
   visualization_msgs::MarkerArray array;
   std::set<int> current;
+  std::vector<const MapObject*> drawn;
+  std::vector<std::string> texts;
   for (const MapObject& object : objects) {
     if (!object.box.center_m.allFinite() || !object.box.size_m.allFinite()) continue;
+    drawn.push_back(&object);
+    texts.push_back(labelText(object));
+  }
+  const std::vector<LabelPlacement> labels = placeLabels(drawn, texts, kLabelHeightM);
+  for (size_t k = 0; k < drawn.size(); ++k) {
+    const MapObject& object = *drawn[k];
     current.insert(object.id);
     visualization_msgs::Marker box;
     box.header = header;
@@ -129,23 +140,35 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
     label.id = object.id;
     label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
     label.action = visualization_msgs::Marker::ADD;
-    // Just above the box top: third box axis is up.
-    const Eigen::Vector3d up = object.box.rotation.col(2).normalized();
-    const Eigen::Vector3d position =
-        object.box.center_m + up * (0.5 * std::abs(object.box.size_m.z()) + 0.08);
+    const Eigen::Vector3d& position = labels[k].position_m;
     label.pose.position.x = position.x();
     label.pose.position.y = position.y();
     label.pose.position.z = position.z();
     label.pose.orientation.w = 1.0;
-    label.scale.z = 0.18;  // text height (m): legible from 5-10 m in rviz
+    label.scale.z = kLabelHeightM;
     label.color = classColor(object.class_id);
-    label.text = labelText(object);
+    label.text = texts[k];
     array.markers.push_back(label);
+
+    // From the box top to the label's foot: which box a label in a column belongs to.
+    visualization_msgs::Marker line = box;
+    line.ns = "label_lines";
+    line.scale.x = 0.008;
+    line.points.resize(2);
+    const Eigen::Vector3d foot =
+        position - (position - labels[k].box_top_m).normalized() * (0.5 * kLabelHeightM);
+    for (const auto& [point, at] : {std::make_pair(&line.points[0], labels[k].box_top_m),
+                                    std::make_pair(&line.points[1], foot)}) {
+      point->x = at.x();
+      point->y = at.y();
+      point->z = at.z();
+    }
+    array.markers.push_back(line);
   }
   if (published_ids != nullptr) {
     for (const int id : *published_ids) {
       if (current.count(id) > 0) continue;
-      for (const char* ns : {"boxes", "labels"}) {
+      for (const char* ns : {"boxes", "labels", "label_lines"}) {
         visualization_msgs::Marker erase;
         erase.header = header;
         erase.ns = ns;

@@ -433,7 +433,7 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   std::set<int> published;
   visualization_msgs::MarkerArray markers =
       objectsToMarkers(objects, makeHeader("map", 1.0), &published);
-  ASSERT_EQ(markers.markers.size(), 4u);
+  ASSERT_EQ(markers.markers.size(), 6u);
   EXPECT_EQ(published, (std::set<int>{3, 5}));
 
   std::map<std::string, int> per_ns;
@@ -444,6 +444,7 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   }
   EXPECT_EQ(per_ns["boxes"], 2);
   EXPECT_EQ(per_ns["labels"], 2);
+  EXPECT_EQ(per_ns["label_lines"], 2);
 
   const visualization_msgs::Marker& box = markers.markers[0];
   ASSERT_EQ(box.ns, "boxes");
@@ -481,7 +482,8 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   EXPECT_GT(label.pose.position.z, 0.9);  // above the box top
   // Classes get different colours.
   const std_msgs::ColorRGBA c_chair = markers.markers[0].color;
-  const std_msgs::ColorRGBA c_couch = markers.markers[2].color;
+  ASSERT_EQ(markers.markers[3].ns, "boxes");
+  const std_msgs::ColorRGBA c_couch = markers.markers[3].color;
   EXPECT_GT(std::abs(c_chair.r - c_couch.r) + std::abs(c_chair.g - c_couch.g) +
                 std::abs(c_chair.b - c_couch.b),
             0.1);
@@ -501,13 +503,78 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
       EXPECT_EQ(m.id, 5);
     }
   }
-  EXPECT_EQ(deletes, 2);
-  EXPECT_EQ(deleted_ns, (std::set<std::string>{"boxes", "labels"}));
+  EXPECT_EQ(deletes, 3);
+  EXPECT_EQ(deleted_ns, (std::set<std::string>{"boxes", "labels", "label_lines"}));
 
   // Nothing removed since: no deletes.
   markers = objectsToMarkers(objects, makeHeader("map", 3.0), &published);
   for (const visualization_msgs::Marker& m : markers.markers) {
     EXPECT_NE(m.action, visualization_msgs::Marker::DELETE);
+  }
+}
+
+// Five chairs round a table, a cup on it and a tv far away. rviz turns each label to the viewer, so
+// labels whose texts could reach each other from some view must share a column, a text height
+// apart; a line joins each label to its box.
+TEST(RosConversionsTest, LabelsOfBoxesCloseTogetherShareAColumnWithoutCrossing) {
+  std::vector<MapObject> objects = {makeObject(1, "dining table", Eigen::Vector3d(2, 1, 0.375),
+                                               Eigen::Vector3d(1.6, 0.9, 0.75), 0.1)};
+  for (int i = 0; i < 5; ++i) {
+    const double angle = 2.0 * M_PI * i / 5.0;
+    objects.push_back(makeObject(
+        2 + i, "chair", Eigen::Vector3d(2 + 0.9 * std::cos(angle), 1 + 0.7 * std::sin(angle), 0.45),
+        Eigen::Vector3d(0.45, 0.45, 0.9), angle));
+  }
+  objects.push_back(
+      makeObject(7, "cup", Eigen::Vector3d(2.1, 1.1, 0.8), Eigen::Vector3d(0.08, 0.08, 0.1), 0));
+  objects.push_back(
+      makeObject(8, "tv", Eigen::Vector3d(8, 6, 1.0), Eigen::Vector3d(1.0, 0.1, 0.6), 0));
+  std::map<int, visualization_msgs::Marker> labels, lines;
+  for (const auto& m : objectsToMarkers(objects, makeHeader("map", 1.0), nullptr).markers) {
+    if (m.ns == "labels") labels[m.id] = m;
+    if (m.ns == "label_lines") lines[m.id] = m;
+  }
+  ASSERT_EQ(labels.size(), objects.size());
+  ASSERT_EQ(lines.size(), objects.size());
+  for (const MapObject& object : objects) {
+    const visualization_msgs::Marker& label = labels[object.id];
+    const double top_m = object.box.center_m.z() + 0.5 * object.box.size_m.z();
+    EXPECT_GT(label.pose.position.z, top_m + 0.5 * label.scale.z) << label.text;
+    // The line runs from the top of its own box, over its centre, to below its label.
+    const visualization_msgs::Marker& line = lines[object.id];
+    ASSERT_EQ(line.points.size(), 2u);
+    EXPECT_NEAR(line.points[0].x, object.box.center_m.x(), 1e-9);
+    EXPECT_NEAR(line.points[0].y, object.box.center_m.y(), 1e-9);
+    EXPECT_NEAR(line.points[0].z, top_m, 1e-9);
+    EXPECT_LT(line.points[1].z, label.pose.position.z);
+    for (const MapObject& other : objects) {
+      if (other.id <= object.id) continue;
+      const visualization_msgs::Marker& b = labels[other.id];
+      const double apart_m = std::hypot(label.pose.position.x - b.pose.position.x,
+                                        label.pose.position.y - b.pose.position.y);
+      // Half a text height per character: narrower than any font rviz draws.
+      if (apart_m >= 0.25 * label.scale.z * (label.text.size() + b.text.size())) continue;
+      EXPECT_LT(apart_m, 1e-9) << "'" << label.text << "' and '" << b.text << "': no column";
+      EXPECT_GE(std::abs(label.pose.position.z - b.pose.position.z), label.scale.z)
+          << "'" << label.text << "' and '" << b.text << "' cross";
+    }
+  }
+  // The table's group is one column over the table (the oldest), the table's line lowest; the tv,
+  // alone, keeps its label over its box.
+  for (int id = 2; id <= 7; ++id) {
+    EXPECT_DOUBLE_EQ(labels[id].pose.position.x, labels[1].pose.position.x) << id;
+    EXPECT_GT(labels[id].pose.position.z, labels[1].pose.position.z) << id;
+  }
+  EXPECT_NEAR(labels[1].pose.position.x, 2.0, 1e-9);
+  EXPECT_NEAR(labels[8].pose.position.x, 8.0, 1e-9);
+  EXPECT_LT(labels[8].pose.position.z, 1.3 + 0.3);
+  // A newer object near the table does not move the older labels.
+  std::vector<MapObject> more = objects;
+  more.push_back(
+      makeObject(9, "book", Eigen::Vector3d(1.9, 0.9, 0.77), Eigen::Vector3d(0.2, 0.15, 0.04), 0));
+  for (const auto& m : objectsToMarkers(more, makeHeader("map", 2.0), nullptr).markers) {
+    if (m.ns != "labels" || m.id == 9) continue;
+    EXPECT_DOUBLE_EQ(m.pose.position.z, labels[m.id].pose.position.z) << m.text;
   }
 }
 
