@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "multiview_object_detection/evaluation/label_layout.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
@@ -98,7 +99,7 @@ using Polygon2d = std::vector<Eigen::Vector2d>;
 struct Canvas {
   Eigen::Vector2d lo, hi;
   double scale = 1.0;
-  int legend_px = 28;
+  int legend_px = 46;  // two lines of legend above the plan
   int width = 0, height = 0;
   cv::Point pixel(const Eigen::Vector2d& q) const {
     return cv::Point(static_cast<int>(std::lround((q.x() - lo.x()) * scale)),
@@ -178,30 +179,110 @@ void drawGroundTruth(const Canvas& canvas, const std::vector<Polygon2d>& gt_boxe
   }
 }
 
-// Predictions: class-coloured outlines, then "id class p" labels over all of them.
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr double kLabelScale = 0.4;
+
+// Text with a white halo, readable over lines and points.
+void putHaloText(const std::string& text, const cv::Point& origin, const cv::Scalar& color,
+                 double scale, cv::Mat* image) {
+  cv::putText(*image, text, origin, kFont, scale, cv::Scalar(255, 255, 255), 3, cv::LINE_AA);
+  cv::putText(*image, text, origin, kFont, scale, color, 1, cv::LINE_AA);
+}
+
+// The point of `rect` nearest to p.
+cv::Point nearestOnRect(const cv::Rect& rect, const cv::Point& p) {
+  return cv::Point(std::clamp(p.x, rect.x, rect.x + rect.width - 1),
+                   std::clamp(p.y, rect.y, rect.y + rect.height - 1));
+}
+
+// Predictions: class-coloured outlines, then "id class p" labels over all of them, each at the free
+// spot nearest its box centre; a label pushed off its centre gets a thin line to it.
 void drawPredictions(const Canvas& canvas, const std::vector<EvaluatedPrediction>& predictions,
                      const std::vector<Polygon2d>& pred_boxes, cv::Mat* image) {
+  std::vector<cv::Point> anchors;
+  std::vector<cv::Size> sizes;
+  std::vector<std::string> texts;
+  std::vector<int> baselines;
   for (size_t i = 0; i < pred_boxes.size(); ++i) {
     const cv::Scalar color = classColorBgr(predictions[i].class_name);
     cv::polylines(*image, std::vector<std::vector<cv::Point>>{canvas.polygon(pred_boxes[i])}, true,
                   color, 2, cv::LINE_AA);
-  }
-  for (size_t i = 0; i < pred_boxes.size(); ++i) {
-    const cv::Scalar color = classColorBgr(predictions[i].class_name);
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     for (const auto& q : pred_boxes[i]) centre += 0.25 * q;
     char text[96];
     std::snprintf(text, sizeof(text), "%d %s %.2f", predictions[i].id,
                   predictions[i].class_name.c_str(), predictions[i].probability);
-    const cv::Point p = canvas.pixel(centre);
     int baseline = 0;
-    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &baseline);
-    const cv::Point origin(
-        std::clamp(p.x - size.width / 2, 0, std::max(0, canvas.width - size.width)),
-        std::clamp(p.y + size.height / 2, canvas.legend_px + size.height, canvas.height - 2));
-    cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 3,
+    const cv::Size size = cv::getTextSize(text, kFont, kLabelScale, 1, &baseline);
+    anchors.push_back(canvas.pixel(centre));
+    sizes.emplace_back(size.width + 2, size.height + baseline + 2);
+    texts.emplace_back(text);
+    baselines.push_back(baseline);
+  }
+  const cv::Rect plan(0, canvas.legend_px, canvas.width, canvas.height - canvas.legend_px);
+  const std::vector<cv::Rect> spots = layoutLabels(anchors, sizes, plan);
+  for (size_t i = 0; i < spots.size(); ++i) {
+    const cv::Scalar color = classColorBgr(predictions[i].class_name);
+    if (!spots[i].contains(anchors[i])) {
+      cv::line(*image, anchors[i], nearestOnRect(spots[i], anchors[i]), color, 1, cv::LINE_AA);
+      cv::circle(*image, anchors[i], 2, color, cv::FILLED, cv::LINE_AA);
+    }
+  }
+  for (size_t i = 0; i < spots.size(); ++i) {
+    const cv::Point origin(spots[i].x + 1, spots[i].y + spots[i].height - 1 - baselines[i]);
+    putHaloText(texts[i], origin, classColorBgr(predictions[i].class_name), kLabelScale, image);
+  }
+}
+
+// Metres at the grid lines: x along the bottom edge, y along the left edge.
+void drawGridValues(const Canvas& canvas, double spacing_m, cv::Mat* image) {
+  if (!(spacing_m > 0.0)) return;
+  const cv::Scalar grey(120, 120, 120);
+  char text[32];
+  for (double x = std::ceil(canvas.lo.x() / spacing_m) * spacing_m; x <= canvas.hi.x();
+       x += spacing_m) {
+    std::snprintf(text, sizeof(text), "%g", std::abs(x) < 1e-9 ? 0.0 : x);
+    const cv::Point p = canvas.pixel({x, canvas.lo.y()});
+    putHaloText(text, cv::Point(p.x + 3, canvas.height - 5), grey, 0.35, image);
+  }
+  for (double y = std::ceil(canvas.lo.y() / spacing_m) * spacing_m; y <= canvas.hi.y();
+       y += spacing_m) {
+    std::snprintf(text, sizeof(text), "%g", std::abs(y) < 1e-9 ? 0.0 : y);
+    const cv::Point p = canvas.pixel({canvas.lo.x(), y});
+    if (p.y - 4 < canvas.legend_px + 10) continue;
+    putHaloText(text, cv::Point(3, p.y - 4), grey, 0.35, image);
+  }
+}
+
+// "+x", "-z": the world axis a unit vector lies along; its components otherwise.
+std::string axisName(const Eigen::Vector3d& e) {
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(e[k]) > 0.999) return std::string(e[k] > 0 ? "+" : "-") + "xyz"[k];
+  }
+  const Eigen::Vector3d rounded = (e * 100.0).array().round() / 100.0 + 0.0;  // no "-0.00"
+  char text[64];
+  std::snprintf(text, sizeof(text), "(%.2f, %.2f, %.2f)", rounded.x() + 0.0, rounded.y() + 0.0,
+                rounded.z() + 0.0);
+  return text;
+}
+
+// Two lines: what is drawn, then how to read the plan (view, axes, units, grid).
+void drawLegend(const Canvas& canvas, const PlanAxes& axes, size_t num_predictions,
+                bool ground_truth, const BirdsEyeConfig& config, cv::Mat* image) {
+  char what[160], how[200];
+  std::snprintf(what, sizeof(what), "%zu detected (coloured: id class probability)%s",
+                num_predictions, ground_truth ? ", ground truth green" : "");
+  std::snprintf(how, sizeof(how), "seen from above: up %s, right %s, top %s; m, grid %g m",
+                axisName(axes.up).c_str(), axisName(axes.e1).c_str(), axisName(axes.e2).c_str(),
+                config.grid_spacing_m);
+  for (const auto& [text, y] :
+       {std::make_pair(std::string(what), 18), std::make_pair(std::string(how), 38)}) {
+    // Shrunk to the width of a narrow map rather than cut.
+    int baseline = 0;
+    const double width = cv::getTextSize(text, kFont, 0.5, 1, &baseline).width;
+    const double scale = std::min(0.5, 0.5 * (canvas.width - 12) / std::max(1.0, width));
+    cv::putText(*image, text, cv::Point(6, y), kFont, scale, cv::Scalar(40, 40, 40), 1,
                 cv::LINE_AA);
-    cv::putText(*image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.4, color, 1, cv::LINE_AA);
   }
 }
 
@@ -231,13 +312,9 @@ cv::Mat drawBirdsEyeMap(const std::vector<GroundTruthObject>& ground_truth,
   drawGrid(canvas, config.grid_spacing_m, &image);
   drawPoints(canvas, points, &image);
   drawGroundTruth(canvas, gt_boxes, &image);
+  drawGridValues(canvas, config.grid_spacing_m, &image);
   drawPredictions(canvas, predictions, pred_boxes, &image);
-  char legend[160];
-  std::snprintf(legend, sizeof(legend),
-                "%zu detected (coloured, id class probability)%s  grid %.0f m", predictions.size(),
-                ground_truth.empty() ? "" : ", ground truth green", config.grid_spacing_m);
-  cv::putText(image, legend, cv::Point(8, 19), cv::FONT_HERSHEY_SIMPLEX, 0.5,
-              cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+  drawLegend(canvas, axes, predictions.size(), !ground_truth.empty(), config, &image);
   return image;
 }
 

@@ -3,9 +3,11 @@
 
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "multiview_object_detection/datasets/ground_truth_geometry.h"
 #include "multiview_object_detection/evaluation/evaluation.h"
+#include "multiview_object_detection/evaluation/label_layout.h"
 #include "multiview_object_detection/evaluation/map_plot.h"
 
 namespace mvod {
@@ -117,15 +119,15 @@ TEST(BirdsEyeMap, DrawsGroundTruthAndColouredPredictionsWhereTheyAre) {
   ASSERT_FALSE(image.empty());
   ASSERT_EQ(image.type(), CV_8UC3);
   // Footprints: table x in [1.2, 2.8], y in [0.55, 1.45]; chair (yaw 0.5) reaches
-  // 0.25 (cos 0.5 + sin 0.5) = 0.339 m from its centre. Plus 0.5 m margins, 100 px/m, and a 28 px
+  // 0.25 (cos 0.5 + sin 0.5) = 0.339 m from its centre. Plus 0.5 m margins, 100 px/m, and a 46 px
   // legend band on top.
   const double reach = 0.25 * (std::cos(0.5) + std::sin(0.5));
   const double x_lo = 1.2 - 0.5;
   const double y_hi = 3.0 + reach + 0.5;
   EXPECT_NEAR(image.cols, 100.0 * (4.0 + reach + 0.5 - x_lo), 2.0);
-  EXPECT_NEAR(image.rows, 28 + 100.0 * (y_hi - (0.55 - 0.5)), 2.0);
+  EXPECT_NEAR(image.rows, 46 + 100.0 * (y_hi - (0.55 - 0.5)), 2.0);
   auto pixel = [&](double x, double y) {
-    return image.at<cv::Vec3b>(static_cast<int>(std::lround(28 + (y_hi - y) * 100.0)),
+    return image.at<cv::Vec3b>(static_cast<int>(std::lround(46 + (y_hi - y) * 100.0)),
                                static_cast<int>(std::lround((x - x_lo) * 100.0)));
   };
   auto is_coloured = [](const cv::Vec3b& c) {
@@ -146,6 +148,44 @@ TEST(BirdsEyeMap, DrawsGroundTruthAndColouredPredictionsWhereTheyAre) {
   // Nothing to draw: a small note image, no crash.
   const cv::Mat blank = drawBirdsEyeMap({}, {}, Eigen::Vector3d::UnitZ());
   EXPECT_FALSE(blank.empty());
+}
+
+// A narrow map (one chair): the legend shrinks to the image's width instead of running off it.
+TEST(BirdsEyeMap, LegendFitsANarrowMap) {
+  const GroundTruthObject chair = groundTruth("chair", yawedBox({1, 1, 0.45}, {0.5, 0.5, 0.9}, 0));
+  const cv::Mat image = drawBirdsEyeMap({chair}, {prediction(7, chair, 0.5)},
+                                        Eigen::Vector3d::UnitZ(), BirdsEyeConfig{});
+  ASSERT_EQ(image.cols, 320);  // the narrowest image
+  cv::Mat grey;
+  cv::cvtColor(image.rowRange(0, 46), grey, cv::COLOR_BGR2GRAY);
+  // Text in both legend lines, none in the last 5 columns.
+  EXPECT_GT(cv::countNonZero(grey.rowRange(0, 23) < 128), 50);
+  EXPECT_GT(cv::countNonZero(grey.rowRange(23, 46) < 128), 50);
+  EXPECT_EQ(cv::countNonZero(grey.colRange(grey.cols - 5, grey.cols) < 200), 0);
+}
+
+// Twelve labels on one spot, as round a table seen from above: none covers another.
+TEST(LabelLayout, LabelsOnOneSpotSpreadWithoutOverlapInsideTheImage) {
+  const cv::Rect bounds(0, 40, 400, 300);
+  std::vector<cv::Point> anchors(12, cv::Point(200, 190));
+  std::vector<cv::Size> sizes(12, cv::Size(90, 14));
+  anchors.push_back(cv::Point(395, 335));  // at the corner: kept inside
+  sizes.emplace_back(60, 14);
+  const std::vector<cv::Rect> rects = layoutLabels(anchors, sizes, bounds);
+  ASSERT_EQ(rects.size(), anchors.size());
+  // The first is centred on its anchor.
+  EXPECT_EQ(rects[0], cv::Rect(155, 183, 90, 14));
+  for (size_t i = 0; i < rects.size(); ++i) {
+    EXPECT_EQ(rects[i] & bounds, rects[i]) << i;
+    EXPECT_EQ(rects[i].size(), sizes[i]);
+    for (size_t j = i + 1; j < rects.size(); ++j) {
+      EXPECT_EQ((rects[i] & rects[j]).area(), 0) << i << " and " << j;
+    }
+    // Near the anchor: within the search distance.
+    const cv::Point centre(rects[i].x + rects[i].width / 2, rects[i].y + rects[i].height / 2);
+    EXPECT_LE(cv::norm(centre - anchors[i]), 161.0) << i;
+  }
+  EXPECT_TRUE(layoutLabels({cv::Point(1, 1)}, {}, bounds).empty());  // mismatched lengths
 }
 
 }  // namespace
