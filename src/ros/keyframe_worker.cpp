@@ -4,26 +4,20 @@
 
 #include <algorithm>
 #include <chrono>
-#include <sstream>
 #include <string>
 #include <utility>
 
-#include "multiview_object_detection/pipeline/map/output_frame.h"
 #include "multiview_object_detection/pipeline/utils/stopwatch.h"
 #include "multiview_object_detection/ros/throttled_log.h"
+
+// KeyframeWorker, part 1: the queue, the worker thread and one keyframe. Parts 2 and 3:
+// keyframe_worker_changes.cpp (pose corrections, reconfigure), keyframe_worker_map.cpp (refinement,
+// the map for the services).
 
 namespace mvod {
 namespace {
 
 using Clock = StopwatchClock;
-
-std::string idList(const std::vector<int>& ids) {
-  std::ostringstream out;
-  out << "[";
-  for (size_t i = 0; i < ids.size(); ++i) out << (i > 0 ? ", " : "") << ids[i];
-  out << "]";
-  return out.str();
-}
 
 }  // namespace
 
@@ -188,127 +182,8 @@ void KeyframeWorker::workerLoop() {
   }
 }
 
-void KeyframeWorker::applyCorrections(std::vector<PoseCorrection> corrections) {
-  ObjectMapper::CorrectionReport report;
-  Status applied;
-  {
-    std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
-    applied = mapper_->correctPoses(corrections, &report);
-    if (applied && report.keyframes_moved > 0) updateSnapshotLocked();
-  }
-  if (!applied) {
-    errorThrottled("keyframe poses refused: " + applied.message());
-    return;
-  }
-  if (report.ignored) {
-    warnThrottled(
-        "keyframe poses ignored: the paper's method (or corrections/enable false) keeps "
-        "no keyframe history, so the map cannot follow the SLAM's corrections");
-    return;
-  }
-  if (report.unmatched > 0) {
-    warnThrottled("keyframe poses: " + std::to_string(report.unmatched) + " of " +
-                  std::to_string(corrections.size()) +
-                  " stamps match no keyframe of the map (within corrections/stamp_tolerance_s; "
-                  "run the node on the SLAM's keyframes, keyframe_mode topic)");
-  }
-  stats_->update([&report](ObjectDetectionStatistics& stats) {
-    stats.removed_gone += report.objects_gone;
-    stats.removed_by_corrections += static_cast<int>(report.removed.size());
-    ++stats.corrections_applied;
-    stats.keyframes_corrected += report.keyframes_moved;
-    stats.keyframe_poses_unmatched += report.unmatched;
-    stats.correction_ms = report.time_ms;
-  });
-  if (report.keyframes_moved == 0) return;
-  ROS_INFO(
-      "keyframe poses corrected: %d keyframes moved, %d views fused again, objects %d -> %d, "
-      "%zu removed (%.1f ms)",
-      report.keyframes_moved, report.views_replayed, report.objects_before, report.objects_after,
-      report.removed.size(), report.time_ms);
-  std::vector<MapObject> removed;
-  std::vector<std::string> reasons;
-  for (const ObjectMapper::RemovedObject& entry : report.removed) {
-    ROS_INFO("keyframe poses corrected: %s #%d removed: %s", entry.object.class_name.c_str(),
-             entry.object.id, entry.reason.c_str());
-    removed.push_back(entry.object);
-    reasons.push_back(entry.reason);
-  }
-  if (report.objects_restored > 0) {
-    ROS_INFO(
-        "keyframe poses corrected: %d objects kept as they were (none of their views moved, so "
-        "the correction cannot explain their removal)",
-        report.objects_restored);
-  }
-  const ros::Time now = ros::Time::now();
-  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
-  publishMap(now);
-}
-
 // ---------------------------------------------------------------------------------------------
 // One keyframe
-
-void KeyframeWorker::applyPendingReconfigure() {
-  bool mapper_changed = false;
-  bool segmenter_changed = false;
-  const RuntimeConfig::Config config = config_->takeChanges(&mapper_changed, &segmenter_changed);
-  if (mapper_changed) {
-    ObjectMapper::ReconfigureReport report;
-    double old_grid_m = 0.0;
-    double new_grid_m = 0.0;
-    {
-      std::lock_guard<std::timed_mutex> lock(mapper_mutex_);
-      ObjectMapper::Config mapper_config = config.mapperConfig();
-      mapper_config.gravity_down_W = mapper_->config().gravity_down_W;  // not reconfigurable
-      old_grid_m = mapper_->config().database.fusion_voxel_size_m;
-      new_grid_m = mapper_config.database.fusion_voxel_size_m;
-      const Status updated = mapper_->updateConfig(mapper_config, &report);
-      if (!updated)
-        ROS_ERROR("reconfigured mapper settings refused: %s", updated.message().c_str());
-      if (report.fused_again) updateSnapshotLocked();
-    }
-    reportNewGrid(report, old_grid_m, new_grid_m);
-  }
-  if (segmenter_changed && config.detector != "topic" && !segmenter_injected_) {
-    std::unique_ptr<InstanceSegmenter> segmenter;
-    const Status created = createInstanceSegmenter(config.segmenterOptions(), &segmenter);
-    if (created) {
-      segmenter_ = std::move(segmenter);
-      ROS_INFO("detector reloaded with score_threshold %.3f",
-               config.segmenterOptions().score_threshold);
-    } else {
-      ROS_ERROR("detector reload failed, the previous one is kept: %s", created.message().c_str());
-    }
-  }
-}
-
-void KeyframeWorker::reportNewGrid(const ObjectMapper::ReconfigureReport& report, double old_grid_m,
-                                   double new_grid_m) {
-  if (report.next_fusions_only) {
-    ROS_WARN(
-        "database/fusion_voxel_size_m %g -> %g m applies to the next keyframes only: there is no "
-        "keyframe history to fuse the map again from (the paper's method, or corrections/enable "
-        "false); each object moves to the new voxel size when a detection is next fused into it",
-        old_grid_m, new_grid_m);
-    return;
-  }
-  if (!report.fused_again) return;
-  ROS_INFO(
-      "database/fusion_voxel_size_m %g -> %g m: the map was fused again from the keyframe history "
-      "at the new voxel size, as if it had been used from the start: objects %d -> %d (%.1f ms)",
-      old_grid_m, new_grid_m, report.objects_before, report.objects_after, report.time_ms);
-  std::vector<MapObject> removed;
-  std::vector<std::string> reasons;
-  for (const ObjectMapper::RemovedObject& entry : report.removed) {
-    ROS_INFO("%s #%d removed: %s", entry.object.class_name.c_str(), entry.object.id,
-             entry.reason.c_str());
-    removed.push_back(entry.object);
-    reasons.push_back(entry.reason);
-  }
-  const ros::Time now = ros::Time::now();
-  publishers_->publishRemoved(removed, reasons, snapshot()->T_W_O, now);
-  publishMap(now);
-}
 
 bool KeyframeWorker::updateGravityFromTf(const std::string& what) {
   const RuntimeConfig::Config config = config_->get();
@@ -483,130 +358,6 @@ void KeyframeWorker::recordLatency(double latency_ms) {
     stats.latency_ms = latency_ms;
     stats.latency_median_ms = median_ms;
   });
-}
-
-void KeyframeWorker::refineLocked(const std::string& why) {
-  const ObjectMapper::RefinementReport report = mapper_->refine();
-  removed_atypical_ += static_cast<int>(report.atypical_ids.size());
-  removed_intersecting_ += static_cast<int>(report.intersecting_ids.size());
-  stats_->update([this, &report](ObjectDetectionStatistics& stats) {
-    stats.removed_atypical = removed_atypical_;
-    stats.removed_intersecting = removed_intersecting_;
-    stats.stage_times.refinement_ms = report.time_ms;
-  });
-  if (!report.atypical_ids.empty() || !report.intersecting_ids.empty()) {
-    std::string merged;
-    for (const auto& pair : report.merged_ids) {
-      merged += (merged.empty() ? "" : ", ") + std::to_string(pair.first) + " into " +
-                std::to_string(pair.second);
-    }
-    ROS_INFO("refinement (%s): removed atypical %s, intersecting %s%s%s (%.1f ms)", why.c_str(),
-             idList(report.atypical_ids).c_str(), idList(report.intersecting_ids).c_str(),
-             merged.empty() ? "" : "; duplicates merged: ", merged.c_str(), report.time_ms);
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
-// The map, for the services
-
-void KeyframeWorker::updateSnapshotLocked() {
-  auto snapshot = std::make_shared<MapSnapshot>();
-  snapshot->objects = databaseObjects(mapper_->database());
-  snapshot->summary.keyframes = mapper_->keyframesProcessed();
-  snapshot->summary.gravity_down_W = -mapper_->gravity().up;
-  snapshot->summary.floor_height_m = mapper_->floorHeight_m();
-  snapshot->T_W_O = gravityAlignedPose(mapper_->gravity(), mapper_->floorHeight_m());
-  snapshot->summary.removed_atypical = removed_atypical_;
-  snapshot->summary.removed_intersecting = removed_intersecting_;
-  snapshot->summary.removed_gone = removed_gone_;
-  snapshot->history = mapper_->history().records();
-  const KeyframeHistory::Usage usage = mapper_->history().usage();
-  stats_->update([&usage](ObjectDetectionStatistics& stats) {
-    stats.history_mb = static_cast<double>(usage.bytes) / (1024.0 * 1024.0);
-    stats.history_keyframes = usage.keyframes;
-    stats.history_full_depth = usage.full_depth;
-    stats.history_coarse_depth = usage.coarse_depth;
-    stats.history_views_only = usage.views_only;
-    stats.history_forgotten = usage.forgotten;
-  });
-  std::lock_guard<std::mutex> lock(snapshot_mutex_);
-  snapshot_ = std::move(snapshot);
-}
-
-std::shared_ptr<const KeyframeWorker::MapSnapshot> KeyframeWorker::snapshot() const {
-  std::lock_guard<std::mutex> lock(snapshot_mutex_);
-  return snapshot_;
-}
-
-std::vector<MapObject> KeyframeWorker::objects() const { return snapshot()->objects; }
-
-void KeyframeWorker::publishMap(const ros::Time& stamp) const {
-  const std::shared_ptr<const MapSnapshot> map = snapshot();
-  publishers_->publishMap(map->objects, map->T_W_O, stamp);
-}
-
-void KeyframeWorker::mapSnapshot(std::vector<MapObject>* objects, MapSummary* summary,
-                                 std::deque<KeyframeRecord>* history) const {
-  const std::shared_ptr<const MapSnapshot> map = snapshot();
-  *objects = map->objects;
-  *summary = map->summary;
-  if (history != nullptr) *history = map->history;
-}
-
-std::unique_lock<std::timed_mutex> KeyframeWorker::lockMap(double timeout_s, Status* busy) const {
-  std::unique_lock<std::timed_mutex> lock(mapper_mutex_, std::defer_lock);
-  if (timeout_s < 0.0) {
-    lock.lock();
-  } else if (!lock.try_lock_for(std::chrono::duration<double>(timeout_s))) {
-    std::ostringstream text;
-    text << "busy: the keyframe in progress did not finish within service_timeout_s (" << timeout_s
-         << " s); the map was not changed, try again";
-    *busy = Status::Error(text.str());
-  }
-  return lock;
-}
-
-Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const MapSummary& summary,
-                                  std::deque<KeyframeRecord> history, double timeout_s) {
-  Status busy;
-  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
-  if (!lock.owns_lock()) return busy;
-  const Status replaced = mapper_->mutableDatabase().setObjects(objects);
-  if (!replaced) return replaced;
-  mapper_->setHistory(std::move(history));
-  mapper_->restoreFloor(summary.floor_height_m);
-  removed_atypical_ = summary.removed_atypical;
-  removed_intersecting_ = summary.removed_intersecting;
-  removed_gone_ = summary.removed_gone;
-  updateSnapshotLocked();
-  return Status::Ok();
-}
-
-Status KeyframeWorker::resetMap(double timeout_s, size_t* removed) {
-  Status busy;
-  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
-  if (!lock.owns_lock()) return busy;
-  *removed = mapper_->database().size();
-  mapper_->reset();
-  removed_atypical_ = 0;
-  removed_intersecting_ = 0;
-  removed_gone_ = 0;
-  updateSnapshotLocked();
-  return Status::Ok();
-}
-
-Status KeyframeWorker::refine(const std::string& why, double timeout_s, Refinement* refinement) {
-  Status busy;
-  const std::unique_lock<std::timed_mutex> lock = lockMap(timeout_s, &busy);
-  if (!lock.owns_lock()) return busy;
-  const int atypical_before = removed_atypical_;
-  const int intersecting_before = removed_intersecting_;
-  refineLocked(why);
-  refinement->removed_atypical = removed_atypical_ - atypical_before;
-  refinement->removed_intersecting = removed_intersecting_ - intersecting_before;
-  refinement->objects_left = mapper_->database().size();
-  updateSnapshotLocked();
-  return Status::Ok();
 }
 
 }  // namespace mvod

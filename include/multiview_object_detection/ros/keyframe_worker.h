@@ -2,6 +2,9 @@
 // dropped when it is full, voxblox-style) and ONE worker thread runs the detector and
 // ObjectMapper::processKeyframe on each, applying reconfigured settings between keyframes. The map
 // lives here; the services reach it through the map functions below, under the same lock.
+// Implemented in three files: keyframe_worker.cpp (queue, thread, one keyframe),
+// keyframe_worker_changes.cpp (pose corrections, reconfigure), keyframe_worker_map.cpp (refinement,
+// the map for the services).
 #pragma once
 
 #include <tf2_ros/buffer.h>
