@@ -16,21 +16,14 @@
 #include <string>
 #include <vector>
 
+#include "synthetic_bag.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-int run(const std::string& command) {
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using mvod::test::readText;
+using mvod::test::run;
 
 // Busy loops on every core while alive.
 class Load {
@@ -62,14 +55,7 @@ class DemoReplayTest : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("mvod_demo_replay_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    const std::string room = (dir_ / "synthetic_default").string();
-    made_ = run(std::string(MVOD_MAKE_SYNTHETIC_DATASET_BIN) +
-                " --layout scenenn --room default --seed 1 --noise-model kinect --frames 60" +
-                " --id synthetic_default --output '" + room + "' > '" +
-                (dir_ / "make.log").string() + "' 2>&1") == 0 &&
-            run(std::string(MVOD_DATASET_TO_BAG_BIN) + " --dataset '" + room + "' --output '" +
-                (dir_ / "demo.bag").string() + "' --detector simulated --quiet > '" +
-                (dir_ / "bag.log").string() + "' 2>&1") == 0;
+    made_ = mvod::test::makeSyntheticBag(dir_, 60, "demo.bag");
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
 
