@@ -4,15 +4,17 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <vector>
 
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {
 namespace {
 
-constexpr double kCharWidth = 0.6;    // rviz's character width, in text heights (about)
-constexpr double kClearanceM = 0.08;  // between a box top and the lowest label over it
-constexpr double kLineSpacing = 1.5;  // between the lines of a column, in text heights
+constexpr double kCharWidth = 0.6;         // rviz's character width, in text heights (about)
+constexpr double kClearanceM = 0.08;       // between a box top and the lowest label over it
+constexpr double kLineSpacing = 1.5;       // between the lines of a column, in text heights
+constexpr double kOtherColumnReach = 1.5;  // see the lines below
 constexpr double kColumnLiftM = 0.4;  // a column's lowest line over its group's highest top: clear
                                       // of the clouds around it in an oblique view
 
@@ -28,27 +30,6 @@ Eigen::Vector3d labelsUp(const std::vector<const MapObject*>& objects) {
   return sum.z() < 0.0 ? Eigen::Vector3d(-sum.normalized()) : Eigen::Vector3d(sum.normalized());
 }
 
-// Union-find over the labels: which column each one joins.
-class Columns {
- public:
-  explicit Columns(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  size_t find(size_t i) {
-    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
-    return i;
-  }
-  // The column keeps the smaller root index: the oldest object when indices are in id order.
-  bool join(size_t a, size_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return false;
-    parent_[std::max(a, b)] = std::min(a, b);
-    return true;
-  }
-
- private:
-  std::vector<size_t> parent_;
-};
-
 }  // namespace
 
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
@@ -56,7 +37,7 @@ std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& obj
                                         double text_height_m) {
   const size_t n = std::min(objects.size(), texts.size());
   const Eigen::Vector3d up = labelsUp(objects);
-  // In id order; below, i and j index this order.
+  // In id order; below, i and k index this order.
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
@@ -75,45 +56,65 @@ std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& obj
     half_width_m[i] =
         0.5 * kCharWidth * text_height_m * static_cast<double>(texts[order[i]].size());
   }
-  // Labels join while their reaches meet: first around their own boxes, then around the columns
-  // (a column's reach is its widest label's), until no two columns meet.
-  Columns columns(n);
-  std::vector<double> reach_m = half_width_m;  // per column (its root): its widest label's
-  for (bool first = true, joined = true; joined; first = false) {
-    joined = false;
-    if (!first) {
-      std::fill(reach_m.begin(), reach_m.end(), 0.0);
-      for (size_t k = 0; k < n; ++k) {
-        reach_m[columns.find(k)] = std::max(reach_m[columns.find(k)], half_width_m[k]);
+  // Columns, in id order: a label joins the nearest column whose owner's reach meets its own
+  // (text half widths), else it starts a column over its own box. Chains of neighbours do not merge
+  // columns: a row of objects along a counter gets several short columns, not one tall one.
+  std::vector<size_t> owner(n);  // per label: the first label of its column
+  std::vector<size_t> owners;
+  for (size_t i = 0; i < n; ++i) {
+    owner[i] = i;
+    double nearest_m = std::numeric_limits<double>::infinity();
+    for (const size_t o : owners) {
+      const double apart_m = (floor_m[i] - floor_m[o]).norm();
+      if (apart_m < half_width_m[i] + half_width_m[o] && apart_m < nearest_m) {
+        owner[i] = o;
+        nearest_m = apart_m;
       }
     }
-    for (size_t i = 0; i < n; ++i) {
-      for (size_t j = i + 1; j < n; ++j) {
-        const size_t ci = columns.find(i), cj = columns.find(j);
-        if (ci == cj) continue;
-        const double apart_m =
-            first ? (floor_m[i] - floor_m[j]).norm() : (floor_m[ci] - floor_m[cj]).norm();
-        const double meet_m = first ? half_width_m[i] + half_width_m[j] : reach_m[ci] + reach_m[cj];
-        if (apart_m < meet_m) joined |= columns.join(i, j);
-      }
-    }
+    if (owner[i] == i) owners.push_back(i);
   }
-  // Each column's base: above the highest box of its group. Then one line per label, in id order.
+  // Each column's base: above the highest box of its members, lifted when it has several.
   std::vector<double> base_m(n, -std::numeric_limits<double>::infinity());
   std::vector<int> members(n, 0);
   for (size_t i = 0; i < n; ++i) {
-    base_m[columns.find(i)] = std::max(base_m[columns.find(i)], lowest_m[i]);
-    ++members[columns.find(i)];
+    base_m[owner[i]] = std::max(base_m[owner[i]], lowest_m[i]);
+    ++members[owner[i]];
   }
-  for (size_t c = 0; c < n; ++c) {
-    if (members[c] > 1) base_m[c] += kColumnLiftM;
+  for (const size_t o : owners) {
+    if (members[o] > 1) base_m[o] += kColumnLiftM;
   }
-  std::vector<int> lines_used(n, 0);
+  // Lines, in id order: the lowest line at or over the column's base that keeps a line's spacing
+  // from every label placed before whose text could reach this one (its own column's, and those
+  // of columns close by).
+  const double spacing_m = kLineSpacing * text_height_m;
+  std::vector<double> height_m(n, 0.0);
   std::vector<LabelPlacement> placements(n);
   for (size_t i = 0; i < n; ++i) {
-    const size_t c = columns.find(i);
-    const double height_m = base_m[c] + kLineSpacing * text_height_m * lines_used[c]++;
-    placements[order[i]] = {floor_m[c] + height_m * up, top_m[i]};
+    const Eigen::Vector3d& at = floor_m[owner[i]];
+    std::vector<size_t> neighbours;
+    for (size_t k = 0; k < i; ++k) {
+      // Other columns' labels count from farther: rviz's oblique view brings a column behind or in
+      // front of this one closer on the screen than on the floor.
+      const double reach_m =
+          (owner[k] == owner[i] ? 1.0 : kOtherColumnReach) * (half_width_m[i] + half_width_m[k]);
+      if ((floor_m[owner[k]] - at).norm() < reach_m) {
+        neighbours.push_back(k);
+      }
+    }
+    std::vector<double> candidates_m = {base_m[owner[i]]};
+    for (const size_t k : neighbours) candidates_m.push_back(height_m[k] + spacing_m);
+    std::sort(candidates_m.begin(), candidates_m.end());
+    for (const double z_m : candidates_m) {
+      if (z_m < base_m[owner[i]]) continue;
+      const bool free = std::none_of(neighbours.begin(), neighbours.end(), [&](size_t k) {
+        return std::abs(height_m[k] - z_m) < spacing_m - 1e-9;
+      });
+      if (free) {
+        height_m[i] = z_m;
+        break;
+      }
+    }
+    placements[order[i]] = {at + height_m[i] * up, top_m[i]};
   }
   return placements;
 }

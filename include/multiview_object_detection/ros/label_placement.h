@@ -18,11 +18,11 @@ struct LabelPlacement {
 };
 
 // One placement per object, in the order of `objects` (as many as texts, if fewer); texts[i] is
-// objects[i]'s label, drawn
-// text_height_m high. "Up" is the boxes' third axis (the floor normal, Eq. 4). A label reaches half
-// its text's width around its column in every direction; columns whose reaches meet merge. Lines
-// go up in id order from above the highest box of the group, so an object's line stays put while
-// newer objects join above it.
+// objects[i]'s label, drawn text_height_m high. "Up" is the boxes' third axis (the floor normal,
+// Eq. 4). A label reaches half its text's width around its column in every direction. In id order,
+// a label joins the nearest column whose first label it reaches, else starts one over its own box;
+// it takes the lowest line, above its column's boxes, that no earlier label it reaches holds. An
+// object's label stays put while newer objects join above it.
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
                                         const std::vector<std::string>& texts,
                                         double text_height_m);
