@@ -11,7 +11,7 @@ virtual X display (Xvfb), rviz. Plays the bag with its clock (BagPlayer: like `r
 more than a few frames ahead of what the node received, so a loaded machine slows the replay down instead of
 losing frames), waits on /diagnostics until every selected keyframe is processed, calls ~refine and ~save_map
 (DIR/map.mvmap, the map folder), prints ~get_objects as a table, shows the map in rviz gravity-up and saves a
-screenshot (DIR/rviz.png). Everything it started is stopped on the way out. Exit status: 0 ok; 1 the node
+screenshot (DIR/rviz.png) looking at the objects. Everything it started is stopped on the way out. Exit status: 0 ok; 1 the node
 failed, found nothing, or did not take every frame of the bag (lost, rejected, dropped or failed: the message
 says which); 2 bad arguments.
 
@@ -367,20 +367,34 @@ class Demo:
         if not reply.success:
             raise DemoError('~save_map: ' + reply.message)
         log('~save_map: ' + reply.message)
-        objects = self.call('get_objects', GetObjects, '', []).objects.objects
+        array = self.call('get_objects', GetObjects, '', []).objects
+        objects = array.objects
         print_objects(objects)
         if not objects:
             raise DemoError('the node found no objects (%s)' % self.progress())
 
         if rviz:
-            self.screenshot()
+            self.screenshot(objects, array.header.frame_id or 'map_gravity_aligned')
         return 0
 
-    def screenshot(self):
-        """Has the node republish its markers, then saves a screenshot of rviz."""
+    def screenshot(self, objects, frame_id):
+        """Points rviz's view at the objects, has the node republish its markers, saves a screenshot."""
         import rospy
+        from geometry_msgs.msg import TransformStamped
         from std_srvs.srv import Trigger
+        from tf2_msgs.msg import TFMessage
         from visualization_msgs.msg import Marker, MarkerArray
+        # rviz/demo.rviz orbits the frame demo_focus: on the floor under the objects' middle (the median of
+        # their centres in the node's frame), so a map anywhere in the room is in view.
+        focus = TransformStamped()
+        focus.header.stamp = rospy.Time.now()
+        focus.header.frame_id = frame_id
+        focus.child_frame_id = 'demo_focus'
+        focus.transform.translation.x = median([o.pose.position.x for o in objects])
+        focus.transform.translation.y = median([o.pose.position.y for o in objects])
+        focus.transform.rotation.w = 1.0
+        self.focus_publisher = rospy.Publisher('/tf_static', TFMessage, queue_size=1, latch=True)
+        self.focus_publisher.publish(TFMessage(transforms=[focus]))
         # rviz may have dropped some of the node's markers while it was busy (the DELETEs of merged and refined
         # objects among them): clear them all, then have the node republish the map.
         clear = rospy.Publisher(NODE + '/markers', MarkerArray, queue_size=1, latch=True)
@@ -406,6 +420,11 @@ class Demo:
             pass
         for process, name in reversed(self.processes):
             stop(process, name)
+
+
+def median(values):
+    values = sorted(values)
+    return values[len(values) // 2] if values else 0.0
 
 
 def print_objects(objects):
