@@ -2,11 +2,15 @@
 
 #include <sys/stat.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "multiview_object_detection/detectors/dnn_instance_segmenter.h"
 #include "multiview_object_detection/detectors/file_instance_segmenter.h"
+#include "multiview_object_detection/pipeline/utils/label_layout.h"
 
 namespace mvod {
 namespace {
@@ -160,6 +164,7 @@ Status createInstanceSegmenter(const SegmenterOptions& given,
 
 cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections) {
   cv::Mat canvas = image_bgr.clone();
+  std::vector<cv::Scalar> colours;
   for (size_t i = 0; i < detections.size(); ++i) {
     const Detection2D& det = detections[i];
     // A colour per class, stable between frames.
@@ -168,26 +173,39 @@ cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>&
     cv::Mat bgr;
     cv::cvtColor(hsv, bgr, cv::COLOR_HSV2BGR);
     const cv::Vec3b c = bgr.at<cv::Vec3b>(0, 0);
-    const cv::Scalar colour(c[0], c[1], c[2]);
+    colours.emplace_back(c[0], c[1], c[2]);
     // Box-sized masks (the DNN detectors') and image-sized ones (files) alike.
     cv::Point mask_origin;
     if (maskOrigin(det, canvas.size(), &mask_origin)) {
       const cv::Rect region =
           cv::Rect(mask_origin, det.mask.size()) & cv::Rect(cv::Point(), canvas.size());
-      cv::Mat tint(region.size(), CV_8UC3, colour);
+      cv::Mat tint(region.size(), CV_8UC3, colours.back());
       cv::Mat blended;
       cv::addWeighted(canvas(region), 0.55, tint, 0.45, 0.0, blended);
       blended.copyTo(canvas(region), maskInRegion(det, canvas.size(), region));
     }
-    cv::rectangle(canvas, det.box_px, colour, 2);
+    cv::rectangle(canvas, det.box_px, colours.back(), 2);
+  }
+  // "class score" over each box's top-left corner, at the free spot nearest it: boxes that share
+  // a top edge would otherwise cover each other's labels.
+  std::vector<std::string> texts;
+  std::vector<cv::Point> anchors;
+  std::vector<cv::Size> sizes;
+  int baseline = 0;
+  for (const Detection2D& det : detections) {
     char text[128];
     std::snprintf(text, sizeof(text), "%s %.2f", det.class_name.c_str(), det.score);
-    int baseline = 0;
     const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.5, 1, &baseline);
-    const cv::Point origin(det.box_px.x, std::max(size.height + 2, det.box_px.y - 2));
-    cv::rectangle(canvas, origin + cv::Point(0, baseline),
-                  origin + cv::Point(size.width, -size.height - 2), colour, cv::FILLED);
-    cv::putText(canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1);
+    texts.emplace_back(text);
+    sizes.emplace_back(size.width, size.height + baseline + 2);
+    anchors.emplace_back(det.box_px.x + size.width / 2, det.box_px.y - 2 - sizes.back().height / 2);
+  }
+  const std::vector<cv::Rect> spots =
+      layoutLabels(anchors, sizes, cv::Rect(cv::Point(), canvas.size()), {2, 80, 0});
+  for (size_t i = 0; i < spots.size(); ++i) {
+    cv::rectangle(canvas, spots[i], colours[i], cv::FILLED);
+    const cv::Point origin(spots[i].x, spots[i].y + spots[i].height - baseline);
+    cv::putText(canvas, texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1);
   }
   return canvas;
 }

@@ -1,9 +1,12 @@
 #include "multiview_object_detection/evaluation/keyframe_overlay.h"
 
-#include <cstdio>
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "multiview_object_detection/detectors/segmenter_factory.h"
+#include "multiview_object_detection/pipeline/utils/label_layout.h"
 
 namespace mvod {
 namespace {
@@ -15,8 +18,9 @@ constexpr double kMinDepthM = 0.05;
 constexpr int kEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
                                {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
-void drawBox(const RgbdFrame& frame, const Eigen::Isometry3d& T_C_W, const MapObject& object,
-             cv::Mat* canvas) {
+// The box's edges in white; false when none is in view, else *label_at is its topmost point.
+bool drawBox(const RgbdFrame& frame, const Eigen::Isometry3d& T_C_W, const MapObject& object,
+             cv::Mat* canvas, cv::Point* label_at) {
   const std::vector<Eigen::Vector3d> corners_W = object.box.corners();
   std::vector<cv::Point2d> pixels(corners_W.size());
   std::vector<bool> in_front(corners_W.size(), false);
@@ -30,7 +34,7 @@ void drawBox(const RgbdFrame& frame, const Eigen::Isometry3d& T_C_W, const MapOb
   const cv::Scalar colour(255, 255, 255);
   const cv::Rect image(cv::Point(), canvas->size());
   bool drawn = false;
-  cv::Point label_at(canvas->cols, canvas->rows);
+  *label_at = cv::Point(canvas->cols, canvas->rows);
   for (const auto& edge : kEdges) {
     if (!in_front[edge[0]] || !in_front[edge[1]]) continue;
     cv::Point a(cvRound(pixels[edge[0]].x), cvRound(pixels[edge[0]].y));
@@ -39,15 +43,40 @@ void drawBox(const RgbdFrame& frame, const Eigen::Isometry3d& T_C_W, const MapOb
     cv::line(*canvas, a, b, colour, 1, cv::LINE_AA);
     drawn = true;
     for (const cv::Point& p : {a, b}) {
-      if (p.y < label_at.y || (p.y == label_at.y && p.x < label_at.x)) label_at = p;
+      if (p.y < label_at->y || (p.y == label_at->y && p.x < label_at->x)) *label_at = p;
     }
   }
-  if (!drawn) return;
-  char text[96];
-  std::snprintf(text, sizeof(text), "#%d %s", object.id, object.class_name.c_str());
-  const cv::Point origin(std::min(label_at.x, canvas->cols - 80), std::max(label_at.y - 3, 12));
-  cv::putText(*canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 3);
-  cv::putText(*canvas, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1);
+  return drawn;
+}
+
+// "#id class" over each drawn box's topmost point, at the free spot nearest it (label_layout.h);
+// a label pushed away gets a thin line to that point.
+void drawBoxLabels(const std::vector<cv::Point>& tops, const std::vector<std::string>& texts,
+                   cv::Mat* canvas) {
+  constexpr double kScale = 0.45;
+  std::vector<cv::Point> anchors;
+  std::vector<cv::Size> sizes;
+  int baseline = 0;
+  for (size_t i = 0; i < texts.size(); ++i) {
+    const cv::Size text = cv::getTextSize(texts[i], cv::FONT_HERSHEY_SIMPLEX, kScale, 1, &baseline);
+    sizes.emplace_back(text.width + 4, text.height + baseline + 2);
+    anchors.emplace_back(tops[i].x + sizes.back().width / 2, tops[i].y - sizes.back().height / 2);
+  }
+  const std::vector<cv::Rect> spots =
+      layoutLabels(anchors, sizes, cv::Rect(cv::Point(), canvas->size()));
+  const cv::Scalar white(255, 255, 255);
+  for (size_t i = 0; i < spots.size(); ++i) {
+    const cv::Point centre(spots[i].x + spots[i].width / 2, spots[i].y + spots[i].height / 2);
+    if (cv::norm(centre - anchors[i]) > 3.0) {
+      const cv::Point end(std::clamp(tops[i].x, spots[i].x, spots[i].x + spots[i].width - 1),
+                          std::clamp(tops[i].y, spots[i].y, spots[i].y + spots[i].height - 1));
+      cv::line(*canvas, tops[i], end, white, 1, cv::LINE_AA);
+    }
+    const cv::Point origin(spots[i].x + 2, spots[i].y + spots[i].height - 1 - baseline);
+    cv::putText(*canvas, texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, kScale, cv::Scalar(0, 0, 0),
+                3);
+    cv::putText(*canvas, texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, kScale, white, 1);
+  }
 }
 
 }  // namespace
@@ -64,7 +93,15 @@ cv::Mat drawKeyframeOverlay(const RgbdFrame& frame, const std::vector<Detection2
   // The map's boxes first, the detections (and their labels) over them.
   cv::Mat canvas = frame.color_bgr.clone();
   const Eigen::Isometry3d T_C_W = frame.T_C_D * frame.T_W_D.inverse();
-  for (const MapObject& object : objects) drawBox(frame, T_C_W, object, &canvas);
+  std::vector<cv::Point> tops;
+  std::vector<std::string> texts;
+  for (const MapObject& object : objects) {
+    cv::Point top;
+    if (!drawBox(frame, T_C_W, object, &canvas, &top)) continue;
+    tops.push_back(top);
+    texts.push_back("#" + std::to_string(object.id) + " " + object.class_name);
+  }
+  drawBoxLabels(tops, texts, &canvas);
   return drawDetections(canvas, labelled);
 }
 

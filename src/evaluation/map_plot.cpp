@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "multiview_object_detection/evaluation/label_layout.h"
+#include "multiview_object_detection/pipeline/utils/label_layout.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
 
 namespace mvod {

@@ -1,4 +1,4 @@
-#include "multiview_object_detection/evaluation/label_layout.h"
+#include "multiview_object_detection/pipeline/utils/label_layout.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,6 +1,6 @@
 // Text labels on an image without overlaps: each goes to the free spot nearest its anchor. For the
-// pictures people read (the bird's-eye map), where labels of objects close together would cover
-// each other.
+// pictures people read (the bird's-eye map, the keyframe overlays, the detections image), where the
+// labels of objects close together would cover each other.
 #pragma once
 
 #include <opencv2/core.hpp>
