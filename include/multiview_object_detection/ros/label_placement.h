@@ -21,8 +21,9 @@ struct LabelPlacement {
 // objects[i]'s label, drawn text_height_m high. "Up" is the boxes' third axis (the floor normal,
 // Eq. 4). A label reaches half its text's width around its column in every direction. In id order,
 // a label joins the nearest column whose first label it reaches, else starts one over its own box;
-// it takes the lowest line, above its column's boxes, that no earlier label it reaches holds. An
-// object's label stays put while newer objects join above it.
+// it takes the lowest line, above its column's boxes, that no earlier label it reaches holds. Newer
+// objects go above older ones: an older label moves only when its column forms (it is lifted clear
+// of the clouds around) or when a newer, taller box joins its column.
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
                                         const std::vector<std::string>& texts,
                                         double text_height_m);
