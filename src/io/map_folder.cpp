@@ -49,6 +49,7 @@ bool isKeyframeFileName(const std::string& name) {
 // `path` as lstat sees it; what it is for a message.
 struct PathKind {
   bool exists = false;
+  bool absent = false;  // lstat said there is nothing at the path (not: it could not look)
   bool directory = false;
   bool regular = false;
   bool link = false;
@@ -58,7 +59,10 @@ struct PathKind {
 PathKind kindOf(const std::string& path) {
   PathKind kind;
   struct stat info {};
-  if (::lstat(path.c_str(), &info) != 0) return kind;
+  if (::lstat(path.c_str(), &info) != 0) {
+    kind.absent = errno == ENOENT;
+    return kind;
+  }
   kind.exists = true;
   kind.directory = S_ISDIR(info.st_mode);
   kind.regular = S_ISREG(info.st_mode);
@@ -314,7 +318,20 @@ std::string mapToLoad(const std::string& path) {
   const PathKind file_kind = folder == path ? PathKind() : kindOf(path);
   if (has_folder && (!file_kind.exists || map_kind.mtime_s >= file_kind.mtime_s)) return folder;
   if (file_kind.exists) return path;
-  return has_folder || folder_kind.exists ? folder : "";
+  // A folder without map.json holds no map: its first save was killed before map.json (the file
+  // that makes a save), or nothing was saved into it. Anything else there (a link, a file, a
+  // map.json that cannot be looked at) is returned, for the load to say what is wrong with it.
+  const bool no_map_in_folder = folder_kind.directory && map_kind.absent;
+  return has_folder || (folder_kind.exists && !no_map_in_folder) ? folder : "";
+}
+
+std::string noMapText(const std::string& path) {
+  const std::string folder = mapFolderPath(path);
+  if (kindOf(folder).directory) {
+    return folder + " holds no " + kMapFile +
+           " (a first save killed before writing it, or nothing saved there yet)";
+  }
+  return "no map at " + folder + (folder == path ? "" : " (nor a map file " + path + ")");
 }
 
 MapFolderWriter::MapFolderWriter() : session_(randomSession()) {}

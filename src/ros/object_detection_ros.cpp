@@ -218,8 +218,7 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
   // The folder the name stands for, or a map file of 0.9.x, whichever was written last.
   const std::string path = mapToLoad(requested);
   if (path.empty()) {
-    ROS_INFO("load_map_on_start: no map at %s yet (a first run): starting with an empty map",
-             mapFolderPath(requested).c_str());
+    ROS_INFO("load_map_on_start: %s; starting with an empty map", noMapText(requested).c_str());
     return;
   }
   size_t objects = 0;

@@ -7,7 +7,6 @@
 #include "multiview_object_detection/io/json_io.h"
 #include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
-#include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/map_autosaver.h"
 
 namespace mvod {
@@ -114,8 +113,7 @@ bool ObjectDetectionServices::loadMap(multiview_object_detection::MapFile::Reque
     // The folder the name stands for (kitchen.json: kitchen.mvmap), or a map file of 0.9.x.
     const std::string found = mapToLoad(path);
     if (found.empty()) {
-      status = Status::Error("no map at " + mapFolderPath(path) +
-                             (mapFolderPath(path) == path ? "" : " (nor a map file " + path + ")"));
+      status = Status::Error(noMapText(path));
     }
     path = found;
   }

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -374,6 +375,56 @@ TEST(NodeStartTest, TheFirstGetObjectsAnswersTheMapLoadedAtStart) {
   std::string logs;
   mvod::readFile((root / "node.out").string(), &logs);
   EXPECT_NE(logs.find("load_map_on_start: resumed 24 objects"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
+// A node killed in its first autosave, after the keyframe files and before map.json, leaves a
+// folder without a map and the map.json's temporary. The respawned node starts empty and leaves
+// the folder where it is (no map in it to keep aside, and the autosave's files stay beside its
+// next save), and its autosave removes the dead node's temporary.
+TEST(NodeStartTest, AFirstSaveKilledBeforeItsMapFileIsNoMapAndIsTidiedAway) {
+  const fs::path root =
+      fs::temp_directory_path() / ("mvod_cut_short_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  const fs::path folder = root / "maps" / "cut_short_node.autosave.mvmap";
+  fs::create_directories(folder / "keyframes");
+  std::ofstream(folder / "keyframes" / "kf3-a1b2c3-7.0-0.kf") << "MVODKF01 cut short";
+  std::ofstream(folder / ".lock");
+  // A dead process's id: a child that has ended and been waited for.
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ASSERT_GT(dead, 0);
+  ::waitpid(dead, nullptr, 0);
+  std::ofstream(folder / (".map.json.save-" + std::to_string(dead) + ".Xy12Zw"))
+      << "{\"objects\": [";
+
+  const std::string node = "/cut_short_node";
+  const pid_t pid = startNode((root / "maps").string(), node,
+                              {"_detector:=topic", "_pose_source:=topic", "_autosave_period_s:=1",
+                               "_load_map_on_start:=cut_short_node.autosave.mvmap"},
+                              (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  KillOnExit running{pid};
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  multiview_object_detection::GetObjects get;
+  EXPECT_TRUE(ros::service::call(node + "/get_objects", get));
+  EXPECT_TRUE(get.response.objects.objects.empty());
+  const auto clean = [&] { return temporariesIn((root / "maps").string()).empty(); };
+  for (int i = 0; i < 50 && !clean(); ++i) ros::WallDuration(0.1).sleep();
+  EXPECT_TRUE(clean()) << "the dead node's temporary is still there";
+  EXPECT_TRUE(fs::is_directory(folder)) << "the folder was moved";
+  for (const auto& entry : fs::directory_iterator(root / "maps")) {
+    EXPECT_EQ(entry.path().filename().string().find("unreadable"), std::string::npos)
+        << "moved aside: " << entry.path();
+  }
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  running.pid = -1;
+  std::string logs;
+  mvod::readFile((root / "node.out").string(), &logs);
+  EXPECT_NE(logs.find("holds no map.json"), std::string::npos) << logs;
+  EXPECT_EQ(logs.find("cannot load"), std::string::npos) << logs;
   fs::remove_all(root);
 }
 

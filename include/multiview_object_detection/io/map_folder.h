@@ -44,8 +44,12 @@ std::string mapFolderPath(const std::string& path);
 
 // Which map `path` names for loading: the folder mapFolderPath(path), or a single file at `path`
 // (the format of 0.9.x and before); where both exist, the one written last. Empty when neither
-// exists.
+// exists, and when the folder holds no map.json (a first save killed before writing it).
 std::string mapToLoad(const std::string& path);
+
+// Why mapToLoad(path) is empty, for a message: "no map at <folder> (nor a map file <path>)", or
+// that the folder holds no map.json.
+std::string noMapText(const std::string& path);
 
 // Writes maps to folders. Keeps which keyframe files it wrote, so that saving the same history
 // again (the autosave) writes only the records that are new or changed (a new record, a depth

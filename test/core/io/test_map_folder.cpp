@@ -348,5 +348,27 @@ TEST(MapFolderNamesTest, ANameStandsForItsFolderOrAnEarlierReleasesFile) {
   fs::remove_all(dir);
 }
 
+TEST(MapFolderNamesTest, AFolderWithoutMapJsonHoldsNoMapAndSaysSo) {
+  const fs::path dir = test::freshTestDir("mvod_map_cut_short");
+  const std::string name = (dir / "kitchen.mvmap").string();
+  EXPECT_EQ(noMapText(name), "no map at " + name);
+  EXPECT_EQ(noMapText((dir / "kitchen.json").string()),
+            "no map at " + name + " (nor a map file " + (dir / "kitchen.json").string() + ")");
+  // What a first save killed before its map.json leaves.
+  fs::create_directories(dir / "kitchen.mvmap" / "keyframes");
+  std::ofstream(dir / "kitchen.mvmap" / "keyframes" / "kf1-abc-1.0-0.kf") << "MVODKF01";
+  std::ofstream(dir / "kitchen.mvmap" / ".map.json.save-123.abcdef") << "{";
+  EXPECT_EQ(mapToLoad(name), "");
+  EXPECT_NE(noMapText(name).find(name + " holds no map.json"), std::string::npos)
+      << noMapText(name);
+  // A map file of 0.9.x beside it is the map.
+  std::ofstream(dir / "kitchen.json") << "{}";
+  EXPECT_EQ(mapToLoad((dir / "kitchen.json").string()), (dir / "kitchen.json").string());
+  // A map.json that is there but not a file is still the folder's, for the load to refuse.
+  fs::create_directories(dir / "kitchen.mvmap" / "map.json");
+  EXPECT_EQ(mapToLoad(name), name);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace mvod
