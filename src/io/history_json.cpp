@@ -167,7 +167,7 @@ Status readTriples(const json& parent, const std::string& path, const char* key,
   Status status = readBytes(parent, path, key, 3 * sizeof(float), blobs, &bytes);
   if (!status) return status;
   out->resize(bytes.size() / (3 * sizeof(float)));
-  std::memcpy(out->data(), bytes.data(), bytes.size());
+  std::memcpy(static_cast<void*>(out->data()), bytes.data(), bytes.size());  // packed floats
   for (const Eigen::Vector3f& v : *out) {
     const bool ok = normals ? (!v.allFinite() ? v.hasNaN() : v.norm() <= 1.01f)
                             : v.allFinite() && v.cwiseAbs().maxCoeff() <= kMapCoordinateLimitM;
