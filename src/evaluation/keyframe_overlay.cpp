@@ -68,9 +68,7 @@ void drawBoxLabels(const std::vector<cv::Point>& tops, const std::vector<std::st
   for (size_t i = 0; i < spots.size(); ++i) {
     const cv::Point centre(spots[i].x + spots[i].width / 2, spots[i].y + spots[i].height / 2);
     if (cv::norm(centre - anchors[i]) > 3.0) {
-      const cv::Point end(std::clamp(tops[i].x, spots[i].x, spots[i].x + spots[i].width - 1),
-                          std::clamp(tops[i].y, spots[i].y, spots[i].y + spots[i].height - 1));
-      cv::line(*canvas, tops[i], end, white, 1, cv::LINE_AA);
+      drawLeaderLine(tops[i], spots[i], white, canvas);
     }
     const cv::Point origin(spots[i].x + 2, spots[i].y + spots[i].height - 1 - baseline);
     cv::putText(*canvas, texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, kScale, cv::Scalar(0, 0, 0),

@@ -7,8 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "multiview_object_detection/pipeline/utils/label_layout.h"
 #include "multiview_object_detection/pipeline/types/oriented_box.h"
+#include "multiview_object_detection/pipeline/utils/label_layout.h"
 
 namespace mvod {
 namespace {
@@ -189,12 +189,6 @@ void putHaloText(const std::string& text, const cv::Point& origin, const cv::Sca
   cv::putText(*image, text, origin, kFont, scale, color, 1, cv::LINE_AA);
 }
 
-// The point of `rect` nearest to p.
-cv::Point nearestOnRect(const cv::Rect& rect, const cv::Point& p) {
-  return cv::Point(std::clamp(p.x, rect.x, rect.x + rect.width - 1),
-                   std::clamp(p.y, rect.y, rect.y + rect.height - 1));
-}
-
 // Predictions: class-coloured outlines, then "id class p" labels over all of them, each at the free
 // spot nearest its box centre; a label pushed off its centre gets a thin line to it.
 void drawPredictions(const Canvas& canvas, const std::vector<EvaluatedPrediction>& predictions,
@@ -224,7 +218,7 @@ void drawPredictions(const Canvas& canvas, const std::vector<EvaluatedPrediction
   for (size_t i = 0; i < spots.size(); ++i) {
     const cv::Scalar color = classColorBgr(predictions[i].class_name);
     if (!spots[i].contains(anchors[i])) {
-      cv::line(*image, anchors[i], nearestOnRect(spots[i], anchors[i]), color, 1, cv::LINE_AA);
+      drawLeaderLine(anchors[i], spots[i], color, image);
       cv::circle(*image, anchors[i], 2, color, cv::FILLED, cv::LINE_AA);
     }
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 namespace mvod {
 namespace {
@@ -66,6 +67,13 @@ std::vector<cv::Rect> layoutLabels(const std::vector<cv::Point>& anchors,
     placed.push_back(best);
   }
   return placed;
+}
+
+void drawLeaderLine(const cv::Point& anchor, const cv::Rect& label, const cv::Scalar& colour,
+                    cv::Mat* image) {
+  const cv::Point end(std::clamp(anchor.x, label.x, label.x + label.width - 1),
+                      std::clamp(anchor.y, label.y, label.y + label.height - 1));
+  cv::line(*image, anchor, end, colour, 1, cv::LINE_AA);
 }
 
 }  // namespace mvod

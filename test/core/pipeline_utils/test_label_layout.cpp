@@ -31,5 +31,23 @@ TEST(LabelLayout, LabelsOnOneSpotSpreadWithoutOverlapInsideTheImage) {
   EXPECT_TRUE(layoutLabels({cv::Point(1, 1)}, {}, bounds).empty());  // mismatched lengths
 }
 
+// A moved label's line runs from its anchor to the label's nearest edge and stops there: it does
+// not cross the text.
+TEST(LabelLayout, ALeaderLineEndsAtTheLabelsNearestEdge) {
+  cv::Mat image(100, 100, CV_8UC3, cv::Scalar::all(0));
+  drawLeaderLine(cv::Point(10, 50), cv::Rect(60, 40, 20, 20), cv::Scalar::all(255), &image);
+  const auto lit = [&](int x, int y) { return image.at<cv::Vec3b>(y, x)[0] > 0; };
+  EXPECT_TRUE(lit(10, 50));
+  EXPECT_TRUE(lit(35, 50));
+  EXPECT_TRUE(lit(60, 50));
+  EXPECT_FALSE(lit(62, 50)) << "the line runs into the label";
+  EXPECT_FALSE(lit(70, 50));
+  // From below the label: to its bottom edge, straight up.
+  image.setTo(cv::Scalar::all(0));
+  drawLeaderLine(cv::Point(70, 90), cv::Rect(60, 40, 20, 20), cv::Scalar::all(255), &image);
+  EXPECT_TRUE(lit(70, 59));
+  EXPECT_FALSE(lit(70, 57));
+}
+
 }  // namespace
 }  // namespace mvod

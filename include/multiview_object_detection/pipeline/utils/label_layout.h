@@ -22,4 +22,9 @@ std::vector<cv::Rect> layoutLabels(const std::vector<cv::Point>& anchors,
                                    const std::vector<cv::Size>& sizes, const cv::Rect& bounds,
                                    const LabelLayoutConfig& config = {});
 
+// A label placed away from its anchor is tied to it: a thin line from `anchor` to the point of
+// `label` nearest it, drawn on `image`.
+void drawLeaderLine(const cv::Point& anchor, const cv::Rect& label, const cv::Scalar& colour,
+                    cv::Mat* image);
+
 }  // namespace mvod
