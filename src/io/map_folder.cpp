@@ -265,7 +265,8 @@ Status readManifestEntry(const json& entry, const std::string& folder, const std
 }
 
 Status readMapFolder(const std::string& folder, std::vector<MapObject>* objects,
-                     MapSummary* summary, std::deque<KeyframeRecord>* history) {
+                     MapSummary* summary, std::deque<KeyframeRecord>* history,
+                     std::map<int, std::string>* keyframe_files) {
   const std::string map_path = folder + "/" + kMapFile;
   const FolderLock lock(folder, false);
   if (!lock.error().empty()) return Status::Error(lock.error());
@@ -281,6 +282,7 @@ Status readMapFolder(const std::string& folder, std::vector<MapObject>* objects,
   if (!(status = map_document::fromJson(doc, &parsed_objects, &parsed_summary, &parsed_history))) {
     return Status::Error(map_path + ": " + status.message());
   }
+  std::map<int, std::string> read_files;
   const auto files = doc.find("keyframe_files");
   if (files != doc.end()) {
     if (!files->is_array()) return fieldError("keyframe_files", "expected an array");
@@ -293,10 +295,12 @@ Status readMapFolder(const std::string& folder, std::vector<MapObject>* objects,
         return Status::Error(map_path + ": keyframe_files[" + std::to_string(i) +
                              "]: keyframes must come in keyframe order");
       }
+      read_files[record.keyframe] = (*files)[i].at("file").get<std::string>();
       parsed_history.push_back(std::move(record));
     }
   }
   if (objects != nullptr) *objects = std::move(parsed_objects);
+  if (keyframe_files != nullptr) *keyframe_files = std::move(read_files);
   if (summary != nullptr) *summary = parsed_summary;
   if (history != nullptr) *history = std::move(parsed_history);
   return Status::Ok();
@@ -401,20 +405,33 @@ Status MapFolderWriter::write(const std::string& folder, const std::vector<MapOb
   return Status::Ok();
 }
 
+void MapFolderWriter::adopt(const std::string& folder, const std::deque<KeyframeRecord>& history,
+                            const std::map<int, std::string>& loaded_files) {
+  if (folder != folder_) written_.clear();
+  folder_ = folder;
+  for (const KeyframeRecord& record : history) {
+    const auto file = loaded_files.find(record.keyframe);
+    if (record.uid == 0 || record.revision != 0 || file == loaded_files.end()) continue;
+    written_[std::make_pair(record.uid, record.revision)] = file->second;
+  }
+}
+
 Status loadMap(const std::string& path, Links links, std::vector<MapObject>* objects,
-               MapSummary* summary, std::deque<KeyframeRecord>* history) {
+               MapSummary* summary, std::deque<KeyframeRecord>* history,
+               std::map<int, std::string>* keyframe_files) {
   const PathKind kind = kindOf(path);
   if (kind.link && links == Links::kRefuse) {
     return Status::Error(path + " is " + describeLink(path) +
                          "; maps are read by their own path, never through a link");
   }
   if (kind.directory || (kind.link && std::filesystem::is_directory(path))) {
-    return readMapFolder(path, objects, summary, history);
+    return readMapFolder(path, objects, summary, history, keyframe_files);
   }
   std::string text;
-  const Status read = readFile(path, &text, kMaxSingleFileMapBytes, links);
-  if (!read) return read;
-  return objectsFromJson(text, objects, summary, history);
+  Status status = readFile(path, &text, kMaxSingleFileMapBytes, links);
+  if (status) status = objectsFromJson(text, objects, summary, history);
+  if (status && keyframe_files != nullptr) keyframe_files->clear();
+  return status;
 }
 
 }  // namespace mvod

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <deque>
+#include <filesystem>
 #include <utility>
 #include <vector>
 
@@ -24,11 +25,11 @@ Status writeMapFile(const std::string& folder, const KeyframeWorker::MapSnapshot
 }
 
 Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects,
-                   double timeout_s) {
+                   double timeout_s, std::map<int, std::string>* keyframe_files) {
   std::vector<MapObject> loaded;
   MapSummary summary;
   std::deque<KeyframeRecord> history;
-  Status status = loadMap(path, Links::kRefuse, &loaded, &summary, &history);
+  Status status = loadMap(path, Links::kRefuse, &loaded, &summary, &history, keyframe_files);
   if (status) status = worker->replaceMap(loaded, summary, std::move(history), timeout_s);
   if (status && objects != nullptr) *objects = loaded.size();
   return status;
@@ -45,6 +46,14 @@ MapAutosaver::~MapAutosaver() {
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
+}
+
+void MapAutosaver::adoptLoadedMap(const std::string& folder,
+                                  const std::map<int, std::string>& keyframe_files) {
+  std::error_code error;
+  if (keyframe_files.empty() || !std::filesystem::equivalent(folder, path_, error)) return;
+  const std::shared_ptr<const KeyframeWorker::MapSnapshot> map = worker_->snapshot();
+  if (map) writer_.adopt(path_, map->history, keyframe_files);
 }
 
 void MapAutosaver::start() {

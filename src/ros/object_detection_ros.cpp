@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <ctime>
 #include <deque>
+#include <map>
 #include <utility>
 
 #include "multiview_object_detection/io/json_io.h"
@@ -222,9 +223,11 @@ void ObjectDetectionRos::loadMapOnStart(const Config& config, const MapPathPolic
     return;
   }
   size_t objects = 0;
-  status = loadMapFile(path, worker_.get(), &objects);
+  std::map<int, std::string> keyframe_files;
+  status = loadMapFile(path, worker_.get(), &objects, -1.0, &keyframe_files);
   if (status) {
     ROS_INFO("load_map_on_start: resumed %zu objects from %s", objects, path.c_str());
+    if (autosaver_) autosaver_->adoptLoadedMap(path, keyframe_files);
     worker_->publishMap(ros::Time::now());
     return;
   }

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -107,7 +108,8 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   double held_mtime_s = 0.0;  // the autosave can only get newer than this
   for (int cycle = 0; cycle <= cycles; ++cycle) {
     SCOPED_TRACE("cycle " + std::to_string(cycle));
-    const pid_t pid = startNode(directory, kNode);
+    const std::string last_out = (root / "last_node.out").string();
+    const pid_t pid = startNode(directory, kNode, {}, cycle == cycles ? last_out : "");
     ASSERT_GT(pid, 0);
     KillOnExit node{pid};
     ASSERT_TRUE(ros::service::waitForService(std::string(kNode) + "/get_objects", 30000))
@@ -139,6 +141,18 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
       EXPECT_LE(saved.size(), live) << "the final save has more objects than the node had";
       EXPECT_GT(saved.size(), 0u);
       EXPECT_TRUE(temporariesIn(directory).empty());
+      // Its first save wrote the keyframes new since the restart, not the resumed ones again.
+      std::string logs;
+      mvod::readFile(last_out, &logs);
+      int written = -1;
+      int total = -1;
+      const size_t at = logs.find(" keyframe files written");
+      ASSERT_NE(at, std::string::npos) << logs;
+      const size_t from = logs.rfind(", ", at);
+      ASSERT_EQ(std::sscanf(logs.c_str() + from, ", %d of %d", &written, &total), 2) << logs;
+      EXPECT_LT(written, total) << "the resumed history was written again\n" << logs;
+      std::printf("[ INFO     ] the resumed node's first save: %d of %d keyframe files written\n",
+                  written, total);
       break;
     }
     // Frames for a random 1.5 - 4 s; the wall time of the last map change seen (objects published).

@@ -69,6 +69,13 @@ class MapFolderWriter {
   Status write(const std::string& folder, const std::vector<MapObject>& objects,
                const MapSummary& summary, const std::deque<KeyframeRecord>& history,
                Report* report = nullptr);
+  // Takes the keyframe files of a map loaded from `folder` as written by this writer, so that its
+  // next write() there reuses them instead of writing the loaded history again (a node resuming its
+  // autosave after a crash). `history`: the records as the map holds them after the load (their
+  // uids); `loaded_files`: keyframe number -> file, from loadMap. A record changed since the load
+  // (revision > 0) or not named there is not adopted; write() still checks each file is there.
+  void adopt(const std::string& folder, const std::deque<KeyframeRecord>& history,
+             const std::map<int, std::string>& loaded_files);
 
  private:
   std::string session_;  // in the names of this writer's files: never another save's name
@@ -81,8 +88,11 @@ class MapFolderWriter {
 // Reads the map at `path`, a map folder or a single-file map (objectsFromJson), whichever it is.
 // Every file is read within its limit; the files inside a folder never through a symbolic link,
 // `path` itself not either with Links::kRefuse (the node's maps). A malformed map is an error
-// naming the file and field, and leaves the outputs untouched. The outputs may be null.
+// naming the file and field, and leaves the outputs untouched. The outputs may be null;
+// `keyframe_files`: for a map folder, keyframe number -> the file it was read from (for
+// MapFolderWriter::adopt), empty for a single file.
 Status loadMap(const std::string& path, Links links, std::vector<MapObject>* objects,
-               MapSummary* summary, std::deque<KeyframeRecord>* history);
+               MapSummary* summary, std::deque<KeyframeRecord>* history,
+               std::map<int, std::string>* keyframe_files = nullptr);
 
 }  // namespace mvod

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <condition_variable>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -28,9 +29,9 @@ Status writeMapFile(const std::string& folder, const KeyframeWorker::MapSnapshot
 
 // Reads the map at `path` (resolved: a map folder or a single-file map of 0.9.x) into the worker,
 // replacing its map (~load_map, load_map_on_start); on any error the worker's map is kept.
-// `objects` (may be null): how many.
+// `objects` (may be null): how many; `keyframe_files` (may be null): as loadMap's.
 Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* objects = nullptr,
-                   double timeout_s = -1.0);
+                   double timeout_s = -1.0, std::map<int, std::string>* keyframe_files = nullptr);
 
 class MapAutosaver {
  public:
@@ -42,6 +43,10 @@ class MapAutosaver {
   MapAutosaver& operator=(const MapAutosaver&) = delete;
 
   const std::string& path() const { return path_; }
+  // Before start(): the worker's map was just loaded from `folder` (load_map_on_start), whose
+  // keyframe files were `keyframe_files`. When that is this saver's folder, its saves reuse them
+  // (a resumed node does not write its whole history again at its first save).
+  void adoptLoadedMap(const std::string& folder, const std::map<int, std::string>& keyframe_files);
   // Removes what an earlier, killed process's save left beside the file, then starts the thread.
   void start();
   // Joins the thread, then saves the map if it changed since the last save. Idempotent.

@@ -11,6 +11,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <thread>
 #include <vector>
@@ -158,6 +159,45 @@ TEST_F(MapFolderTest, ASaveWritesOnlyTheKeyframesThatAreNewOrChanged) {
   ASSERT_TRUE(other.write(folder_, objects_, summary_, fewer, &report).ok());
   EXPECT_EQ(report.keyframe_files_written, 1);
   expectLoadsAs(fewer);
+}
+
+// A node resuming its autosave (load_map_on_start): its writer adopts the loaded files, so its
+// first save writes only the keyframes new or changed since the load, not the whole history again.
+TEST_F(MapFolderTest, AWriterAdoptingTheLoadedFilesWritesOnlyWhatChangedSinceTheLoad) {
+  ASSERT_TRUE(MapFolderWriter().write(folder_, objects_, summary_, folderTestHistory()).ok());
+  std::deque<KeyframeRecord> loaded;
+  std::map<int, std::string> files;
+  ASSERT_TRUE(loadMap(folder_, Links::kRefuse, nullptr, nullptr, &loaded, &files).ok());
+  ASSERT_EQ(files.size(), 6u);
+  for (const auto& [keyframe, file] : files) {
+    EXPECT_TRUE(fs::exists(fs::path(folder_) / "keyframes" / file)) << keyframe << ": " << file;
+  }
+  // The history as the resumed node holds it: new uids, then one record coarsened and one added.
+  KeyframeHistory history;
+  for (KeyframeRecord& record : loaded) history.add(std::move(record));
+  history.add(test::makeRecord(6, CV_16UC1));
+  std::deque<KeyframeRecord> now = history.records();
+  coarsenDepth(&now[0]);
+
+  MapFolderWriter resumed;
+  resumed.adopt(folder_, history.records(), files);
+  MapFolderWriter::Report report;
+  ASSERT_TRUE(resumed.write(folder_, objects_, summary_, now, &report).ok());
+  EXPECT_EQ(report.keyframe_files_written, 2) << "the coarsened record and the new one";
+  EXPECT_EQ(report.keyframe_files_reused, 5);
+  EXPECT_EQ(report.keyframe_files_removed, 1) << "the coarsened record's old file";
+  EXPECT_EQ(keyframeFiles().size(), 7u);
+  expectLoadsAs(now);
+  // Files adopted for another folder are not this folder's.
+  MapFolderWriter elsewhere;
+  elsewhere.adopt((dir_ / "other.mvmap").string(), now, files);
+  ASSERT_TRUE(elsewhere.write(folder_, objects_, summary_, now, &report).ok());
+  EXPECT_EQ(report.keyframe_files_written, 7);
+  // A single-file map names no keyframe files.
+  const std::string single = (dir_ / "old.json").string();
+  ASSERT_TRUE(writeFileAtomic(single, asText(objects_, summary_, now)).ok());
+  ASSERT_TRUE(loadMap(single, Links::kRefuse, nullptr, nullptr, nullptr, &files).ok());
+  EXPECT_TRUE(files.empty());
 }
 
 TEST_F(MapFolderTest, AHistoryAtItsMemoryBoundSavesAndLoadsBackEqual) {
