@@ -116,30 +116,25 @@ TEST_F(SoakTest, ReplaysReadTheNodesCountersFromDiagnostics) {
 
 TEST_F(SoakTest, KillAndRestartResumesFromTheAutosave) {
 #if defined(__SANITIZE_ADDRESS__)
-  // The kills come 1-5 s into each replay (wall time); the sanitized node has processed no keyframe
-  // by then, so nothing is ever autosaved to resume. make test runs it with the normal build.
-  GTEST_SKIP() << "timed for the normal build: under AddressSanitizer the node maps nothing before "
-                  "the kill";
+  // Two respawns of the sanitized node, each loading the map and its history, do not fit this
+  // test's time limit on 2 cores; make test runs it with the normal build.
+  GTEST_SKIP() << "too slow under AddressSanitizer: make test runs it with the normal build";
 #endif
   ASSERT_TRUE(made_);
   std::string log;
+  // Each kill waits for an autosave on disk that holds a keyframe of its replay (events, not the
+  // clock: issue 57, item 6), so every cycle has an autosave to check, on a loaded machine too.
   const int status = soak("kill_restart", "--kill-restart --replays 2", &log);
   ASSERT_EQ(status, 0) << log;
   const auto kills = readCsv(dir_ / "kill_restart" / "kills.csv");
   ASSERT_EQ(kills.size(), 2u) << log;
-  int loaded = 0;
   for (const auto& row : kills) {
-    // A kill before the node's first save finds no autosave yet; every autosave there loads, and
-    // the respawned node resumes it.
-    if (row.at("autosave_loads") != "yes") {
-      EXPECT_NE(row.at("autosave_loads").find("No such file"), std::string::npos) << log;
-      continue;
-    }
-    ++loaded;
+    EXPECT_EQ(row.at("autosave_loads"), "yes") << log;
+    EXPECT_GE(number(row, "autosave_objects"), 1.0) << log;
+    EXPECT_GE(number(row, "keyframes"), 1.0) << log;
     EXPECT_EQ(row.at("resumed"), "yes") << log;
     EXPECT_EQ(row.at("temporaries_after_restart"), "0") << log;
   }
-  EXPECT_GE(loaded, 1) << log;
 }
 
 }  // namespace
