@@ -136,6 +136,17 @@ Status writeFileAtomic(const std::string& path, const std::string& content) {
   return Status::Ok();
 }
 
+std::string fileKindText(unsigned int mode) {
+  return S_ISREG(mode)    ? "a regular file"
+         : S_ISDIR(mode)  ? "a directory"
+         : S_ISFIFO(mode) ? "a FIFO"
+         : S_ISCHR(mode)  ? "a character device"
+         : S_ISBLK(mode)  ? "a block device"
+         : S_ISSOCK(mode) ? "a socket"
+         : S_ISLNK(mode)  ? "a symbolic link"
+                          : "not a regular file";
+}
+
 std::string describeLink(const std::string& path) {
   std::error_code error;
   const std::filesystem::path target = std::filesystem::read_symlink(path, error);
@@ -160,13 +171,7 @@ Status readFile(const std::string& path, std::string* content, size_t max_bytes,
   }
   if (!S_ISREG(info.st_mode)) {
     ::close(fd);
-    const char* kind = S_ISDIR(info.st_mode)    ? "a directory"
-                       : S_ISFIFO(info.st_mode) ? "a FIFO"
-                       : S_ISCHR(info.st_mode)  ? "a character device"
-                       : S_ISBLK(info.st_mode)  ? "a block device"
-                       : S_ISSOCK(info.st_mode) ? "a socket"
-                                                : "not a regular file";
-    return Status::Error("cannot read " + path + ": it is " + std::string(kind) +
+    return Status::Error("cannot read " + path + ": it is " + fileKindText(info.st_mode) +
                          ", not a regular file");
   }
   if (static_cast<unsigned long long>(info.st_size) > max_bytes) {

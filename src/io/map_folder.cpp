@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -15,6 +16,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "history_json.h"
 #include "json_fields.h"
@@ -129,24 +131,55 @@ void syncFolder(const std::string& folder) {
   ::close(fd);
 }
 
+std::string notARegularFile(const std::string& path, unsigned int mode) {
+  return path + " is " + fileKindText(mode) +
+         ", not a regular file: a map folder's lock file must be one (remove it; the next save "
+         "makes it again)";
+}
+
 // A flock on <folder>/.lock: exclusive for a writer's whole save, shared for a reader's whole
 // load (threads and processes), so that no save removes the files of the map.json a load is
-// reading. A reader of a folder without the file (nothing wrote it yet) goes without.
+// reading. A reader of a folder without the file (nothing wrote it yet) goes without. Nothing here
+// can block for good: the file is opened with O_NONBLOCK (a FIFO put there does not wait for a
+// writer) and must be a regular file, and the lock is waited for at most kLockWaitS (a save or
+// load of another process that hangs holding it).
+constexpr double kLockWaitS = 120.0;
+
 class FolderLock {
  public:
   FolderLock(const std::string& folder, bool exclusive) {
     const std::string path = folder + "/.lock";
-    fd_ = exclusive ? ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0666)
-                    : ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    const int flags = O_NONBLOCK | O_NOFOLLOW | O_CLOEXEC;
+    fd_ = exclusive ? ::open(path.c_str(), O_RDWR | O_CREAT | flags, 0666)
+                    : ::open(path.c_str(), O_RDONLY | flags);
     if (fd_ < 0) {
       if (!exclusive && errno == ENOENT) return;
-      error_ = "cannot open " + path + ": " + errnoText();
+      const std::string why = errnoText();
+      struct stat info {};
+      error_ = ::lstat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)
+                   ? notARegularFile(path, info.st_mode)
+                   : "cannot open " + path + ": " + why;
       return;
     }
-    while (::flock(fd_, exclusive ? LOCK_EX : LOCK_SH) != 0) {
-      if (errno == EINTR) continue;
-      error_ = "cannot lock " + path + ": " + errnoText();
+    struct stat info {};
+    if (::fstat(fd_, &info) != 0 || !S_ISREG(info.st_mode)) {
+      error_ = notARegularFile(path, info.st_mode);
+      ::close(fd_);
+      fd_ = -1;
       return;
+    }
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(kLockWaitS);
+    while (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+      if (errno == EINTR) continue;
+      if (errno != EWOULDBLOCK || std::chrono::steady_clock::now() > deadline) {
+        error_ = errno != EWOULDBLOCK
+                     ? "cannot lock " + path + ": " + errnoText()
+                     : path + " stayed locked for " + std::to_string(static_cast<int>(kLockWaitS)) +
+                           " s by another save or load of the folder (a process that hangs?)";
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   }
   ~FolderLock() {
@@ -248,9 +281,12 @@ Status readManifestEntry(const json& entry, const std::string& folder, const std
   }
   for (std::size_t i = 0; i < read.views.size(); ++i) {
     const json& id = (*object_ids)[i];
+    // An id that names no object of the map is allowed: the object was refined away after the
+    // keyframe. Past kMaxObjectId no object id can be (a corrupt or forged file).
     if (!id.is_number_integer() || id.get<std::int64_t>() < -1 ||
-        id.get<std::int64_t>() > std::numeric_limits<int>::max()) {
-      return fieldError(p + "object_ids", "expected integers >= -1");
+        id.get<std::int64_t>() > kMaxObjectId) {
+      return fieldError(p + "object_ids",
+                        "expected integers in [-1, " + std::to_string(kMaxObjectId) + "]");
     }
     read.views[i].object_id = id.get<int>();
   }
@@ -268,6 +304,18 @@ Status readMapFolder(const std::string& folder, std::vector<MapObject>* objects,
                      MapSummary* summary, std::deque<KeyframeRecord>* history,
                      std::map<int, std::string>* keyframe_files) {
   const std::string map_path = folder + "/" + kMapFile;
+  // The keyframes are read from the folder itself: a link there would read (and the next save
+  // would refuse to write) files outside it.
+  const std::string keyframe_folder = folder + "/" + kKeyframeFolder;
+  const PathKind keyframes = kindOf(keyframe_folder);
+  if (keyframes.link) {
+    return Status::Error(keyframe_folder + " is " + describeLink(keyframe_folder) +
+                         "; a map's keyframes are never read or saved through a link (put the "
+                         "files themselves in a folder of that name)");
+  }
+  if (keyframes.exists && !keyframes.directory) {
+    return Status::Error(keyframe_folder + " exists and is not a folder");
+  }
   const FolderLock lock(folder, false);
   if (!lock.error().empty()) return Status::Error(lock.error());
   std::string text;
@@ -414,6 +462,53 @@ void MapFolderWriter::adopt(const std::string& folder, const std::deque<Keyframe
     if (record.uid == 0 || record.revision != 0 || file == loaded_files.end()) continue;
     written_[std::make_pair(record.uid, record.revision)] = file->second;
   }
+}
+
+MapFolderClaim::~MapFolderClaim() { release(); }
+
+void MapFolderClaim::release() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
+  fd_ = -1;
+}
+
+Status MapFolderClaim::claim(const std::string& folder) {
+  release();
+  const Status made = makeFolder(folder);
+  if (!made) return made;
+  const std::string path = folder + "/.owner";
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NONBLOCK | O_NOFOLLOW | O_CLOEXEC, 0666);
+  struct stat info {};
+  if (fd < 0 || ::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    const std::string why = errnoText();
+    if (fd >= 0) ::close(fd);
+    return ::lstat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)
+               ? Status::Error(path + " is " + fileKindText(info.st_mode) +
+                               ", not a regular file (remove it)")
+               : Status::Error("cannot open " + path + ": " + why);
+  }
+  while (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    if (errno == EINTR) continue;
+    const bool taken = errno == EWOULDBLOCK;
+    const std::string why = errnoText();
+    std::string holder;
+    char buffer[32] = {};
+    const ssize_t n = ::pread(fd, buffer, sizeof(buffer) - 1, 0);
+    if (n > 0) holder = std::string(buffer, static_cast<std::size_t>(n));
+    while (!holder.empty() && std::isspace(static_cast<unsigned char>(holder.back()))) {
+      holder.pop_back();
+    }
+    ::close(fd);
+    if (!taken) return Status::Error("cannot lock " + path + ": " + why);
+    return Status::Error(folder + " is in use by another process" +
+                         (holder.empty() ? std::string() : " (pid " + holder + ")") +
+                         ": two nodes saving to one folder would overwrite each other's maps");
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
+    // The claim holds without the pid; only the message of a refused claim lacks it.
+  }
+  fd_ = fd;
+  return Status::Ok();
 }
 
 Status loadMap(const std::string& path, Links links, std::vector<MapObject>* objects,

@@ -1,5 +1,6 @@
 #include <ros/console.h>
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 #include <string>
@@ -111,6 +112,15 @@ Status KeyframeWorker::replaceMap(const std::vector<MapObject>& objects, const M
   if (!lock.owns_lock()) return busy;
   const Status replaced = mapper_->mutableDatabase().setObjects(objects);
   if (!replaced) return replaced;
+  // The history may name objects refined away after its keyframes: no new object takes their ids
+  // (a correction's replay would take the two for one).
+  int largest_view_id = -1;
+  for (const KeyframeRecord& record : history) {
+    for (const RecordedView& view : record.views) {
+      largest_view_id = std::max(largest_view_id, view.object_id);
+    }
+  }
+  mapper_->mutableDatabase().reserveIdsBelow(largest_view_id + 1);
   mapper_->setHistory(std::move(history));
   mapper_->restoreFloor(summary.floor_height_m);
   removed_atypical_ = summary.removed_atypical;

@@ -28,6 +28,9 @@ constexpr size_t kDefaultMaxFileBytes = size_t{1} << 30;  // 1 GiB
 Status readFile(const std::string& path, std::string* content,
                 size_t max_bytes = kDefaultMaxFileBytes, Links links = Links::kFollow);
 
+// What a file of st_mode `mode` is, for a message: "a FIFO", "a directory", ...
+std::string fileKindText(unsigned int mode);
+
 // "a symbolic link to <target>" when `path` is a link (not followed), else "" (for messages).
 std::string describeLink(const std::string& path);
 

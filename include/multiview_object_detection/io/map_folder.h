@@ -85,6 +85,27 @@ class MapFolderWriter {
   std::uint64_t next_file_ = 0;  // in every new file's name: unique within the session
 };
 
+// A process's claim on a map folder for as long as it holds this object (a node's autosave folder):
+// an exclusive flock on <folder>/.owner, taken without waiting, with the holder's pid in the file.
+// While one process holds it, no other can claim the folder (a second node with the same
+// autosave_path); the kernel drops it when the process ends, SIGKILL included. Saves and loads do
+// not need it (they take turns on .lock).
+class MapFolderClaim {
+ public:
+  MapFolderClaim() = default;
+  ~MapFolderClaim();
+  MapFolderClaim(const MapFolderClaim&) = delete;
+  MapFolderClaim& operator=(const MapFolderClaim&) = delete;
+  // Makes `folder` if missing (never through a link) and claims it, releasing any earlier claim.
+  // An error says why not: another process holds it (its pid), or the folder cannot be used.
+  Status claim(const std::string& folder);
+  void release();
+  bool held() const { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
+
 // Reads the map at `path`, a map folder or a single-file map (objectsFromJson), whichever it is.
 // Every file is read within its limit; the files inside a folder never through a symbolic link,
 // `path` itself not either with Links::kRefuse (the node's maps). A malformed map is an error

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -312,6 +313,89 @@ TEST_F(MapFolderTest, LinksAreNeitherWrittenThroughNorRead) {
   const Status loaded = loadMap(folder_, Links::kRefuse, nullptr, nullptr, nullptr);
   ASSERT_FALSE(loaded.ok());
   EXPECT_NE(loaded.message().find("symbolic link"), std::string::npos) << loaded.message();
+}
+
+// Issue 57, items 1 and 2: what is put in place of the lock file or the keyframes folder refuses
+// the load at once, with the reason; nothing blocks (a FIFO's open would wait for a writer).
+TEST_F(MapFolderTest, AStrangeLockOrKeyframesFolderIsRefusedAtOnceWithTheReason) {
+  const std::deque<KeyframeRecord> history = folderTestHistory();
+  ASSERT_TRUE(MapFolderWriter().write(folder_, objects_, summary_, history).ok());
+  const fs::path lock = fs::path(folder_) / ".lock";
+  const auto expectRefused = [&](const std::string& what, const std::string& needle) {
+    const auto start = std::chrono::steady_clock::now();
+    const Status loaded = loadMap(folder_, Links::kRefuse, nullptr, nullptr, nullptr);
+    const Status saved = MapFolderWriter().write(folder_, objects_, summary_, history);
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5)) << what;
+    EXPECT_FALSE(loaded.ok()) << what;
+    EXPECT_NE(loaded.message().find(needle), std::string::npos) << what << ": " << loaded.message();
+    EXPECT_FALSE(saved.ok()) << what;
+  };
+  fs::remove(lock);
+  ASSERT_EQ(::mkfifo(lock.c_str(), 0600), 0);
+  expectRefused("a FIFO at .lock", "FIFO");
+  fs::remove(lock);
+  fs::create_directory(lock);
+  expectRefused("a directory at .lock", "directory");
+  fs::remove(lock);
+  fs::create_symlink("/dev/null", lock);
+  expectRefused("a link at .lock", "regular file");
+  fs::remove(lock);
+  expectLoadsAs(history);
+  // keyframes/ a link to a copy outside the folder: refused, not read from there.
+  const fs::path outside = dir_ / "elsewhere";
+  fs::rename(fs::path(folder_) / "keyframes", outside);
+  fs::create_directory_symlink(outside, fs::path(folder_) / "keyframes");
+  expectRefused("keyframes/ a link", "never read or saved through a link");
+  fs::remove(fs::path(folder_) / "keyframes");
+  fs::rename(outside, fs::path(folder_) / "keyframes");
+  expectLoadsAs(history);
+}
+
+// Issue 57, item 5: a keyframe naming an object id no object can have is refused; one naming an
+// object refined away since (an id below the map's ids, no object of it) loads.
+TEST_F(MapFolderTest, KeyframesNamingImpossibleObjectIdsAreRefused) {
+  std::deque<KeyframeRecord> history = folderTestHistory();
+  ASSERT_FALSE(history.front().views.empty());
+  history.front().views.front().object_id = 3;  // no object 3: refined away
+  ASSERT_TRUE(MapFolderWriter().write(folder_, objects_, summary_, history).ok());
+  expectLoadsAs(history);
+  const fs::path map_json = fs::path(folder_) / "map.json";
+  std::string map = test::readText(map_json);
+  const std::string ids = "\"object_ids\":[3";
+  const size_t at = map.find(ids);
+  ASSERT_NE(at, std::string::npos) << map.substr(0, 400);
+  std::ofstream(map_json, std::ios::trunc)
+      << map.replace(at, ids.size(), "\"object_ids\":[2147483647");
+  const Status loaded = loadMap(folder_, Links::kRefuse, nullptr, nullptr, nullptr);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_NE(loaded.message().find("object_ids"), std::string::npos) << loaded.message();
+}
+
+// Issue 57, item 3: one claim on a folder at a time, across processes; it ends with its process.
+TEST_F(MapFolderTest, AFolderIsClaimedByOneProcessAtATime) {
+  MapFolderClaim mine;
+  ASSERT_TRUE(mine.claim(folder_).ok());
+  const pid_t child = ::fork();
+  if (child == 0) {
+    MapFolderClaim theirs;
+    const Status status = theirs.claim(folder_);
+    const bool refused_naming_me =
+        !status.ok() &&
+        status.message().find("pid " + std::to_string(::getppid())) != std::string::npos;
+    ::_exit(refused_naming_me ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
+      << "a second process claimed the folder, or its refusal did not name the holder";
+  mine.release();
+  const pid_t second = ::fork();
+  if (second == 0) {
+    MapFolderClaim theirs;
+    ::_exit(theirs.claim(folder_).ok() ? 0 : 1);
+  }
+  ASSERT_EQ(::waitpid(second, &status, 0), second);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "released, yet not claimable";
 }
 
 TEST_F(MapFolderTest, ConcurrentSaversToOneFolderAllSucceedAndTheMapAlwaysLoads) {
