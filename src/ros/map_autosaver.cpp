@@ -35,6 +35,24 @@ Status loadMapFile(const std::string& path, KeyframeWorker* worker, size_t* obje
   return status;
 }
 
+namespace {
+
+constexpr int kFallbacks = 8;  // <name>-2.mvmap to <name>-9.mvmap
+
+// path (a folder "<name>.mvmap") for index 0, its index-th fallback "<name>-<index + 1>.mvmap"
+// else.
+std::string fallbackFolder(const std::string& path, int index) {
+  if (index == 0) return path;
+  const std::string extension = kMapFolderExtension;
+  const bool has_extension =
+      path.size() >= extension.size() &&
+      path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
+  const std::string stem = has_extension ? path.substr(0, path.size() - extension.size()) : path;
+  return stem + "-" + std::to_string(index + 1) + extension;
+}
+
+}  // namespace
+
 MapAutosaver::MapAutosaver(std::string path, double period_s, const KeyframeWorker* worker,
                            SharedStatistics* stats)
     : path_(std::move(path)), period_s_(period_s), worker_(worker), stats_(stats) {}
@@ -56,11 +74,68 @@ void MapAutosaver::adoptLoadedMap(const std::string& folder,
   if (map) writer_.adopt(path_, map->history, keyframe_files);
 }
 
+std::string MapAutosaver::path() const {
+  const std::lock_guard<std::mutex> lock(folder_mutex_);
+  return folder_.empty() ? path_ : folder_;
+}
+
+void MapAutosaver::publishState(const std::string& problem) {
+  std::string folder;
+  {
+    const std::lock_guard<std::mutex> lock(folder_mutex_);
+    folder = folder_;
+  }
+  stats_->update([&folder, &problem](ObjectDetectionStatistics& s) {
+    s.autosave_folder = folder;
+    s.autosave_problem = problem;
+  });
+}
+
+bool MapAutosaver::claimFolder(int first, const std::string& why) {
+  std::string reasons = why;
+  for (int index = first; index <= kFallbacks; ++index) {
+    const std::string folder = fallbackFolder(path_, index);
+    const Status claimed = claim_.claim(folder);
+    if (!claimed) {
+      reasons += (reasons.empty() ? "" : "; ") + claimed.message();
+      continue;
+    }
+    {
+      const std::lock_guard<std::mutex> lock(folder_mutex_);
+      folder_ = folder;
+    }
+    folder_index_ = index;
+    if (index > 0) {
+      fallback_problem_ = "autosave cannot use " + path_ + " (" + reasons +
+                          "); the map is saved to " + folder + " instead: free or repair " + path_ +
+                          ", or resume from the fallback (load_map_on_start or ~load_map " +
+                          folder + ")";
+      ROS_ERROR("%s", fallback_problem_.c_str());
+    }
+    publishState(fallback_problem_);
+    return true;
+  }
+  claim_.release();
+  {
+    const std::lock_guard<std::mutex> lock(folder_mutex_);
+    folder_.clear();
+  }
+  const std::string problem =
+      "autosave off: no folder to save to (" + reasons + "; and " +
+      fallbackFolder(path_, kFallbacks) +
+      " was the last fallback): the map is not saved; ~save_map still works";
+  ROS_ERROR("%s", problem.c_str());
+  publishState(problem);
+  return false;
+}
+
 void MapAutosaver::start() {
-  const int removed = removeOrphanTemporaries(path_ + "/map.json");
-  if (removed > 0) {
-    ROS_WARN("autosave: removed %d temporary file(s) that a killed save of %s left behind", removed,
-             path_.c_str());
+  if (claimFolder(0, "")) {
+    const int removed = removeOrphanTemporaries(path() + "/map.json");
+    if (removed > 0) {
+      ROS_WARN("autosave: removed %d temporary file(s) that a killed save of %s left behind",
+               removed, path().c_str());
+    }
   }
   // The map as it starts (empty, or loaded) is not worth a save of its own.
   last_saved_ = worker_->snapshot();
@@ -99,18 +174,32 @@ void MapAutosaver::saveIfChanged(bool final) {
   // The same snapshot (owner) as the last save's: unchanged. A weak reference: holding the snapshot
   // for a period would hold every depth image and cut the history gave up since (its bound).
   if (!map || (!last_saved_.owner_before(map) && !map.owner_before(last_saved_))) return;
+  if (folder_.empty()) return;  // no folder could be claimed (said at start)
   const auto start = std::chrono::steady_clock::now();
   MapFolderWriter::Report report;
-  const Status written =
-      writeMapFile(path_, *map, stats_->get().frames_received, &writer_, &report);
+  const int frames = stats_->get().frames_received;
+  Status written = writeMapFile(folder_, *map, frames, &writer_, &report);
+  if (!written && folder_index_ < kFallbacks) {
+    // Not where it should go: to the next fallback, now, rather than nowhere.
+    const std::string failed = folder_;
+    stats_->update([](ObjectDetectionStatistics& s) { ++s.autosave_failures; });
+    if (claimFolder(folder_index_ + 1, "saving to " + failed + " failed: " + written.message())) {
+      written = writeMapFile(folder_, *map, frames, &writer_, &report);
+    }
+  }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!written) {
-    errorThrottled("autosave to " + path_ + " failed: " + written.message() +
-                   "; the previous autosave is kept, the next try in the next period");
+    const std::string problem =
+        "autosave to " + path() + " failed: " + written.message() +
+        "; the previous autosave is kept, the next try in the next period (check the disk and the "
+        "folder)";
+    errorThrottled(problem);
     stats_->update([](ObjectDetectionStatistics& s) { ++s.autosave_failures; });
+    publishState(problem);
     return;
   }
+  publishState(fallback_problem_);
   last_saved_ = map;
   const int objects = static_cast<int>(map->objects.size());
   const double bytes = static_cast<double>(report.folder_bytes);
@@ -125,7 +214,7 @@ void MapAutosaver::saveIfChanged(bool final) {
                            std::to_string(report.keyframe_files_written) + " of " +
                            std::to_string(map->history.size()) + " keyframe files written (" +
                            std::to_string(report.bytes_written) + " of " +
-                           std::to_string(report.folder_bytes) + " bytes) to " + path_;
+                           std::to_string(report.folder_bytes) + " bytes) to " + folder_;
   if (final || !saved_once_) {
     saved_once_ = true;
     ROS_INFO("autosave%s: %s in %.1f ms", final ? " at shutdown" : " (the first)", what.c_str(),

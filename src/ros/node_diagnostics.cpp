@@ -88,6 +88,10 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   } else if (stats.waiting_for_gravity) {
     status.summary(DiagnosticStatus::WARN, "waiting for gravity");
   }
+  // The autosave not where it should be, or failing: ERROR until it is well (it says what to do).
+  if (!stats.autosave_problem.empty()) {
+    status.mergeSummary(DiagnosticStatus::ERROR, stats.autosave_problem);
+  }
   rejections_.add(ros::WallTime::now().toSec(),
                   {stats.frames_received, stats.frames_rejected, stats.pose_failures});
   const RejectionWindow::Report rejected =
@@ -151,6 +155,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"history forgotten", stats.history_forgotten},
   };
   for (const auto& [key, value] : values) status.add(key, value);
+  if (!stats.autosave_folder.empty()) status.add("autosave folder", stats.autosave_folder);
 }
 
 }  // namespace mvod

@@ -210,12 +210,16 @@ TEST(NodeAutosaveTest, KillNineAtRandomMomentsResumesFromTheAutosave) {
   fs::remove_all(root);
 }
 
-// A node on the paper's (slow) method with a long queue: 16 keyframes published, the first
-// processed, the others queued behind a long keyframe in progress.
-class SlowNodeWithAQueue {
+// A node fed synthetic frames, 16 at its start. On the paper's (slow) method with a long queue
+// (`slow`): the first keyframe processed, the others queued behind a long keyframe in progress.
+// `subscribers`: how many nodes must listen to the inputs before the frames go (nodes started
+// beside it on the same topics).
+class FedNode {
  public:
-  SlowNodeWithAQueue(ros::NodeHandle& nh, const std::string& node)
-      : node_(node),
+  FedNode(ros::NodeHandle& nh, const std::string& node, bool slow = true, unsigned subscribers = 1)
+      : slow_(slow),
+        subscribers_(subscribers),
+        node_(node),
         root_(fs::temp_directory_path() / ("mvod" + node + "_" + std::to_string(::getpid()))),
         stream_(SyntheticStream::Options()),
         inputs_(nh),
@@ -223,7 +227,7 @@ class SlowNodeWithAQueue {
     fs::remove_all(root_);
     fs::create_directories(root_ / "maps");
   }
-  ~SlowNodeWithAQueue() {
+  ~FedNode() {
     if (pid_ > 0) stop(SIGKILL);
     fs::remove_all(root_);
   }
@@ -234,30 +238,41 @@ class SlowNodeWithAQueue {
                                      "_pose_source:=topic",
                                      "_keyframe_mode:=every_n",
                                      "_keyframe_every_n:=1",
-                                     "_paper_method:=true",
+                                     slow_ ? "_paper_method:=true" : "_paper_method:=false",
                                      "_processing_queue_size:=30",
-                                     "_refine_every_n_keyframes:=0",
-                                     "_autosave_period_s:=0"};
+                                     "_refine_every_n_keyframes:=0"};
+    // Autosave off unless `extra` sets it.
+    if (std::none_of(extra.begin(), extra.end(), [](const std::string& arg) {
+          return arg.rfind("_autosave_period_s:=", 0) == 0;
+        })) {
+      args.push_back("_autosave_period_s:=0");
+    }
     args.insert(args.end(), extra.begin(), extra.end());
     pid_ = startNode((root_ / "maps").string(), node_, args, (root_ / "node.out").string());
     if (pid_ <= 0) return ::testing::AssertionFailure() << "fork failed";
     if (!ros::service::waitForService(node_ + "/get_objects", 30000)) {
       return ::testing::AssertionFailure() << "the node did not start";
     }
-    if (!outputs_.waitFor([&] { return inputs_.connected(1, 1) && outputs_.connected(); }, 30.0)) {
+    if (!outputs_.waitFor(
+            [&] { return inputs_.connected(subscribers_, subscribers_) && outputs_.connected(); },
+            30.0)) {
       return ::testing::AssertionFailure() << "the topics did not connect";
     }
-    int second = static_cast<int>(std::floor(ros::Time::now().toSec()));
-    for (int i = 0; i < 16; ++i) {
-      inputs_.publish(stream_.make(i % stream_.options().num_frames, ros::Time(++second)), true,
-                      true);
-    }
+    second_ = static_cast<int>(std::floor(ros::Time::now().toSec()));
+    feed(16);
     if (!outputs_.waitForObjectsCount(1, 60.0)) {
       return ::testing::AssertionFailure() << "no keyframe processed\n" << outputs_.allLogs();
     }
     return ::testing::AssertionSuccess();
   }
 
+  // Publishes `frames` more frames, one stamp a second on from the last.
+  void feed(int frames) {
+    for (int i = 0; i < frames; ++i, ++frame_) {
+      inputs_.publish(stream_.make(frame_ % stream_.options().num_frames, ros::Time(++second_)),
+                      true, true);
+    }
+  }
   pid_t pid() const { return pid_; }
   // Sends `signal` and waits for the node to end; its wait status.
   int stop(int signal) {
@@ -270,8 +285,12 @@ class SlowNodeWithAQueue {
   NodeOutputs& outputs() { return outputs_; }
 
  private:
+  const bool slow_;
+  const unsigned subscribers_;
   std::string node_;
   fs::path root_;
+  int second_ = 0;
+  int frame_ = 0;
   SyntheticStream stream_;
   InputPublisher inputs_;
   NodeOutputs outputs_;
@@ -282,7 +301,7 @@ TEST(NodeShutdownTest, SigintDoesNotWaitForTheQueuedKeyframes) {
   // The paper's method (slow) with a long queue: SIGINT cancels the keyframe in progress and drops
   // the queue instead of working it off first.
   ros::NodeHandle nh;
-  SlowNodeWithAQueue node(nh, "/sigint_node");
+  FedNode node(nh, "/sigint_node");
   ASSERT_TRUE(node.start({}));
   const ros::WallTime signalled = ros::WallTime::now();
   const int status = node.stop(SIGINT);
@@ -517,7 +536,7 @@ TEST(NodeOutputFrameTest, ATiltedWorldComesOutZUpOnTheLoadedMapsFloor) {
 
 TEST(NodeServicesTest, MapChangesAnswerBusyPastTheTimeoutAndReadersKeepAnswering) {
   ros::NodeHandle nh;
-  SlowNodeWithAQueue slow(nh, "/busy_node");
+  FedNode slow(nh, "/busy_node");
   ASSERT_TRUE(slow.start({"_service_timeout_s:=0.1"}));
   const std::string node = "/busy_node";
   int busy = 0, refined = 0, read = 0;
@@ -615,6 +634,157 @@ TEST(NodeDiagnosticsTest, ADeadInputIsAnErrorAndOkWhenItResumes) {
   mvod::readFile((root / "node.out").string(), &logs);
   EXPECT_NE(logs.find(std::string("nothing on '") + kRgbTopic), std::string::npos) << logs;
   fs::remove_all(root);
+}
+
+// Issue 57, items 1-3: what a strange or shared map folder does to the node.
+
+// Waits up to `timeout_s` for the process to end; its wait status, or -1 (then it was killed).
+int waitForExit(pid_t pid, double timeout_s) {
+  int status = 0;
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::WallTime::now() < deadline) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) return status;
+    ros::WallDuration(0.05).sleep();
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return -1;
+}
+
+std::string readLog(const fs::path& path) {
+  std::string text;
+  mvod::readFile(path.string(), &text);
+  return text;
+}
+
+// A FIFO in place of the folder's lock file: the start neither hangs on it (load_map_on_start) nor
+// keeps the node from ending at SIGTERM; the load is refused naming the FIFO.
+TEST(NodeMapFolderTest, AFifoAtTheLockNeitherHangsTheStartNorOutlivesSigterm) {
+  const fs::path root =
+      fs::temp_directory_path() / ("mvod_fifo_lock_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  const fs::path folder = root / "maps" / "fifo_node.autosave.mvmap";
+  fs::create_directories(root / "maps");
+  mvod::MapObject chair;
+  chair.id = 1;
+  chair.class_id = 56;
+  chair.class_name = "chair";
+  chair.probability = 0.8;
+  chair.observations = 3;
+  chair.box.center_m = Eigen::Vector3d(1.0, 0.0, 0.45);
+  chair.box.size_m = Eigen::Vector3d(0.5, 0.5, 0.9);
+  chair.box.rotation.setIdentity();
+  ASSERT_TRUE(mvod::MapFolderWriter().write(folder.string(), {chair}, mvod::MapSummary(), {}).ok());
+  fs::remove(folder / ".lock");
+  ASSERT_EQ(::mkfifo((folder / ".lock").c_str(), 0600), 0);
+  const std::string node = "/fifo_node";
+  const pid_t pid = startNode((root / "maps").string(), node,
+                              {"_detector:=topic", "_pose_source:=topic", "_autosave_period_s:=1",
+                               "_load_map_on_start:=fifo_node.autosave.mvmap"},
+                              (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  KillOnExit running{pid};
+  EXPECT_TRUE(ros::service::waitForService(node + "/get_objects", 30000))
+      << "the node did not start\n"
+      << readLog(root / "node.out");
+  ::kill(pid, SIGTERM);
+  const int status = waitForExit(pid, 20.0);
+  running.pid = -1;
+  EXPECT_NE(status, -1) << "SIGTERM did not end the node";
+  const std::string logs = readLog(root / "node.out");
+  EXPECT_NE(logs.find("FIFO"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
+// Two nodes with one autosave_path: the second takes a folder of its own and says so; both maps
+// are saved, neither overwrites the other.
+TEST(NodeMapFolderTest, TwoNodesOnOneAutosavePathEachSaveTheirOwnMap) {
+  ros::NodeHandle nh;
+  FedNode first(nh, "/twin_a", false, 2);
+  const fs::path maps = first.root() / "maps";
+  const std::vector<std::string> shared = {"_autosave_path:=twins.mvmap", "_autosave_period_s:=1"};
+  std::vector<std::string> args = {"_detector:=topic",           "_pose_source:=topic",
+                                   "_keyframe_mode:=every_n",    "_keyframe_every_n:=1",
+                                   "_processing_queue_size:=30", "_refine_every_n_keyframes:=0"};
+  args.insert(args.end(), shared.begin(), shared.end());
+  const pid_t second = startNode(maps.string(), "/twin_b", args, (first.root() / "b.out").string());
+  ASSERT_GT(second, 0);
+  KillOnExit running{second};
+  ASSERT_TRUE(ros::service::waitForService("/twin_b/get_objects", 30000));
+  ASSERT_TRUE(first.start(shared));
+  const auto saved = [&] {
+    return fs::exists(maps / "twins.mvmap" / "map.json") &&
+           fs::exists(maps / "twins-2.mvmap" / "map.json");
+  };
+  for (int i = 0; i < 60 && !saved(); ++i) {
+    first.feed(2);
+    ros::WallDuration(0.5).sleep();
+  }
+  EXPECT_TRUE(saved()) << readLog(first.root() / "node.out") << readLog(first.root() / "b.out");
+  ::kill(second, SIGINT);
+  EXPECT_NE(waitForExit(second, 30.0), -1);
+  running.pid = -1;
+  first.stop(SIGINT);
+  const std::string logs = readLog(first.root() / "node.out") + readLog(first.root() / "b.out");
+  EXPECT_NE(logs.find("in use by another process (pid "), std::string::npos) << logs;
+  EXPECT_NE(logs.find("twins-2.mvmap instead"), std::string::npos) << logs;
+  for (const char* folder : {"twins.mvmap", "twins-2.mvmap"}) {
+    std::vector<mvod::MapObject> objects;
+    const mvod::Status loaded =
+        mvod::loadMap((maps / folder).string(), mvod::Links::kRefuse, &objects, nullptr, nullptr);
+    EXPECT_TRUE(loaded.ok()) << folder << ": " << loaded.message();
+    EXPECT_FALSE(objects.empty()) << folder;
+  }
+}
+
+// A save that cannot go where it should (a directory put where the lock file was, after the
+// start) goes to the fallback beside it, and /diagnostics turns ERROR naming both.
+TEST(NodeMapFolderTest, ASaveThatCannotGoWhereItShouldGoesToTheFallback) {
+  ros::NodeHandle nh;
+  const std::string node = "/fallback_node";
+  std::mutex mutex;
+  diagnostic_msgs::DiagnosticStatus map_status;
+  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name == node.substr(1) + ": map") map_status = status;
+        }
+      });
+  FedNode fed(nh, node, false);
+  const fs::path folder = fed.root() / "maps" / "fallback_node.autosave.mvmap";
+  const fs::path fallback = fed.root() / "maps" / "fallback_node.autosave-2.mvmap";
+  ASSERT_TRUE(fed.start({"_autosave_period_s:=1"}));
+  NodeOutputs& outputs = fed.outputs();
+  ASSERT_TRUE(outputs.waitFor([&] { return fs::exists(folder / "map.json"); }, 30.0));
+  fs::remove(folder / ".lock");
+  fs::create_directory(folder / ".lock");
+  bool moved = false;
+  for (int i = 0; i < 200 && !moved; ++i) {
+    fed.feed(1);
+    ros::WallDuration(0.3).sleep();
+    moved = fs::exists(fallback / "map.json");
+  }
+  EXPECT_TRUE(moved) << readLog(fed.root() / "node.out");
+  const bool error = outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return map_status.level == diagnostic_msgs::DiagnosticStatus::ERROR;
+      },
+      15.0);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_TRUE(error) << map_status.message;
+    EXPECT_NE(map_status.message.find(fallback.string() + " instead"), std::string::npos)
+        << map_status.message;
+    EXPECT_NE(map_status.message.find("directory"), std::string::npos) << map_status.message;
+  }
+  fed.stop(SIGINT);
+  std::vector<mvod::MapObject> objects;
+  const mvod::Status loaded =
+      mvod::loadMap(fallback.string(), mvod::Links::kRefuse, &objects, nullptr, nullptr);
+  EXPECT_TRUE(loaded.ok()) << loaded.message();
+  EXPECT_FALSE(objects.empty());
 }
 
 }  // namespace

@@ -4,6 +4,12 @@
 // the map changed since the last save, writes it: the objects, and the keyframe files that are new
 // or changed since the last save (the folder always holds a whole map, old or new). stop() saves
 // once more (shutdown, SIGINT, SIGTERM).
+//
+// The saver claims its folder for the node's life (MapFolderClaim). A folder another node claimed,
+// or one a save cannot write (a stray .lock directory, a keyframes/ link, a full or read-only
+// disk), is not the end of saving: the map goes to the first fallback beside it that it can claim
+// and write, "<name>-2.mvmap" to "<name>-9.mvmap", with an ERROR that names both and what to do
+// (statistics: autosave_folder, autosave_problem).
 #pragma once
 
 #include <condition_variable>
@@ -42,7 +48,8 @@ class MapAutosaver {
   MapAutosaver(const MapAutosaver&) = delete;
   MapAutosaver& operator=(const MapAutosaver&) = delete;
 
-  const std::string& path() const { return path_; }
+  // The folder asked for (before start()), or the one the saves go to now (after).
+  std::string path() const;
   // Before start(): the worker's map was just loaded from `folder` (load_map_on_start), whose
   // keyframe files were `keyframe_files`. When that is this saver's folder, its saves reuse them
   // (a resumed node does not write its whole history again at its first save).
@@ -56,8 +63,19 @@ class MapAutosaver {
   void loop();
   // `final`: the save at stop(), logged at INFO with its size and time.
   void saveIfChanged(bool final);
+  // Claims the first folder it can of path_ and its fallbacks, from the `first`-th (0: path_);
+  // `why`: what went wrong with the one before, for the message. False: none could be claimed.
+  bool claimFolder(int first, const std::string& why);
+  // Statistics' autosave_folder and autosave_problem.
+  void publishState(const std::string& problem);
 
   const std::string path_;
+  std::string folder_;    // where the saves go: path_ or a fallback (the saver's thread only)
+  int folder_index_ = 0;  // 0: path_; n: its n-th fallback
+  std::string
+      fallback_problem_;  // why the saves go to a fallback, and what to do ("": they do not)
+  MapFolderClaim claim_;
+  mutable std::mutex folder_mutex_;  // folder_ for path()
   const double period_s_;
   const KeyframeWorker* worker_;
   SharedStatistics* stats_;

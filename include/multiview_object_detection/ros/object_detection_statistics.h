@@ -12,8 +12,8 @@ namespace mvod {
 // Counters reported on /diagnostics (and read by tests).
 struct ObjectDetectionStatistics {
   int frames_received = 0;
-  int frames_rejected = 0;      // bad encoding, size, camera_info, out-of-order stamp
-  int pose_failures = 0;        // no TF / pose in time, or an invalid pose
+  int frames_rejected = 0;  // bad encoding, size, camera_info, out-of-order stamp
+  int pose_failures = 0;    // no TF / pose in time, or an invalid pose
   // The last reasons given for those two (the map status on /diagnostics names them).
   std::string last_frame_rejection;
   std::string last_pose_failure;
@@ -59,8 +59,11 @@ struct ObjectDetectionStatistics {
   double autosave_ms = 0.0;
   double autosave_bytes = 0.0;          // the map as saved (the whole folder)
   double autosave_written_bytes = 0.0;  // what the last save wrote (new keyframe files, map.json)
-  double detection_ms = 0.0;            // last keyframe
-  StageTimes stage_times;               // last keyframe
+  std::string autosave_folder;          // where the saves go now (empty: autosave off)
+  // Why the autosave is not where it should be, or failing, and what to do; empty when it is well.
+  std::string autosave_problem;
+  double detection_ms = 0.0;  // last keyframe
+  StageTimes stage_times;     // last keyframe
   // From a keyframe's images arriving to its objects being published (queueing, pose wait,
   // detection and mapping): the last one and the median of the last 100.
   double latency_ms = 0.0;
