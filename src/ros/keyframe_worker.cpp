@@ -1,5 +1,6 @@
 #include "multiview_object_detection/ros/keyframe_worker.h"
 
+#include <malloc.h>
 #include <ros/console.h>
 
 #include <algorithm>
@@ -34,6 +35,7 @@ KeyframeWorker::KeyframeWorker(const ClassPriors& priors,
       publishers_(publishers),
       stats_(stats),
       max_queue_size_(config->get().processing_queue_size),
+      max_queue_bytes_(config->get().processing_queue_max_mb * 1024.0 * 1024.0),
       mapper_(std::make_unique<ObjectMapper>(config->get().mapperConfig(), priors)),
       segmenter_(std::move(segmenter)),
       segmenter_injected_(segmenter_injected) {
@@ -58,42 +60,68 @@ void KeyframeWorker::stop() {
 // ---------------------------------------------------------------------------------------------
 // Queue
 
+namespace {
+
+// What a queued keyframe holds: its images (the camera infos are small).
+std::size_t jobBytes(const KeyframeJob& job) {
+  return (job.msgs.color ? job.msgs.color->data.size() : 0) +
+         (job.msgs.depth ? job.msgs.depth->data.size() : 0);
+}
+
+double toMb(std::size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); }
+
+}  // namespace
+
 void KeyframeWorker::enqueue(KeyframeJob job) {
   int dropped_total = 0;
   std::string dropped_what;
+  const char* bound = "";
   int queue_length = 0;
+  double queue_mb = 0.0;
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_bytes_ += jobBytes(job);
     queue_.push_back(std::move(job));
-    while (static_cast<int>(queue_.size()) > max_queue_size_) {
+    // Full by count, or by memory (the newest is always kept).
+    while (static_cast<int>(queue_.size()) > max_queue_size_ ||
+           (queue_.size() > 1 && static_cast<double>(queue_bytes_) > max_queue_bytes_)) {
+      bound = static_cast<int>(queue_.size()) > max_queue_size_ ? "processing_queue_size"
+                                                                : "processing_queue_max_mb";
       dropped_what = describeInput(topics_.color, queue_.front().msgs.color->header);
+      queue_bytes_ -= jobBytes(queue_.front());
       queue_.pop_front();
       dropped_total = stats_->update(
           [](ObjectDetectionStatistics& stats) { return ++stats.keyframes_dropped; });
     }
     queue_length = static_cast<int>(queue_.size());
+    queue_mb = toMb(queue_bytes_);
     // Under the queue's lock, like the worker's update when it takes a job: set after the lock, a
     // length could overwrite the worker's newer one (a queue of 1 reported for an empty queue).
-    stats_->update([queue_length](ObjectDetectionStatistics& stats) {
+    stats_->update([queue_length, queue_mb](ObjectDetectionStatistics& stats) {
       ++stats.keyframes_selected;
       stats.queue_length = queue_length;
+      stats.queue_mb = queue_mb;
     });
   }
   queue_cv_.notify_one();
   if (!dropped_what.empty()) {
     ROS_WARN_THROTTLE(kLogThrottlePeriodS,
-                      "processing queue full (processing_queue_size %d): dropped the oldest "
-                      "keyframe %s; %d keyframes dropped so far (processing is slower than the "
-                      "keyframe rate)",
-                      queue_length, dropped_what.c_str(), dropped_total);
+                      "processing queue full (%s; %d keyframes, %.0f MB of images): dropped the "
+                      "oldest keyframe %s; %d keyframes dropped so far (processing is slower than "
+                      "the keyframe rate)",
+                      bound, queue_length, queue_mb, dropped_what.c_str(), dropped_total);
   }
 }
 
 void KeyframeWorker::clearQueue() {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   queue_.clear();
+  queue_bytes_ = 0;
   pending_corrections_.clear();
-  stats_->update([](ObjectDetectionStatistics& stats) { stats.queue_length = 0; });
+  stats_->update([](ObjectDetectionStatistics& stats) {
+    stats.queue_length = 0;
+    stats.queue_mb = 0.0;
+  });
 }
 
 void KeyframeWorker::cancelCurrent() { cancel_ = true; }
@@ -105,6 +133,7 @@ void KeyframeWorker::stopNow() {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     dropped = queue_.size();
     queue_.clear();
+    queue_bytes_ = 0;
   }
   if (dropped > 0) {
     ROS_INFO("shutdown: %zu queued keyframe(s) dropped; the map is the last processed keyframe's",
@@ -128,6 +157,7 @@ void KeyframeWorker::workerLoop() {
   while (true) {
     KeyframeJob job;
     bool have_job = false;
+    bool drained = false;  // the queue is empty behind this job
     std::vector<PoseCorrection> corrections;
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
@@ -138,13 +168,18 @@ void KeyframeWorker::workerLoop() {
       for (auto& entry : pending_corrections_) corrections.push_back(entry.second);
       pending_corrections_.clear();
       if (!queue_.empty()) {
+        queue_bytes_ -= jobBytes(queue_.front());
         job = std::move(queue_.front());
         queue_.pop_front();
         have_job = true;
       }
       const int queue_length = static_cast<int>(queue_.size());
-      stats_->update(
-          [queue_length](ObjectDetectionStatistics& stats) { stats.queue_length = queue_length; });
+      drained = queue_length == 0;
+      const double queue_mb = toMb(queue_bytes_);
+      stats_->update([queue_length, queue_mb](ObjectDetectionStatistics& stats) {
+        stats.queue_length = queue_length;
+        stats.queue_mb = queue_mb;
+      });
     }
     if (!corrections.empty()) {
       try {
@@ -178,6 +213,12 @@ void KeyframeWorker::workerLoop() {
         ++stats.keyframes_failed;
         ++stats.callback_exceptions;
       });
+    }
+    if (drained) {
+      // A backlog worked off: the memory its images and clouds took goes back to the system
+      // (glibc keeps freed memory in its arenas otherwise, and the node's RSS stays at its peak).
+      job = KeyframeJob();
+      ::malloc_trim(0);
     }
   }
 }

@@ -1,7 +1,10 @@
 #include "multiview_object_detection/ros/node_diagnostics.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
+#include <unistd.h>
 
+#include <fstream>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -39,6 +42,20 @@ void NodeDiagnostics::addInputTasks() {
     });
   }
 }
+
+namespace {
+
+// The process's resident memory (MB; NaN where /proc cannot tell): what the history bound, the
+// queue's and the map's memory add up to, plus the code and the detector's network.
+double residentMb() {
+  std::ifstream statm("/proc/self/statm");
+  double pages_total = 0.0;
+  double pages_resident = 0.0;
+  if (!(statm >> pages_total >> pages_resident)) return std::numeric_limits<double>::quiet_NaN();
+  return pages_resident * static_cast<double>(::sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+}  // namespace
 
 void NodeDiagnostics::update(const ros::WallTimerEvent& /*event*/) {
   // force_update: Updater::update() follows ros::Time, which stands still while a bag is paused.
@@ -124,6 +141,8 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"keyframes failed", stats.keyframes_failed},
       {"keyframes taken for faults", stats.keyframes_faulty},
       {"queue length", stats.queue_length},
+      {"queue MB", stats.queue_mb},
+      {"process RSS MB", residentMb()},
       {"objects", stats.objects},
       {"removed atypical", stats.removed_atypical},
       {"removed intersecting", stats.removed_intersecting},

@@ -69,6 +69,9 @@ Status ObjectDetectionRosConfig::isValid() const {
   if (Status s = checkParameterRange("max_detections_per_frame", max_detections_per_frame); !s)
     return s;
   if (Status s = checkParameterRange("processing_queue_size", processing_queue_size); !s) return s;
+  if (Status s = checkParameterRange("processing_queue_max_mb", processing_queue_max_mb); !s) {
+    return s;
+  }
   if (Status s = checkParameterRange("refine_every_n_keyframes", refine_every_n_keyframes); !s)
     return s;
   return mapperConfig().isValid();
@@ -117,6 +120,7 @@ std::string ObjectDetectionRosConfig::print() const {
       << "allow_any_map_path: " << (allow_any_map_path ? "true" : "false") << "\n"
       << "service_timeout_s: " << service_timeout_s << "\n"
       << "processing_queue_size: " << processing_queue_size << "\n"
+      << "processing_queue_max_mb: " << processing_queue_max_mb << "\n"
       << "refine_every_n_keyframes: " << refine_every_n_keyframes << "\n"
       << "priors_file: " << priors_file << "\n"
       << "publish_object_cloud: " << (publish_object_cloud ? "true" : "false") << "\n"

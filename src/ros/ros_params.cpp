@@ -413,6 +413,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   p.read("load_map_on_start", &cfg.load_map_on_start);
   if (cfg.map_directory.empty()) cfg.map_directory = defaultMapDirectory();
   p.read("processing_queue_size", &cfg.processing_queue_size);
+  p.read("processing_queue_max_mb", &cfg.processing_queue_max_mb);
   p.read("refine_every_n_keyframes", &cfg.refine_every_n_keyframes);
   p.read("priors_file", &cfg.priors_file);
   if (cfg.priors_file.empty()) {

@@ -865,6 +865,10 @@ TEST(RosConversionsTest, ValuesThatWouldStallTheWorkerAreRefusedNamingTheParamet
   refused([](ObjectDetectionRosConfig* c) { c->queue_size = 2147483647; }, "queue_size");
   refused([](ObjectDetectionRosConfig* c) { c->processing_queue_size = 2147483647; },
           "processing_queue_size");
+  refused([](ObjectDetectionRosConfig* c) { c->processing_queue_max_mb = 0.0; },
+          "processing_queue_max_mb");
+  refused([](ObjectDetectionRosConfig* c) { c->processing_queue_max_mb = std::nan(""); },
+          "processing_queue_max_mb");
   ObjectDetectionRosConfig off;
   off.mapper.box.outline_cell_m = 0.0;  // 0 switches the outline normals off
   EXPECT_TRUE(off.isValid().ok()) << off.isValid().message();

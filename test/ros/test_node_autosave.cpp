@@ -787,6 +787,51 @@ TEST(NodeMapFolderTest, ASaveThatCannotGoWhereItShouldGoesToTheFallback) {
   EXPECT_FALSE(objects.empty());
 }
 
+// Issue 57, item 4: processing_queue_max_mb bounds the queue by its images, whatever its length
+// (here 1 MB, two or three of the 320x240 keyframes, in a queue of 30 behind the slow method), and
+// /diagnostics shows the queue's memory and the process's.
+TEST(NodeMemoryTest, TheQueueIsBoundedByItsImagesMemory) {
+  ros::NodeHandle nh;
+  const std::string node = "/queue_mb_node";
+  std::mutex mutex;
+  double max_queue_mb = -1.0;
+  double max_queue_length = -1.0;
+  double dropped = -1.0;
+  double rss_mb = -1.0;
+  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name != node.substr(1) + ": map") continue;
+          for (const diagnostic_msgs::KeyValue& value : status.values) {
+            const double number = std::atof(value.value.c_str());
+            if (value.key == "queue MB") max_queue_mb = std::max(max_queue_mb, number);
+            if (value.key == "queue length") max_queue_length = std::max(max_queue_length, number);
+            if (value.key == "keyframes dropped") dropped = number;
+            if (value.key == "process RSS MB") rss_mb = number;
+          }
+        }
+      });
+  FedNode fed(nh, node, true);
+  ASSERT_TRUE(fed.start({"_processing_queue_max_mb:=1", "_diagnostic_period:=0.2"}));
+  NodeOutputs& outputs = fed.outputs();
+  EXPECT_TRUE(outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return dropped >= 10.0 && rss_mb > 0.0;
+      },
+      30.0));
+  fed.stop(SIGINT);
+  const std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_GE(dropped, 10.0) << "16 keyframes in a queue of 30: the memory bound dropped none";
+  EXPECT_LE(max_queue_length, 3.0);
+  EXPECT_GT(max_queue_mb, 0.0);
+  EXPECT_LE(max_queue_mb, 1.0);
+  EXPECT_GT(rss_mb, 10.0);
+  const std::string logs = readLog(fed.root() / "node.out");
+  EXPECT_NE(logs.find("processing queue full (processing_queue_max_mb"), std::string::npos) << logs;
+}
+
 }  // namespace
 }  // namespace mvod_test
 

@@ -127,12 +127,14 @@ class KeyframeWorker {
   DetectionsBuffer* detections_;  // detector "topic" only
   ObjectDetectionPublishers* publishers_;
   SharedStatistics* stats_;
-  const int max_queue_size_;  // processing_queue_size (fixed)
+  const int max_queue_size_;      // processing_queue_size (fixed)
+  const double max_queue_bytes_;  // processing_queue_max_mb (fixed)
 
   // Queue (queue_mutex_).
   std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
   std::deque<KeyframeJob> queue_;
+  std::size_t queue_bytes_ = 0;                           // the queued jobs' images
   std::map<double, PoseCorrection> pending_corrections_;  // by stamp, the latest pose
   bool stop_ = false;
   // Set by cancelCurrent(): the keyframe in progress stops between its stages (ObjectMapper).

@@ -82,7 +82,9 @@ struct ObjectDetectionRosConfig {
   // unreadable one is moved aside (<path>.unreadable-<unix time>) and the node starts empty.
   std::string load_map_on_start;
 
-  int processing_queue_size = 2;      // keyframes waiting for the worker; the oldest is dropped
+  int processing_queue_size = 2;  // keyframes waiting for the worker; the oldest is dropped
+  // The queued keyframes' images (MB); past it the oldest is dropped too, one always kept.
+  double processing_queue_max_mb = 256.0;
   int refine_every_n_keyframes = 10;  // 0 = only on ~refine and at shutdown
   std::string priors_file;            // class priors YAML (ros_params fills in the package's)
   bool publish_object_cloud = true;

@@ -27,6 +27,7 @@ struct ObjectDetectionStatistics {
   int keyframes_processed = 0;  // went through ObjectMapper::processKeyframe
   int keyframes_failed = 0;     // conversion, detector or mapper error; no detections in time
   int queue_length = 0;
+  double queue_mb = 0.0;  // the queued keyframes' images
   int objects = 0;
   int removed_atypical = 0;
   int removed_intersecting = 0;

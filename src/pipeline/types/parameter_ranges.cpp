@@ -42,6 +42,8 @@ const std::vector<ParameterRange>& parameterRanges() {
       {"autosave_period_s", 1, 86400, "s", true, "one save at most per period"},
       {"processing_queue_size", 1, 1000, "", false,
        "keyframes held for the worker (images: about 2 MB each at 640x480)"},
+      {"processing_queue_max_mb", 1, 65536, "MB", false,
+       "the queued keyframes' images; past it the oldest is dropped (one is always kept)"},
       {"refine_every_n_keyframes", 0, 10000, "", false, "0 = only on ~refine and at shutdown"},
       {"filter/voxel_leaf_size_m", 0.002, 0.5, "m", false,
        "finer than a Kinect's pixel footprint at 1 m (1 m / 525 px = 1.9 mm) keeps every point: no "
