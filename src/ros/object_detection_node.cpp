@@ -8,7 +8,6 @@
 
 namespace {
 volatile std::sig_atomic_t g_sigint = 0;
-volatile std::sig_atomic_t g_running = 0;  // set once the node is up (its map loaded)
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -16,10 +15,11 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "object_detection", ros::init_options::NoSigintHandler);
   // SIGTERM (roslaunch's second try, systemd, docker stop) too: the map is refined and autosaved.
   // A second signal while that runs (a long keyframe still in the worker) ends the process at once;
-  // the last autosave is then the map. So does a signal before the node is up (a map loading at
-  // start has nothing new to save, and must not keep the process from ending).
-  const auto on_signal = [](int signal) {
-    if (g_sigint || !g_running) std::_Exit(128 + signal);
+  // the last autosave is then the map. A signal during the start (a map loading) is acted on once it
+  // is up: nothing the start reads can block for good (map files and the map folder's lock are
+  // opened without blocking, the lock waited for at most 120 s), and a second signal ends it at once.
+  const auto on_signal = [](int) {
+    if (g_sigint) std::_Exit(128 + SIGINT);
     g_sigint = 1;
   };
   std::signal(SIGINT, on_signal);
@@ -28,7 +28,6 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh_private("~");
   mvod::ObjectDetectionRos node(nh, nh_private);
   if (!node.ok()) return EXIT_FAILURE;
-  g_running = 1;
   const ros::WallTimer stop = nh.createWallTimer(ros::WallDuration(0.1), [&node](const auto&) {
     if (g_sigint) {
       node.shutdown();

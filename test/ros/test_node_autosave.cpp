@@ -716,7 +716,7 @@ TEST(NodeMapFolderTest, TwoNodesOnOneAutosavePathEachSaveTheirOwnMap) {
     return fs::exists(maps / "twins.mvmap" / "map.json") &&
            fs::exists(maps / "twins-2.mvmap" / "map.json");
   };
-  for (int i = 0; i < 60 && !saved(); ++i) {
+  for (int i = 0; i < 180 && !saved(); ++i) {  // 90 s at most: a sanitizer build is slow
     first.feed(2);
     ros::WallDuration(0.5).sleep();
   }
@@ -756,11 +756,11 @@ TEST(NodeMapFolderTest, ASaveThatCannotGoWhereItShouldGoesToTheFallback) {
   const fs::path fallback = fed.root() / "maps" / "fallback_node.autosave-2.mvmap";
   ASSERT_TRUE(fed.start({"_autosave_period_s:=1"}));
   NodeOutputs& outputs = fed.outputs();
-  ASSERT_TRUE(outputs.waitFor([&] { return fs::exists(folder / "map.json"); }, 30.0));
+  ASSERT_TRUE(outputs.waitFor([&] { return fs::exists(folder / "map.json"); }, 90.0));
   fs::remove(folder / ".lock");
   fs::create_directory(folder / ".lock");
   bool moved = false;
-  for (int i = 0; i < 200 && !moved; ++i) {
+  for (int i = 0; i < 300 && !moved; ++i) {
     fed.feed(1);
     ros::WallDuration(0.3).sleep();
     moved = fs::exists(fallback / "map.json");
