@@ -90,7 +90,8 @@ test-sanitize: deps sanitize-workspace
 		reports=0; /usr/bin/python3 test/sanitize/check_reports.py $(SAN_LOGS) $(SAN_WS)/run_tests.log || reports=$$?; \
 		[[ $$tests -eq 0 && $$reports -eq 0 ]]
 
-# make demo DATASET=DIR [FIRST=N LAST=M]: a 7-Scenes-layout folder or SceneNN sequence instead, FastestDet in the node.
+# make demo DATASET=DIR [FIRST=N LAST=M] [TRAJECTORY=FILE [KEYFRAMES=FILE]]: a 7-Scenes-layout folder or SceneNN
+# sequence instead, YOLOv5n-seg (else FastestDet) in the node; a SLAM's TUM trajectory instead of its poses.
 DATASET ?=
 demo: build
 	@bash scripts/demo.sh $(WS) $(DATASET)

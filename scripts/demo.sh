@@ -8,7 +8,8 @@
 # `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with YOLOv5n-seg (when
 # yolov5n-seg.onnx is in the model folder), else Mask R-CNN (its weights there), else FastestDet in the
 # node (models in $MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models: scripts/download_models.sh),
-# without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames.
+# without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames; TRAJECTORY=FILE
+# (KEYFRAMES=FILE) a SLAM's poses in TUM format instead of the dataset's (its keyframes only).
 #   usage: scripts/demo.sh WORKSPACE [DATASET]
 # Output: build/demo/ (map.mvmap, accuracy.md/.csv, map.png, rviz.png, roslaunch.log).
 set -euo pipefail
@@ -37,6 +38,9 @@ start=$(date +%s)
 range=()
 [[ -n "${FIRST:-}" ]] && range+=(--first "$FIRST")
 [[ -n "${LAST:-}" ]] && range+=(--last "$LAST")
+# TRAJECTORY=FILE [KEYFRAMES=FILE]: a SLAM's poses (TUM format) instead of the dataset's (dataset_to_bag --help).
+[[ -n "${TRAJECTORY:-}" ]] && range+=(--trajectory "$TRAJECTORY")
+[[ -n "${KEYFRAMES:-}" ]] && range+=(--keyframes "$KEYFRAMES")
 
 model_dir=""
 gravity=""       # gravity_down for the node, a YAML list; empty = gravity_source:=estimate
@@ -107,6 +111,7 @@ else
   fi
   detector_args=()
   every=10
+  [[ -n "${KEYFRAMES:-}" ]] && every=1  # the bag holds the SLAM's keyframes only: each is one
   rate=${RATE:-0.5}
 fi
 

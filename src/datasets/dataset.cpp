@@ -129,6 +129,8 @@ std::vector<std::string> missingDepthWarnings(const fs::path& dir,
 
 }  // namespace
 
+double SevenScenesDataset::stampOf(int index) { return index / kFrameRateHz; }
+
 std::string SevenScenesDataset::frameName(int index) {
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), "frame-%06d", index);
@@ -311,7 +313,7 @@ Status SevenScenesDataset::load(int index, RgbdFrame* frame) const {
   RgbdFrame result;
   result.index = index;
   result.name = stem;
-  result.stamp_s = index / kFrameRateHz;
+  result.stamp_s = stampOf(index);
 
   Status status = readPose(pose_path.string(), &result.T_W_D);
   if (!status) return status;

@@ -93,6 +93,7 @@ Status openSevenScenes(const std::string& directory, const ColorCameraFiles& cam
     return Status::Ok();
   };
   source->check = [](int) { return Status::Ok(); };
+  source->stamp_s = [](int index) { return SevenScenesDataset::stampOf(index); };
   source->warnings = dataset->warnings();
   source->has_gravity = dataset->hasGravity();
   source->gravity_down_W = dataset->gravityDown_W();
@@ -139,6 +140,7 @@ Status openSceneNN(const std::string& directory, DatasetSource* source) {
     return Status::Ok();
   };
   source->check = [dataset](int index) { return dataset->checkFrame(index); };
+  source->stamp_s = [dataset](int index) { return dataset->stampOf(index); };
   source->warnings = dataset->warnings();
   source->has_timestamps = dataset->hasTimestamps();
   // The SceneNN mesh and trajectory frame is y-up (shared/formats/scenenn.md).

@@ -349,6 +349,12 @@ Status SceneNNDataset::checkFrame(int index) const {
   return Status::Ok();
 }
 
+double SceneNNDataset::stampOf(int index) const {
+  if (!hasTimestamps()) return (index - 1) / kDefaultFrameRateHz;
+  const auto found = stamps_s_.find(index);
+  return found != stamps_s_.end() ? found->second : std::numeric_limits<double>::quiet_NaN();
+}
+
 Status SceneNNDataset::load(int index, RgbdFrame* frame) const {
   if (frame == nullptr) return Status::Error("load: frame is null");
   const fs::path dir(directory_);

@@ -60,7 +60,8 @@ Status openDataset(const Options& options, DatasetSource* source, std::vector<st
   camera.color_intrinsics = options.color_intrinsics;
   camera.depth_to_color = options.depth_to_color;
   camera.registered = options.registered;
-  const Status status = openDatasetSource(options.dataset_dir, options.format, source, camera);
+  Status status = openDatasetSource(options.dataset_dir, options.format, source, camera);
+  if (status) status = applyTrajectory(options.trajectory, source);
   if (!status) return status;
   *notes = source->notes;
   if (source->has_gravity) {

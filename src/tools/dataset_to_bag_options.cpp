@@ -26,6 +26,14 @@ const char kUsage[] =
     "                                 folder's depth-to-color.txt\n"
     "  --registered                   7-Scenes layout: colour and depth are one camera (the\n"
     "                                 folder's colour files are not read)\n"
+    "  --trajectory FILE              a SLAM's poses instead of the dataset's (TUM format 't tx\n"
+    "                                 ty tz qx qy qz qw', the colour camera to the SLAM's world,\n"
+    "                                 t the frame's stamp); frames without one are left out\n"
+    "  --keyframes FILE               only the frames at this TUM file's stamps, with its poses\n"
+    "                                 (e.g. KeyFrameTrajectory.txt; the node with\n"
+    "                                 keyframe_every_n 1 maps each)\n"
+    "  --trajectory-world aligned|slam  aligned: the SLAM's world placed so that its first frame\n"
+    "                                 has the dataset's pose; slam: as it is [aligned]\n"
     "  --camera NAME                  topic namespace and frame prefix [camera]\n"
     "  --world-frame FRAME            parent frame of the pose and TF [map]\n"
     "  --pose-topic TOPIC             [/orb_slam2_rgbd/pose]\n"
@@ -149,9 +157,18 @@ void addOptions(CLI::App* app, Options* options) {
         std::make_pair("--world-frame", &options->world_frame),
         std::make_pair("--pose-topic", &options->pose_topic),
         std::make_pair("--color-intrinsics", &options->color_intrinsics),
-        std::make_pair("--depth-to-color", &options->depth_to_color)}) {
+        std::make_pair("--depth-to-color", &options->depth_to_color),
+        std::make_pair("--trajectory", &options->trajectory.trajectory),
+        std::make_pair("--keyframes", &options->trajectory.keyframes)}) {
     cli::addText(app, name, value);
   }
+  cli::addValue(app, "--trajectory-world", [options](const std::string& text) {
+    if (text != "aligned" && text != "slam") {
+      return "--trajectory-world must be aligned or slam, not '" + text + "'";
+    }
+    options->trajectory.align_first_frame = text == "aligned";
+    return std::string();
+  });
   cli::addValue(app, "--format", [options](const std::string& text) {
     if (text != "auto" && text != "7scenes" && text != "scenenn") {
       return "--format must be auto, 7scenes or scenenn, not '" + text + "'";

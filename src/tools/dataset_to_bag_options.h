@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "multiview_object_detection/datasets/trajectory.h"
 #include "multiview_object_detection/evaluation/benchmark_segmenter_factory.h"
 
 namespace mvod {
@@ -29,6 +30,7 @@ struct Options {
   std::string color_intrinsics;
   std::string depth_to_color;
   bool registered = false;
+  TrajectoryOptions trajectory;  // --trajectory, --keyframes, --trajectory-world
   double rate_hz = 30.0;
   double time_offset_s = 1.0;
   long first = 0;

@@ -173,8 +173,8 @@ int openDataset(const Options& options, mvod::DatasetSource* dataset) {
   camera.color_intrinsics = options.color_intrinsics;
   camera.depth_to_color = options.depth_to_color;
   camera.registered = options.registered;
-  const mvod::Status opened =
-      mvod::openDatasetSource(options.dataset, options.format, dataset, camera);
+  mvod::Status opened = mvod::openDatasetSource(options.dataset, options.format, dataset, camera);
+  if (opened) opened = mvod::applyTrajectory(options.trajectory, dataset);
   if (!opened) {
     std::cerr << "offline_detection: cannot open dataset " << options.dataset << ": "
               << opened.message() << "\n";

@@ -33,6 +33,16 @@ const char* const kUsage =
     "                         depth-to-color.txt\n"
     "  --registered           7-Scenes layout: colour and depth are one camera (the folder's\n"
     "                         colour files are not read)\n"
+    "  --trajectory FILE      a SLAM's poses instead of the dataset's: TUM format ('t tx ty tz\n"
+    "                         qx qy qz qw' per line, the colour camera to the SLAM's world, t\n"
+    "                         the frame's stamp: 7-Scenes frame / 30 s); frames without a pose\n"
+    "                         within half a frame are left out\n"
+    "  --keyframes FILE       map only the frames at this TUM file's stamps, with its poses (a\n"
+    "                         SLAM's final keyframe poses, e.g. KeyFrameTrajectory.txt); use\n"
+    "                         --every 1\n"
+    "  --trajectory-world W   aligned: the SLAM's world placed so that its first frame has the\n"
+    "                         dataset's pose (the dataset's gravity and annotation apply);\n"
+    "                         slam: as it is, gravity estimated (default: aligned)\n"
     "  --detector NAME        files | simulated | yolo_seg | fastestdet | maskrcnn (default:\n"
     "                         files)\n"
     "  --detections DIR       files: folder of <frame>.json detections (required);\n"
@@ -131,9 +141,18 @@ void addInputOptions(CLI::App* app, Options* options) {
         std::make_pair("--yolo-seg-model", &options->yolo_seg_model),
         std::make_pair("--corrected-poses", &options->corrected_poses),
         std::make_pair("--color-intrinsics", &options->color_intrinsics),
-        std::make_pair("--depth-to-color", &options->depth_to_color)}) {
+        std::make_pair("--depth-to-color", &options->depth_to_color),
+        std::make_pair("--trajectory", &options->trajectory.trajectory),
+        std::make_pair("--keyframes", &options->trajectory.keyframes)}) {
     cli::addText(app, name, value, std::string(name) + " needs a value");
   }
+  cli::addValue(app, "--trajectory-world", [options](const std::string& text) {
+    if (text != "aligned" && text != "slam") {
+      return "--trajectory-world must be aligned or slam, not '" + text + "'";
+    }
+    options->trajectory.align_first_frame = text == "aligned";
+    return std::string();
+  });
   cli::addValue(app, "--format", [options](const std::string& text) {
     if (text.empty()) return std::string("--format needs a value");
     if (text != "auto" && text != "7scenes" && text != "scenenn") {

@@ -5,6 +5,8 @@
 #include <limits>
 #include <string>
 
+#include "multiview_object_detection/datasets/trajectory.h"
+
 namespace offline_detection {
 
 constexpr int kExitOk = 0;
@@ -18,6 +20,7 @@ struct Options {
   std::string color_intrinsics;  // the colour camera apart from the dataset folder
   std::string depth_to_color;
   bool registered = false;
+  mvod::TrajectoryOptions trajectory;  // --trajectory, --keyframes, --trajectory-world
   std::string detections;
   std::string detector = "files";
   std::string model_dir;

@@ -39,6 +39,7 @@ class SevenScenesDataset {
   size_t size() const { return frame_indices_.size(); }
   const std::vector<int>& frameIndices() const { return frame_indices_; }
   static std::string frameName(int index);  // "frame-000010"
+  static double stampOf(int index);         // index / 30 s, as load() gives it
   // Loads one frame (images, pose); the message names the file on any problem.
   Status load(int index, RgbdFrame* frame) const;
 

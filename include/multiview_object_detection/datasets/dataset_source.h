@@ -19,8 +19,9 @@ struct DatasetSource {
   // The message names the file. The intrinsics are checked against the images as the node checks
   // camera_info (checkIntrinsicsForImage), the message naming the intrinsics file.
   std::function<Status(int, RgbdFrame*)> load;
-  std::function<Status(int)> check;  // cheap per-frame checks (no image read)
-  bool has_timestamps = false;       // SceneNN with timestamp.txt
+  std::function<Status(int)> check;    // cheap per-frame checks (no image read)
+  std::function<double(int)> stamp_s;  // the frame's stamp as load() gives it (no image read)
+  bool has_timestamps = false;         // SceneNN with timestamp.txt
   // World gravity (pointing down) the dataset states: 7-Scenes' gravity-direction.txt, SceneNN's
   // y-up world (0, -1, 0). has_gravity false = unknown (estimate it).
   bool has_gravity = false;

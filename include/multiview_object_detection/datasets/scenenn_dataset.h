@@ -58,6 +58,8 @@ class SceneNNDataset {
   const CameraIntrinsics& intrinsics() const { return K_; }
   const std::string& intrinsicsPath() const { return intrinsics_path_; }  // "" = defaults
   bool hasTimestamps() const { return !stamps_s_.empty(); }
+  // The frame's stamp as load() gives it; NaN for a frame without one (timestamp.txt lacks it).
+  double stampOf(int index) const;
   // What may make the results wrong, found by open() (e.g. frames skipped for a missing depth
   // image).
   const std::vector<std::string>& warnings() const { return warnings_; }
