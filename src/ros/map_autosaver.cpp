@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <deque>
 #include <filesystem>
 #include <utility>
@@ -41,14 +42,11 @@ constexpr int kFallbacks = 8;  // <name>-2.mvmap to <name>-9.mvmap
 
 // path (a folder "<name>.mvmap") for index 0, its index-th fallback "<name>-<index + 1>.mvmap"
 // else.
+// `path` ends in .mvmap (the node resolves autosave_path through mapFolderPath).
 std::string fallbackFolder(const std::string& path, int index) {
   if (index == 0) return path;
-  const std::string extension = kMapFolderExtension;
-  const bool has_extension =
-      path.size() >= extension.size() &&
-      path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
-  const std::string stem = has_extension ? path.substr(0, path.size() - extension.size()) : path;
-  return stem + "-" + std::to_string(index + 1) + extension;
+  const std::string stem = path.substr(0, path.size() - std::strlen(kMapFolderExtension));
+  return stem + "-" + std::to_string(index + 1) + kMapFolderExtension;
 }
 
 }  // namespace
@@ -179,10 +177,10 @@ void MapAutosaver::saveIfChanged(bool final) {
   MapFolderWriter::Report report;
   const int frames = stats_->get().frames_received;
   Status written = writeMapFile(folder_, *map, frames, &writer_, &report);
+  if (!written) stats_->update([](ObjectDetectionStatistics& s) { ++s.autosave_failures; });
   if (!written && folder_index_ < kFallbacks) {
     // Not where it should go: to the next fallback, now, rather than nowhere.
     const std::string failed = folder_;
-    stats_->update([](ObjectDetectionStatistics& s) { ++s.autosave_failures; });
     if (claimFolder(folder_index_ + 1, "saving to " + failed + " failed: " + written.message())) {
       written = writeMapFile(folder_, *map, frames, &writer_, &report);
     }
@@ -195,7 +193,6 @@ void MapAutosaver::saveIfChanged(bool final) {
         "; the previous autosave is kept, the next try in the next period (check the disk and the "
         "folder)";
     errorThrottled(problem);
-    stats_->update([](ObjectDetectionStatistics& s) { ++s.autosave_failures; });
     publishState(problem);
     return;
   }
