@@ -39,6 +39,9 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
   std::string why;
   out->depth_fault = isKeyframeFault(frame.T_W_D, depth_view.get(), &why);
   if (out->depth_fault) out->warnings.push_back(label + ": " + why);
+  // The detections' fields, then the association of all of them at once, then the fusion.
+  std::vector<const ObjectObservation*> observations;
+  std::vector<size_t> observed;
   for (size_t k = 0; k < kept.detections.size(); ++k) {
     const Detection2D& detection = kept.detections[k];
     SingleView& view = (*views)[k];
@@ -59,8 +62,15 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     observation.stamp_s = frame.stamp_s;
     observation.depth_view = depth_view;
     if (out->depth_fault) continue;  // kept in the history: a correction may fuse it
+    observations.push_back(&observation);
+    observed.push_back(k);
+  }
+  const std::vector<int> object_ids = associateKeyframe(observations, &out->times);
+  for (size_t n = 0; n < observed.size(); ++n) {
+    const size_t k = observed[n];
+    SingleView& view = (*views)[k];
     const ObjectDatabase::FusionResult result =
-        fuseObservation(observation, defer_rebox, &out->times);
+        fuseObservation(view.observation, defer_rebox, &out->times, object_ids[n]);
     view.object_id = result.object_id;
     if (kept.index[k] < out->object_ids.size()) {
       out->object_ids[kept.index[k]] = result.object_id;
@@ -124,8 +134,17 @@ void ObjectMapper::updateExistence(const DepthView* view, const std::vector<int>
   }
 }
 
+std::vector<int> ObjectMapper::associateKeyframe(
+    const std::vector<const ObjectObservation*>& observations, StageTimes* times) {
+  const Clock::time_point t = Clock::now();
+  std::vector<int> object_ids = database_.associate(observations);
+  times->fusion_ms += msSince(t);
+  return object_ids;
+}
+
 ObjectDatabase::FusionResult ObjectMapper::fuseObservation(const ObjectObservation& observation,
-                                                           bool defer_rebox, StageTimes* times) {
+                                                           bool defer_rebox, StageTimes* times,
+                                                           int object_id) {
   // Eq. 6-8; the fused cloud's filter/LCCP/box time counts in those stages and in fusion.
   const Clock::time_point t = Clock::now();
   StageTimes fused_times;
@@ -136,7 +155,7 @@ ObjectDatabase::FusionResult ObjectMapper::fuseObservation(const ObjectObservati
         return processFused(class_name, points_W, normals_W, segment_W, box, yaw_rad, &fused_times);
       };
   const ObjectDatabase::FusionResult result =
-      database_.fuseOrInsert(observation, process, defer_rebox);
+      database_.fuseOrInsert(observation, process, defer_rebox, object_id);
   times->fusion_ms += msSince(t);
   addStageTimes(fused_times, times);
   return result;

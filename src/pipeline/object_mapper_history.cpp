@@ -244,9 +244,15 @@ void ObjectMapper::replayRecord(const KeyframeRecord& record, ReplayInput* input
   }
   StageTimes times;
   std::vector<int> detected_ids;
+  std::vector<const ObjectObservation*> observations;
   for (ObjectObservation& observation : input->observations) {
     alignReplayedBox(record, &observation);  // the floor as the records before it left it
-    detected_ids.push_back(fuseObservation(observation, true, &times).object_id);
+    observations.push_back(&observation);
+  }
+  const std::vector<int> object_ids = associateKeyframe(observations, &times);
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const ObjectObservation& observation = *observations[k];
+    detected_ids.push_back(fuseObservation(observation, true, &times, object_ids[k]).object_id);
     outcome->rebuilt_ids.push_back(detected_ids.back());
     ++report->views_replayed;
   }

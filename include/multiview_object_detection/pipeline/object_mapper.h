@@ -267,8 +267,14 @@ class ObjectMapper {
                     std::vector<SingleView>* views, KeyframeReport* out);
   // One observation into the database (Eq. 6-8), its fused cloud processed by processFused; the
   // times of that added to *times.
+  // object_id: the association decided for it (ObjectDatabase::associate), or kAssociateNow.
   ObjectDatabase::FusionResult fuseObservation(const ObjectObservation& observation,
-                                               bool defer_rebox, StageTimes* times);
+                                               bool defer_rebox, StageTimes* times,
+                                               int object_id = ObjectDatabase::kAssociateNow);
+  // A keyframe's observations matched to the objects at once (ObjectDatabase::associate); its time
+  // counts in the fusion.
+  std::vector<int> associateKeyframe(const std::vector<const ObjectObservation*>& observations,
+                                     StageTimes* times);
   // Evidence fusion, once per keyframe: the objects that changed boxed, in parallel.
   void reboxPending(StageTimes* times);
   // Existence evidence, once per keyframe after its fusion: every object votes with the keyframe's

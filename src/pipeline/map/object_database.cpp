@@ -17,6 +17,7 @@ namespace mvod {
 
 using object_database_detail::addClassScore;
 using object_database_detail::addSignedDistances;
+using object_database_detail::voxelKeys;
 
 Status ObjectDatabase::Config::isValid() const {
   if (Status s = checkParameterRange("database/fusion_voxel_size_m", fusion_voxel_size_m); !s)
@@ -58,10 +59,8 @@ std::string ObjectDatabase::Config::print() const {
   return out.str();
 }
 
-namespace {
+namespace object_database_detail {
 
-// The distinct voxel keys of points_W, ascending (packed keys are non-negative: their order as
-// unsigned is their order), radix-sorted instead of hashed.
 std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m) {
   std::vector<std::uint64_t> keyed;
   keyed.reserve(points_W.size());
@@ -77,6 +76,10 @@ std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_siz
   }
   return keys;
 }
+
+}  // namespace object_database_detail
+
+namespace {
 
 void countInside(const std::vector<std::int64_t>& inside, EvidenceMap* evidence) {
   for (const std::int64_t key : inside) {
@@ -209,34 +212,37 @@ PointCloud ObjectDatabase::supportedVoxels(const MapObject& object,
 
 ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservation& observation,
                                                           const FusedCloudProcessor& process,
-                                                          bool defer_rebox) {
+                                                          bool defer_rebox, int object_id) {
   beginKeyframe(observation.keyframe);
   FusionResult result;
   MapObject* nearest = nearestSameClass(observation, &result.distance_m);
-  bool fuse =
-      nearest != nullptr && result.distance_m <= priors_.fusionDistance(observation.class_name);
   // Evidence fusion: the voxels of this view's cut and of what it saw around it, computed once
   // (by the single-view stage, or here).
   const bool evidence = config_.fusion == "evidence";
   const std::shared_ptr<const FusionKeys> keys = evidence ? fusionKeysOf(observation) : nullptr;
-  if (!fuse && evidence && config_.min_overlap_to_fuse > 0.0 && !config_.disable_fusion) {
-    // Not near a same-class object: the object (any class) whose supported voxels hold most of
-    // this cut, if enough of it.
-    MapObject* overlapping = mostOverlapping(observation, keys->cut);
-    if (overlapping != nullptr) {
-      fuse = true;
-      nearest = overlapping;
-      result.distance_m = (nearest->seenBox().center_m - observation.box.center_m).norm();
-    }
+  MapObject* target = nullptr;
+  if (config_.disable_fusion || object_id == -1) {
+    target = nullptr;
+  } else if (object_id >= 0) {
+    const auto it = objects_.find(object_id);
+    target = it != objects_.end() ? &it->second : nullptr;
+  } else if (evidence) {
+    const std::vector<Candidate> candidates = candidatesOf(observation, *keys);
+    if (!candidates.empty()) target = candidates.front().object;
+  } else if (nearest != nullptr &&
+             result.distance_m <= priors_.fusionDistance(observation.class_name)) {
+    target = nearest;  // Eq. 6
   }
-  if (!config_.disable_fusion && fuse) {
+  if (target != nullptr) {
+    result.distance_m = (target->seenBox().center_m - observation.box.center_m).norm();
     if (evidence) {
-      fuseEvidence(observation, *keys, process, defer_rebox, nearest);
+      fused_this_keyframe_.push_back(target->id);
+      fuseEvidence(observation, *keys, process, defer_rebox, target);
     } else {
-      fusePaper(observation, process, nearest);
+      fusePaper(observation, process, target);
     }
     result.decision = Decision::kFused;
-    result.object_id = nearest->id;
+    result.object_id = target->id;
     return result;
   }
   result.decision = Decision::kInserted;
@@ -248,6 +254,7 @@ void ObjectDatabase::beginKeyframe(int keyframe) {
   if (keyframe == current_keyframe_) return;
   current_keyframe_ = keyframe;
   inserted_this_keyframe_.clear();
+  fused_this_keyframe_.clear();
 }
 
 bool ObjectDatabase::insertedThisKeyframe(const MapObject& object) const {
@@ -283,61 +290,6 @@ std::shared_ptr<const FusionKeys> ObjectDatabase::fusionKeysOf(
         makeFusionKeys(observation.segment_W, observation.seen_W, config_.fusion_voxel_size_m));
   }
   return keys;
-}
-
-MapObject* ObjectDatabase::mostOverlapping(const ObjectObservation& observation,
-                                           const std::vector<std::int64_t>& cut) {
-  double best_overlap = 0.0;
-  MapObject* best_object = nullptr;
-  for (auto& entry : objects_) {
-    MapObject& object = entry.second;
-    if (object.evidence.empty() || object.evidence_voxel_size_m != config_.fusion_voxel_size_m) {
-      continue;
-    }
-    if (insertedThisKeyframe(object)) continue;
-    if ((object.box.center_m - observation.box.center_m).norm() >
-        0.5 * (object.box.size_m.norm() + observation.box.size_m.norm())) {
-      continue;  // the boxes cannot overlap
-    }
-    const int reach =
-        object.class_name == observation.class_name ? config_.same_class_overlap_voxels : 0;
-    const double overlap = overlapShare(object, cut, reach);
-    if (overlap > best_overlap) {
-      best_overlap = overlap;
-      best_object = &object;
-    }
-  }
-  return best_overlap >= config_.min_overlap_to_fuse ? best_object : nullptr;
-}
-
-double ObjectDatabase::overlapShare(const MapObject& object, const std::vector<std::int64_t>& cut,
-                                    int reach) {
-  // The votes only: a new view's cut may lie in the shell of noise around the surface
-  // (surface_band_m selects the object's voxels, not what it can be matched on).
-  const auto voted = [&object](std::int64_t key) {
-    const auto it = object.evidence.find(key);
-    return it != object.evidence.end() && it->second.inside >= 1 &&
-           it->second.inside >= it->second.outside;
-  };
-  int shared = 0;
-  for (const std::int64_t key : cut) {
-    if (voted(key)) {
-      ++shared;
-      continue;
-    }
-    if (reach == 0) continue;
-    const Eigen::Vector3i centre = unpackVoxel(key);
-    bool near = false;
-    for (int dx = -reach; dx <= reach && !near; ++dx) {
-      for (int dy = -reach; dy <= reach && !near; ++dy) {
-        for (int dz = -reach; dz <= reach && !near; ++dz) {
-          near = voted(packVoxel(centre + Eigen::Vector3i(dx, dy, dz)));
-        }
-      }
-    }
-    if (near) ++shared;
-  }
-  return cut.empty() ? 0.0 : static_cast<double>(shared) / cut.size();
 }
 
 void ObjectDatabase::addObservation(const ObjectObservation& observation, MapObject* object) {
@@ -454,6 +406,9 @@ bool ObjectDatabase::remove(int id) {
   inserted_this_keyframe_.erase(
       std::remove(inserted_this_keyframe_.begin(), inserted_this_keyframe_.end(), id),
       inserted_this_keyframe_.end());
+  fused_this_keyframe_.erase(
+      std::remove(fused_this_keyframe_.begin(), fused_this_keyframe_.end(), id),
+      fused_this_keyframe_.end());
   return objects_.erase(id) > 0;
 }
 
@@ -462,6 +417,7 @@ void ObjectDatabase::clear() {
   pending_rebox_.clear();
   pending_depth_views_.clear();
   inserted_this_keyframe_.clear();
+  fused_this_keyframe_.clear();
   current_keyframe_ = -1;
 }
 

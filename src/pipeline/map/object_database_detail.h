@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "multiview_object_detection/pipeline/map/depth_view.h"
 #include "multiview_object_detection/pipeline/map/object_database.h"
@@ -18,6 +20,10 @@ void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap*
                         std::size_t first, std::size_t last);
 // ... over all entries.
 void addSignedDistances(const DepthView& view, double voxel_size_m, EvidenceMap* evidence);
+
+// The distinct voxel keys of points_W, ascending (packed keys are non-negative: their order as
+// unsigned is their order), radix-sorted instead of hashed.
+std::vector<std::int64_t> voxelKeys(const PointCloud& points_W, double voxel_size_m);
 
 // Evidence fusion's class vote: `score` more for `class_name`; the object takes the class with the
 // largest sum. An object without scores yet (a map saved before them) starts from its own class.

@@ -110,6 +110,7 @@ class ObjectDatabase {
     double fusion_voxel_size_m = 0.01;
     // Objects inserted in the current keyframe are not fusion candidates for other detections of
     // the same keyframe (Sec. 3.4.1: two same-class detections in one image are two objects).
+    // Evidence fusion: nor are objects another detection of the keyframe fused into.
     bool no_fusion_within_keyframe = true;
     // Table 2's single-frame baseline: every observation is inserted as a new object, nothing is
     // fused.
@@ -119,8 +120,8 @@ class ObjectDatabase {
     // saw it but left it out; the box comes from the voxels that are inside at least as often.
     std::string fusion = "evidence";
     // Evidence fusion: a detection whose cut lies at least this much (share of its voxels) on an
-    // object's supported voxels is fused into it whatever the classes and centres (0 = centres
-    // and classes only, Eq. 6).
+    // object's voted voxels may join it whatever the classes and centres (0 = centres and classes
+    // only: Eq. 6's Γ_C, unless the view saw the object apart from its cut; see associate()).
     double min_overlap_to_fuse = 0.5;
     // Evidence fusion, the overlap above with an object of the detection's class: a cut voxel
     // counts as on the object when one of its voted voxels (inside >= outside) lies within this
@@ -172,8 +173,21 @@ class ObjectDatabase {
   // boxed (`process`) later, by reboxPending(), once per object however many detections of the
   // keyframe fused into it, and the objects in parallel. Until then the object keeps its previous
   // segment and box (a later detection of the same keyframe is matched against those).
+  // object_id: the association decided beforehand (associate()): an object's id to fuse into, or
+  // -1 to insert; kAssociateNow (the default) decides here, against the objects no earlier
+  // observation of this keyframe took.
+  static constexpr int kAssociateNow = -2;
   FusionResult fuseOrInsert(const ObjectObservation& observation,
-                            const FusedCloudProcessor& process, bool defer_rebox = false);
+                            const FusedCloudProcessor& process, bool defer_rebox = false,
+                            int object_id = kAssociateNow);
+  // One keyframe's observations matched to the objects at once, before any is fused: per
+  // observation, the id of the object it joins or -1 (a new object). Evidence fusion: a detection
+  // joins an object its cut overlaps (min_overlap_to_fuse), or a same-class object within the
+  // class's Γ_C that its view did not see apart from the cut; each object takes at most one
+  // detection of a keyframe (two detections in one image are two objects), the pairs of the same
+  // class and the largest overlap first. The paper's fusion and disable_fusion: kAssociateNow for
+  // each (Eq. 6, one observation after the other).
+  std::vector<int> associate(const std::vector<const ObjectObservation*>& observations);
   // Adds the keyframe's signed distances (surface band) to, and boxes the supported voxels of,
   // every object fused with defer_rebox since the last call, on up to `threads` threads (each
   // object is independent: the same result for any thread count). A processor that returns false
@@ -226,15 +240,30 @@ class ObjectDatabase {
   // previous one (no_fusion_within_keyframe).
   void beginKeyframe(int keyframe);
   bool insertedThisKeyframe(const MapObject& object) const;
+  // Evidence fusion: inserted or fused into by an observation of the current keyframe.
+  bool takenThisKeyframe(const MapObject& object) const;
+  // Evidence fusion's association: an object an observation may join. tier 0: same class, 1:
+  // another class (joined by overlap only).
+  struct Candidate {
+    MapObject* object = nullptr;
+    int tier = 0;
+    double overlap = 0.0;
+    double distance_m = 0.0;
+  };
+  // The objects the observation may join (not taken this keyframe), best first: same class before
+  // other classes, then the largest overlap, then the nearest.
+  std::vector<Candidate> candidatesOf(const ObjectObservation& observation, const FusionKeys& keys);
+  // Whether the view saw the object apart from the detection: of the object's voted voxels within
+  // `reach` voxels of what the view saw, more lie only on the surface around the detection than in
+  // its mask (mask: the voxels of its points_W, ascending) or cut, and they are at least a tenth
+  // of the object (a book beside the detected book).
+  static bool seenApart(const MapObject& object, const std::vector<std::int64_t>& mask,
+                        const FusionKeys& keys, int reach);
   // Eq. 6's candidate: the nearest object of the observation's class by box-centre distance (null
   // and infinity when none).
   MapObject* nearestSameClass(const ObjectObservation& observation, double* distance_m);
   // Evidence fusion: the observation's fusion keys on this database's grid.
   std::shared_ptr<const FusionKeys> fusionKeysOf(const ObjectObservation& observation) const;
-  // Evidence fusion's overlap candidate: the object (any class) whose voted voxels hold the largest
-  // share of the cut, if at least min_overlap_to_fuse; else null.
-  MapObject* mostOverlapping(const ObjectObservation& observation,
-                             const std::vector<std::int64_t>& cut);
   // The share of the cut's voxels on the object's voted voxels (or within `reach` voxels of one).
   static double overlapShare(const MapObject& object, const std::vector<std::int64_t>& cut,
                              int reach);
@@ -268,7 +297,8 @@ class ObjectDatabase {
   int next_id_ = 1;
   int current_keyframe_ = -1;
   std::vector<int> inserted_this_keyframe_;
-  std::vector<int> pending_rebox_;  // ascending ids
+  std::vector<int> fused_this_keyframe_;  // evidence fusion: fused into this keyframe
+  std::vector<int> pending_rebox_;        // ascending ids
   // Of pending objects: the keyframe whose signed distances reboxPending adds first.
   std::map<int, std::shared_ptr<const DepthView>> pending_depth_views_;
 };
