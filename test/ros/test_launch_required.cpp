@@ -102,6 +102,54 @@ TEST(RosLaunchArgsTest, OnlyTheBagIsRequiredAndEveryArgumentIsDocumented) {
   }
 }
 
+// kinect_orbslam2.launch sets the parameters appliedAI's orb_slam2_ros reads today (Node.cc from
+// 09b82abf): the calibration (camera_info or the args; without either the wrapper stops), the
+// depth's units (its default 1 reads a Kinect's millimetres as metres) and the frames that make
+// the node's TF look-up the colour camera's pose (docs/live_camera.md).
+TEST(KinectOrbslam2LaunchTest, DrivesTheWrapperWithTheParametersItReads) {
+  if (std::system("command -v roslaunch > /dev/null 2>&1") != 0) GTEST_SKIP() << "no roslaunch";
+  const auto dump = [](const std::string& args) {
+    int status = 0;
+    const std::string text = run(
+        "roslaunch --dump-params multiview_object_detection kinect_orbslam2.launch "
+        "start_kinect:=false start_orbslam2:=true rviz:=false " +
+            args,
+        &status);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << text;
+    std::map<std::string, std::string> params;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      const std::string prefix = "/orb_slam2_rgbd/";
+      const size_t colon = line.find(": ");
+      if (line.rfind(prefix, 0) != 0 || colon == std::string::npos) continue;
+      params[line.substr(prefix.size(), colon - prefix.size())] = line.substr(colon + 2);
+    }
+    return params;
+  };
+  std::map<std::string, std::string> params = dump("");
+  EXPECT_EQ(params["depth_map_factor"], "1000.0");
+  EXPECT_EQ(params["load_calibration_from_cam"], "true");
+  EXPECT_EQ(params["camera_frame_id"], "camera_rgb_frame");
+  EXPECT_EQ(params["target_frame_id"], "camera_link");
+  EXPECT_EQ(params["pointcloud_frame_id"], "map");
+  EXPECT_EQ(params["publish_tf"], "true");
+  // Calibration parameters always present: the wrapper falls back to them without camera_info.
+  for (const char* name : {"camera_fx", "camera_fy", "camera_cx", "camera_cy", "camera_k1",
+                           "camera_k2", "camera_k3", "camera_p1", "camera_p2", "camera_baseline"}) {
+    EXPECT_EQ(params.count(name), 1u) << name;
+  }
+  EXPECT_EQ(params["camera_fx"], "525.0");
+  EXPECT_EQ(params["camera_baseline"], "40.0");
+  EXPECT_EQ(params.count("settings_file"), 0u);  // read only by versions before 6efc879
+  params = dump("orbslam2_calibration:=args camera:=kinect2 depth_map_factor:=1 "
+                "orbslam2_settings:=/tmp/TUM1.yaml");
+  EXPECT_EQ(params["load_calibration_from_cam"], "false");
+  EXPECT_EQ(params["camera_frame_id"], "kinect2_rgb_frame");
+  EXPECT_EQ(params["target_frame_id"], "kinect2_link");
+  EXPECT_EQ(params["depth_map_factor"], "1.0");
+  EXPECT_EQ(params["settings_file"], "/tmp/TUM1.yaml");
+}
+
 // rviz asks rospack for media_export's plugins at every start; Debian has no media_export, so each
 // demo's log had "[rospack] Error: no such package media_export" (deps/standin: a stand-in).
 TEST(RospackTest, MediaExportIsFound) {
