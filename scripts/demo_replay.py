@@ -5,6 +5,11 @@ Used by `make demo` (scripts/demo.sh); also usable alone:
 
   scripts/demo_replay.py --bag scene.bag --output-dir DIR [--detector topic|fastestdet] [--model-dir DIR]
       [--gravity-down "[0, -1, 0]" | --gravity-estimate] [--keyframe-every N] [--rate R] [--no-rviz]
+  scripts/demo_replay.py --bag scene.bag --output-dir DIR --launch kinect_orbslam2 --slam-trajectory TUM.txt ...
+
+--launch kinect_orbslam2 runs the live launch file instead, with test/ros/orbslam2_standin.py in ORB-SLAM2's place
+(its poses from --slam-trajectory) and freenect's static frames published here; the bag's own poses and TF are not
+played, its registered depth goes to depth_registered/image_raw as freenect names it.
 
 Starts roslaunch (its own master on a free port, so it never meets another master) with the node and, on a
 virtual X display (Xvfb), rviz. Plays the bag with its clock (BagPlayer: like `rosbag play --clock`, but never
@@ -101,6 +106,27 @@ def image_topic_args(bag_path):
     return ['rgb_topic:=%s/rgb/image_raw' % camera, 'depth_topic:=%s/depth_registered/image_raw' % camera]
 
 
+def publish_freenect_frames():
+    """The static frames freenect_launch publishes with its defaults: camera_link -> camera_rgb_frame (4.5 cm
+    to the right) -> camera_rgb_optical_frame (ROS body axes to optical axes)."""
+    import tf2_ros
+    from geometry_msgs.msg import TransformStamped
+    import rospy
+    frames = [('camera_link', 'camera_rgb_frame', (0.0, -0.045, 0.0), (0.0, 0.0, 0.0, 1.0)),
+              ('camera_rgb_frame', 'camera_rgb_optical_frame', (0.0, 0.0, 0.0), (-0.5, 0.5, -0.5, 0.5))]
+    transforms = []
+    for parent, child, t, q in frames:
+        tf = TransformStamped()
+        tf.header.stamp = rospy.Time(0)
+        tf.header.frame_id, tf.child_frame_id = parent, child
+        tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z = t
+        (tf.transform.rotation.x, tf.transform.rotation.y, tf.transform.rotation.z,
+         tf.transform.rotation.w) = q
+        transforms.append(tf)
+    publish_freenect_frames.broadcaster = tf2_ros.StaticTransformBroadcaster()
+    publish_freenect_frames.broadcaster.sendTransform(transforms)
+
+
 class BagPlayer:
     """Plays a bag with its clock, like `rosbag play --clock`, but never more than MAX_AHEAD colour frames
     ahead of what the node reports received (/diagnostics "frames received", every diagnostic_period): on a
@@ -108,11 +134,18 @@ class BagPlayer:
     MAX_AHEAD = 3
     WAIT_S = 60.0  # for the node to take one frame
 
-    def __init__(self, path, rate, demo):
+    def __init__(self, path, rate, demo, skip=(), rename=None, subscribers=1, prime=None):
         import rosbag
         self.bag = rosbag.Bag(path)
         self.rate = rate
         self.demo = demo
+        self.skip = set(skip)  # topics not played (the SLAM's, where a SLAM stand-in runs)
+        self.rename = rename or {}  # bag topic -> topic it is played on
+        # Play once the colour topic has this many subscribers (the node, and a SLAM that reads the images);
+        # until then the first message of `prime` is sent every 0.1 s (a camera_info a SLAM waits for before
+        # it subscribes to the images, as a streaming camera's would be).
+        self.subscribers = subscribers
+        self.prime = prime
         topics = self.bag.get_type_and_topic_info().topics
         self.colour_topics = [t for t in topics if t.endswith(COLOUR_SUFFIXES)]
         if len(self.colour_topics) != 1:
@@ -126,20 +159,33 @@ class BagPlayer:
         clock = rospy.Publisher('/clock', Clock, queue_size=10)
         publishers = {}
         for topic, info in self.bag.get_type_and_topic_info().topics.items():
+            if topic in self.skip:
+                continue
             msg_class = None
             for _, msg, _ in self.bag.read_messages(topics=[topic]):
                 msg_class = type(msg)
                 break
-            publishers[topic] = rospy.Publisher(topic, msg_class, queue_size=100,
+            publishers[topic] = rospy.Publisher(self.rename.get(topic, topic), msg_class, queue_size=100,
                                                 latch=topic.endswith('tf_static'))
         # The node subscribes to the colour topic once it runs: wait for the connection.
         colour = publishers[self.colour_topics[0]]
-        self.demo.wait_for(lambda: colour.get_num_connections() > 0, 60, 'the node to subscribe to the bag')
+        primer = None
+        if self.prime in publishers:
+            for _, primer, _ in self.bag.read_messages(topics=[self.prime]):
+                break
+
+        def subscribed():
+            if primer is not None:
+                publishers[self.prime].publish(primer)
+            return colour.get_num_connections() >= self.subscribers
+        self.demo.wait_for(subscribed, 60, 'the node (and the SLAM) to subscribe to the bag')
         time.sleep(1.0)  # the other topics' connections
         sent = 0
         first_bag = None
         first_wall = time.time()
         for topic, msg, stamp in self.bag.read_messages():
+            if topic in self.skip:
+                continue
             tick()
             if first_bag is None:
                 first_bag = stamp.to_sec()
@@ -190,6 +236,8 @@ class Demo:
                 if 'process has died' in line or 'process has finished cleanly' in line:
                     if 'object_detection' in line:
                         raise DemoError('object_detection_node died: ' + line.strip())
+                    if 'orb_slam2_rgbd' in line:
+                        raise DemoError('the SLAM (stand-in) died: ' + line.strip())
 
     def wait_for(self, condition, timeout_s, what):
         deadline = time.time() + timeout_s
@@ -272,18 +320,27 @@ class Demo:
             env.update(DISPLAY=display, LIBGL_ALWAYS_SOFTWARE='1')
             self.display = display
 
-        command = ['roslaunch', '-p', str(port), PKG, 'replay.launch', 'bag:=' + a.bag, 'play:=false',
-                   'rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
-                   'pose_source:=topic', 'keyframe_mode:=every_n', 'keyframe_every_n:=%d' % a.keyframe_every,
-                   'processing_queue_size:=%d' % a.queue_size, 'diagnostic_period:=0.05',
-                   'map_directory:=' + os.path.abspath(a.output_dir)] + image_topic_args(a.bag)
+        common = ['rviz:=' + ('true' if rviz else 'false'), 'detector:=' + a.detector,
+                  'processing_queue_size:=%d' % a.queue_size, 'diagnostic_period:=0.05',
+                  'map_directory:=' + os.path.abspath(a.output_dir)]
+        if a.launch == 'kinect_orbslam2':
+            # The live launch file with the SLAM stand-in in ORB-SLAM2's place (its poses from the trajectory),
+            # the driver left out (its frames published here), the bag's clock.
+            env['MVOD_ORBSLAM2_STANDIN_TRAJECTORY'] = os.path.abspath(a.slam_trajectory)
+            command = ['roslaunch', '-p', str(port), PKG, 'kinect_orbslam2.launch', 'start_kinect:=false',
+                       'start_orbslam2:=true', 'orbslam2_package:=' + PKG,
+                       'orbslam2_node:=orbslam2_standin.py', 'use_sim_time:=true'] + common
+        else:
+            command = ['roslaunch', '-p', str(port), PKG, 'replay.launch', 'bag:=' + a.bag, 'play:=false',
+                       'pose_source:=topic', 'keyframe_mode:=every_n',
+                       'keyframe_every_n:=%d' % a.keyframe_every] + common + image_topic_args(a.bag)
         if a.rviz_config:
             command.append('rviz_config:=' + a.rviz_config)
         if a.paper_method:
             command.append('paper_method:=true')
         if a.model_dir:
             command.append('model_dir:=' + a.model_dir)
-        if a.gravity_estimate:
+        if a.gravity_estimate or a.launch == 'kinect_orbslam2':
             command.append('gravity_source:=estimate')
         else:
             command += ['gravity_source:=param', 'gravity_down:=' + a.gravity_down]
@@ -307,6 +364,8 @@ class Demo:
                 return True
             except Exception:
                 return False
+        if a.launch == 'kinect_orbslam2':
+            publish_freenect_frames()  # before the node and the SLAM stand-in take their first frame
         self.wait_for(has_service, 90, 'the node\'s services (model loading, start-up)')
         self.wait_for(lambda: self.diagnostics is not None, 30, '/diagnostics from the node')
         if rviz:
@@ -319,7 +378,13 @@ class Demo:
 
         # -- play ----------------------------------------------------------------------------------------
         start = time.time()
-        player = BagPlayer(a.bag, a.rate, self)
+        if a.launch == 'kinect_orbslam2':
+            # The SLAM's poses come from the stand-in; freenect names the registered depth image_raw.
+            player = BagPlayer(a.bag, a.rate, self, skip=('/tf', '/orb_slam2_rgbd/pose'),
+                               rename={'/camera/depth_registered/image_rect': '/camera/depth_registered/image_raw'},
+                               subscribers=2, prime='/camera/rgb/camera_info')
+        else:
+            player = BagPlayer(a.bag, a.rate, self)
         log('playing the bag (%d frames, at most %d ahead of what the node received)'
             % (player.frames, BagPlayer.MAX_AHEAD))
         last_print = [time.time()]
@@ -455,7 +520,15 @@ def main():
     parser.add_argument('--paper-method', action='store_true', help='the node runs the paper\'s method')
     parser.add_argument('--rviz-config', default='')
     parser.add_argument('--rviz-wait', type=float, default=5.0, help='seconds rviz renders before the shot')
+    parser.add_argument('--launch', choices=['replay', 'kinect_orbslam2'], default='replay',
+                        help='replay: replay.launch, the bag\'s poses; kinect_orbslam2: the live launch file with '
+                        'the ORB-SLAM2 stand-in (test/ros/orbslam2_standin.py) giving the poses of '
+                        '--slam-trajectory, gravity estimated, keyframes by motion')
+    parser.add_argument('--slam-trajectory', default='', help='kinect_orbslam2: the stand-in\'s TUM trajectory '
+                        '(the colour camera in ORB-SLAM2\'s world, stamped as the bag)')
     args = parser.parse_args()
+    if args.launch == 'kinect_orbslam2' and not os.path.isfile(args.slam_trajectory):
+        parser.error('--launch kinect_orbslam2 needs --slam-trajectory FILE')
     if not os.path.isfile(args.bag):
         parser.error('no bag at ' + args.bag)
     args.bag = os.path.abspath(args.bag)
