@@ -282,7 +282,8 @@ class Demo:
         lost = frames - self.stat('frames received')
         if lost > 0:
             problems.append('%d of the bag\'s %d frames never reached the node' % (lost, frames))
-        for key in ('frames rejected', 'keyframes dropped', 'keyframes failed', 'pose failures'):
+        for key in ('frames rejected', 'frames lost before the node', 'keyframes dropped', 'keyframes failed',
+                    'pose failures'):
             if self.stat(key) > 0:
                 problems.append('%s: %d' % (key, self.stat(key)))
         if self.stat('keyframes processed') == 0:

@@ -3,6 +3,8 @@
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -89,6 +91,15 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   if (stats.keyframes_dropped > dropped_at_last_) {
     status.summary(DiagnosticStatus::WARN,
                    "keyframes dropped: processing is slower than the keyframe rate");
+  } else if (stats.frames_lost > lost_at_last_) {
+    char text[240];
+    std::snprintf(
+        text, sizeof(text),
+        "%d of %d frames (%.1f %%) lost before the node: gaps in the colour images' "
+        "sequence numbers or stamps (a full subscriber queue, the network or the driver)",
+        stats.frames_lost, stats.frames_lost + stats.frames_received,
+        100.0 * stats.frames_lost / std::max(1, stats.frames_lost + stats.frames_received));
+    status.summary(DiagnosticStatus::WARN, text);
   } else if (stats.autosave_failures > autosave_failures_at_last_) {
     status.summary(DiagnosticStatus::WARN,
                    "autosave failed (the previous autosave is kept; see the log)");
@@ -117,6 +128,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
     status.mergeSummary(static_cast<unsigned char>(rejected.level), rejected.message);
   }
   dropped_at_last_ = stats.keyframes_dropped;
+  lost_at_last_ = stats.frames_lost;
   exceptions_at_last_ = stats.callback_exceptions;
   refused_at_last_ = stats.stamps_refused;
   faulty_at_last_ = stats.keyframes_faulty;
@@ -124,6 +136,7 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   const std::pair<const char*, double> values[] = {
       {"frames received", stats.frames_received},
       {"frames rejected", stats.frames_rejected},
+      {"frames lost before the node", stats.frames_lost},
       {"stamps refused", stats.stamps_refused},
       {"callback exceptions", stats.callback_exceptions},
       {"autosaves", stats.autosaves},

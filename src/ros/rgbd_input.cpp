@@ -84,7 +84,19 @@ void RgbdInput::rgbdCallback(const sensor_msgs::ImageConstPtr& color,
                              const sensor_msgs::CameraInfoConstPtr& color_info,
                              const sensor_msgs::CameraInfoConstPtr& depth_info) {
   if (shut_down_) return;
-  stats_->update([](ObjectDetectionStatistics& stats) { ++stats.frames_received; });
+  const int missing = color ? gaps_.add(color->header.seq, color->header.stamp.toSec()) : 0;
+  stats_->update([missing](ObjectDetectionStatistics& stats) {
+    ++stats.frames_received;
+    stats.frames_lost += missing;
+  });
+  if (missing > 0) {
+    warnThrottled(
+        std::to_string(missing) + " frame(s) lost just before the colour image stamped " +
+        std::to_string(color->header.stamp.toSec()) +
+        " (gaps in its sequence numbers or stamps): the subscriber queue was full (the node "
+        "too slow for the stream), or the network or the driver dropped them; /diagnostics "
+        "counts them ('frames lost before the node')");
+  }
   auto reject = [this](const std::string& text) {
     errorThrottled(text);
     stats_->update([&text](ObjectDetectionStatistics& stats) {

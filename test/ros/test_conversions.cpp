@@ -21,6 +21,7 @@
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/frame_gaps.h"
 #include "multiview_object_detection/ros/input_monitor.h"
 #include "multiview_object_detection/ros/markers.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
@@ -934,6 +935,58 @@ TEST(RosConversionsTest, EveryReconfigureNameHasItsYamlNameInTheConfigFile) {
 // slow one a warning, a steady one ok with its rate; unexpected topics are not tracked.
 // The issue's cases: 74 of 74 frames rejected (mono8 colour) and 91 of 92 pose lookups failed
 // (no TF) left /diagnostics at "ok".
+// Frames lost before the node (issue 55, item 5): a 30 Hz stream that reaches the node with gaps.
+TEST(FrameGapsTest, CountsMissingSequenceNumbersOrStampsAndNothingInASteadyStream) {
+  const double period = 1.0 / 30.0;
+  {  // numbered (a driver, rosbag play): 100 frames, every 4th lost
+    FrameGaps gaps;
+    int reached = 0;
+    for (std::uint32_t seq = 1; seq <= 100; ++seq) {
+      if (seq % 4 == 0) continue;
+      gaps.add(seq, 10.0 + seq * period);
+      ++reached;
+    }
+    EXPECT_EQ(gaps.lost(), 24);  // 25 multiples of 4, the last (100) after the last received
+    EXPECT_EQ(gaps.received(), reached);
+  }
+  {  // unnumbered (seq 0 throughout): the stamps, with 2 ms jitter; 3 frames lost at once, twice
+    FrameGaps gaps;
+    int missing = 0;
+    for (int k = 0; k < 60; ++k) {
+      if ((k >= 20 && k < 23) || (k >= 40 && k < 43)) continue;
+      missing += gaps.add(0, 5.0 + k * period + ((k % 3) - 1) * 0.002);
+    }
+    EXPECT_EQ(missing, 6);
+    EXPECT_EQ(gaps.lost(), 6);
+  }
+  {  // a steady stream of every 5th frame (a subsampled bag): no loss
+    FrameGaps gaps;
+    for (int k = 0; k < 50; ++k) gaps.add(0, 1.0 + k * 5 * period);
+    for (int k = 0; k < 50; ++k) gaps.add(7 + static_cast<std::uint32_t>(k), 20.0 + k * 5 * period);
+    EXPECT_EQ(gaps.lost(), 0);
+  }
+  {  // numbered without gaps, but the stamps skip 2 frames (a driver that never sent them)
+    FrameGaps gaps;
+    for (std::uint32_t seq = 1; seq <= 30; ++seq)
+      gaps.add(seq, (seq > 20 ? 2 : 0) * period + seq * period);
+    EXPECT_EQ(gaps.lost(), 2);
+  }
+  {  // irregular stamps (a bag of keyframes only): not judged
+    FrameGaps gaps;
+    const double steps[] = {0.2, 0.9, 0.3, 1.7, 0.25, 0.6, 2.4, 0.4, 0.35, 1.1};
+    double t = 1.0;
+    for (int k = 0; k < 40; ++k) gaps.add(0, t += steps[k % 10]);
+    EXPECT_EQ(gaps.lost(), 0);
+  }
+  {  // a bag played again (stamps and numbers start over) and a restarted driver: no loss counted
+    FrameGaps gaps;
+    for (std::uint32_t seq = 1; seq <= 20; ++seq) gaps.add(seq, 1.0 + seq * period);
+    for (std::uint32_t seq = 1; seq <= 20; ++seq) gaps.add(seq, 1.0 + seq * period);
+    for (std::uint32_t seq = 500000; seq <= 500020; ++seq) gaps.add(seq, 3.0 + seq * 1e-6);
+    EXPECT_EQ(gaps.lost(), 0);
+  }
+}
+
 TEST(RejectionWindowTest, RejectedInputIsAWarningAndMostlyRejectedAnError) {
   RejectionWindow window(10.0);
   EXPECT_EQ(window.report("", "").level, RejectionWindow::kOk);  // nothing yet

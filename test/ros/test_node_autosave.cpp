@@ -273,6 +273,11 @@ class FedNode {
                       true, true);
     }
   }
+  // Frames the node never gets: their stamps and frames pass unpublished (lost before the node).
+  void skip(int frames) {
+    frame_ += frames;
+    second_ += frames;
+  }
   pid_t pid() const { return pid_; }
   // Sends `signal` and waits for the node to end; its wait status.
   int stop(int signal) {
@@ -790,6 +795,59 @@ TEST(NodeMapFolderTest, ASaveThatCannotGoWhereItShouldGoesToTheFallback) {
 // Issue 57, item 4: processing_queue_max_mb bounds the queue by its images, whatever its length
 // (here 1 MB, two or three of the 320x240 keyframes, in a queue of 30 behind the slow method), and
 // /diagnostics shows the queue's memory and the process's.
+// Frames lost before the node (issue 55, item 5): a stream whose images stop for 3 frames and go
+// on. The node counts the gap from the stamps (these frames carry no sequence numbers) and warns on
+// /diagnostics with the share, instead of a map status that stays 'ok'.
+TEST(NodeFrameGapsTest, FramesLostBeforeTheNodeAreCountedAndWarned) {
+  ros::NodeHandle nh;
+  const std::string node = "/gaps_node";
+  std::mutex mutex;
+  double lost = -1.0;
+  double received = -1.0;
+  std::string warning;
+  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name != node.substr(1) + ": map") continue;
+          for (const diagnostic_msgs::KeyValue& value : status.values) {
+            const double number = std::atof(value.value.c_str());
+            if (value.key == "frames lost before the node") lost = number;
+            if (value.key == "frames received") received = number;
+          }
+          if (status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+              status.message.find("lost before the node") != std::string::npos) {
+            warning = status.message;
+          }
+        }
+      });
+  FedNode fed(nh, node, false);
+  ASSERT_TRUE(fed.start({"_diagnostic_period:=0.2"}));
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_TRUE(warning.empty()) << warning;  // 16 frames one second apart: nothing lost
+  }
+  fed.skip(3);
+  fed.feed(8);
+  NodeOutputs& outputs = fed.outputs();
+  EXPECT_TRUE(outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return received >= 24.0 && !warning.empty();
+      },
+      30.0))
+      << "received " << received << ", lost " << lost;
+  fed.stop(SIGINT);
+  const std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(lost, 3.0);
+  EXPECT_EQ(received, 24.0);
+  // The share at the report after the gap: 3 of (3 + the frames received by then).
+  EXPECT_EQ(warning.rfind("3 of ", 0), 0u) << warning;
+  EXPECT_NE(warning.find(" %) lost before the node"), std::string::npos) << warning;
+  const std::string logs = readLog(fed.root() / "node.out");
+  EXPECT_NE(logs.find("3 frame(s) lost just before"), std::string::npos) << logs;
+}
+
 TEST(NodeMemoryTest, TheQueueIsBoundedByItsImagesMemory) {
   ros::NodeHandle nh;
   const std::string node = "/queue_mb_node";

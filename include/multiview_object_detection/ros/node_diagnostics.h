@@ -41,6 +41,7 @@ class NodeDiagnostics {
   // The timer's thread only.
   std::map<std::string, int> input_levels_;
   int dropped_at_last_ = 0;
+  int lost_at_last_ = 0;
   int exceptions_at_last_ = 0;
   int refused_at_last_ = 0;
   int faulty_at_last_ = 0;

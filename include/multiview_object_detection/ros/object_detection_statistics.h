@@ -13,6 +13,8 @@ namespace mvod {
 struct ObjectDetectionStatistics {
   int frames_received = 0;
   int frames_rejected = 0;  // bad encoding, size, camera_info, out-of-order stamp
+  // Lost before the node: gaps in the colour images' sequence numbers or stamps (FrameGaps).
+  int frames_lost = 0;
   int pose_failures = 0;    // no TF / pose in time, or an invalid pose
   // The last reasons given for those two (the map status on /diagnostics names them).
   std::string last_frame_rejection;

@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "multiview_object_detection/ros/conversions.h"
+#include "multiview_object_detection/ros/frame_gaps.h"
 #include "multiview_object_detection/ros/object_detection_ros_config.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/pending_frames.h"
@@ -68,6 +69,7 @@ class RgbdInput {
   const std::atomic<bool>& shut_down_;
   RgbdTopics topics_;
   FrameCallback callback_;
+  FrameGaps gaps_;  // frames lost before the callback (synchronised callbacks: one at a time)
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   image_transport::SubscriberFilter color_sub_;
