@@ -204,6 +204,11 @@ TEST_F(NodeChangingRoomTest, RemovedObjectsAreAnnouncedDeletedFromRvizAndCounted
   for (const Object& object : final_.objects) final_ids.insert(object.id);
   for (const Object& object : gone.objects) {
     EXPECT_EQ(final_ids.count(object.id), 0u) << "#" << object.id << " announced gone but mapped";
+    // The other removal rule: a detection that did not repeat (one view, then missed by the
+    // keyframes that show its place). Since a keyframe's detections are associated at once and
+    // Γ_C no longer joins what the view saw apart, this room has one such chair (the log: "chair
+    // #12 gone: a detection that did not repeat: detected in 1 of the 8 keyframes").
+    if (object.observations == 1) continue;
     EXPECT_LT(object.existence, 0.5) << "#" << object.id;
     EXPECT_GT(object.views_seen_through, 0u) << "#" << object.id;
   }
