@@ -6,12 +6,33 @@
 # With another DIR, point the node / offline tools at it: model_dir parameter, --model-dir DIR, or
 # MVOD_MODEL_DIR=DIR. YOLOv5-seg has no ONNX download upstream: the script says how to export it.
 set -euo pipefail
+usage() {
+  sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'
+  echo "Usage: download_models.sh [DIR]   (-h, --help: this text)"
+}
+case "${1:-}" in
+  -h | --help) usage; exit 0 ;;
+  -*) echo "download_models.sh: unknown option '$1'" >&2; usage >&2; exit 2 ;;
+esac
+if [[ $# -gt 1 ]]; then echo "download_models.sh: one folder at most (got $#)" >&2; usage >&2; exit 2; fi
 dir=${1:-${ROS_HOME:-$HOME/.ros}/multiview_object_detection/models}
 mkdir -p "$dir"
 cd "$dir"
 
 fetch() {  # url file
-  if command -v curl >/dev/null; then curl -fL --retry 3 -o "$2.part" "$1"; else wget -O "$2.part" "$1"; fi
+  local status=0
+  if command -v curl >/dev/null; then
+    curl -fsSL --retry 3 -o "$2.part" "$1" || status=$?
+  else
+    wget -q -O "$2.part" "$1" || status=$?
+  fi
+  if [[ $status -ne 0 ]]; then
+    rm -f "$2.part"
+    echo "download_models.sh: could not download $2 (exit $status of $(command -v curl >/dev/null && echo curl || echo wget)): no network, a proxy, or the file moved." >&2
+    echo "  Copy it by hand from $1" >&2
+    echo "  into $dir (the files already here are kept), or run this script where there is a network." >&2
+    exit 1
+  fi
   mv "$2.part" "$2"
 }
 check() {  # sha256 file; an empty sha256 means upstream publishes none: print it for the record
