@@ -7,7 +7,8 @@
 #   4. evaluate: AP against the ground truth, and a bird's-eye plot of the boxes over the ground truth.
 # `make demo DATASET=DIR` does the same on a 7-Scenes-layout folder or a SceneNN sequence with YOLOv5n-seg (when
 # yolov5n-seg.onnx is in the model folder), else Mask R-CNN (its weights there), else FastestDet in the
-# node (models in $MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models: scripts/download_models.sh),
+# node (models in MODEL_DIR=DIR, else $MVOD_MODEL_DIR, else $ROS_HOME/multiview_object_detection/models:
+# scripts/download_models.sh),
 # without the accuracy table (no ground truth). FIRST=N LAST=M replay only those frames; TRAJECTORY=FILE
 # (KEYFRAMES=FILE) a SLAM's poses in TUM format instead of the dataset's (its keyframes only).
 #   usage: scripts/demo.sh WORKSPACE [DATASET]
@@ -75,7 +76,10 @@ else
   [[ -d "$dataset_arg" ]] || { echo "demo: DATASET=$dataset_arg is not a folder" >&2; exit 1; }
   dataset=$(cd "$dataset_arg" && pwd)
   dataset_name=$dataset
-  model_dir=${MVOD_MODEL_DIR:-${ROS_HOME:-$HOME/.ros}/multiview_object_detection/models}
+  # MODEL_DIR=DIR (make demo's), else $MVOD_MODEL_DIR, else the folder download_models.sh fills.
+  model_dir=${MODEL_DIR:-${MVOD_MODEL_DIR:-${ROS_HOME:-$HOME/.ros}/multiview_object_detection/models}}
+  [[ -d "$model_dir" ]] || { echo "demo: model folder $model_dir does not exist (MODEL_DIR=DIR," \
+    "MVOD_MODEL_DIR, or scripts/download_models.sh to fill the default one)" >&2; exit 1; }
   if [[ -f "$model_dir/yolov5n-seg.onnx" ]]; then
     node_detector=yolo_seg
     detector_name="YOLOv5n-seg"
@@ -89,7 +93,7 @@ else
     detector_name=FastestDet
   else
     echo "demo: no YOLOv5n-seg, Mask R-CNN or FastestDet model in $model_dir: run scripts/download_models.sh" \
-      "(or set MVOD_MODEL_DIR)" >&2
+      "(or MODEL_DIR=DIR for the folder that holds them)" >&2
     exit 1
   fi
   echo "== 1/4 dataset $dataset, $detector_name from $model_dir"
