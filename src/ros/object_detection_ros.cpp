@@ -104,7 +104,13 @@ bool ObjectDetectionRos::checkAndLoad(const Config& config, ClassPriors* priors,
     } else {
       const Status created = createInstanceSegmenter(config.segmenterOptions(), segmenter);
       if (!created) {
-        fail("detector '" + config.detector + "': " + created.message());
+        const SegmenterOptions options = config.segmenterOptions();
+        const std::string chosen = config.detector_auto
+                                       ? "detector 'auto' (it looks for YOLOv5n-seg first, " +
+                                             resolveModelPath(options, options.yolo_seg_model) +
+                                             ": not there, so " + config.detector + ")"
+                                       : "detector '" + config.detector + "'";
+        fail(chosen + ": " + created.message());
         return false;
       }
     }

@@ -399,6 +399,7 @@ ObjectDetectionRosConfig getObjectDetectionConfigFromRosParam(const ros::NodeHan
   cfg.segmenter = getSegmenterOptionsFromRosParam(nh_private, errors);
   cfg.segmenter.detector = detector;
   cfg.detector = resolveAutoDetector(cfg.segmenter);
+  cfg.detector_auto = detector == "auto";
   // Thresholds not given: the detector's own (detectorThresholds).
   cfg.segmenter.detector = cfg.detector;
   cfg.segmenter = cfg.segmenter.withDetectorDefaults();

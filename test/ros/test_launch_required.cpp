@@ -45,6 +45,11 @@ TEST(LaunchRequiredTest, LaunchEndsWhenTheNodeCannotStart) {
   EXPECT_NE(WEXITSTATUS(status), 124) << "roslaunch kept running:\n" << text.str();
   EXPECT_NE(WEXITSTATUS(status), 137) << "roslaunch kept running:\n" << text.str();
   EXPECT_NE(text.str().find("FastestDet.onnx"), std::string::npos) << text.str();
+  // detector 'auto' says it looked for YOLOv5n-seg first, and where (issue 56).
+  EXPECT_NE(text.str().find("detector 'auto' (it looks for YOLOv5n-seg first, " +
+                            (dir / "models" / "yolov5n-seg.onnx").string()),
+            std::string::npos)
+      << text.str();
   EXPECT_NE(text.str().find("REQUIRED process"), std::string::npos) << text.str();
   fs::remove_all(dir);
 }
@@ -110,11 +115,11 @@ TEST(KinectOrbslam2LaunchTest, DrivesTheWrapperWithTheParametersItReads) {
   if (std::system("command -v roslaunch > /dev/null 2>&1") != 0) GTEST_SKIP() << "no roslaunch";
   const auto dump = [](const std::string& args) {
     int status = 0;
-    const std::string text = run(
-        "roslaunch --dump-params multiview_object_detection kinect_orbslam2.launch "
-        "start_kinect:=false start_orbslam2:=true rviz:=false " +
-            args,
-        &status);
+    const std::string text =
+        run("roslaunch --dump-params multiview_object_detection kinect_orbslam2.launch "
+            "start_kinect:=false start_orbslam2:=true rviz:=false " +
+                args,
+            &status);
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << text;
     std::map<std::string, std::string> params;
     std::istringstream lines(text);
@@ -141,8 +146,9 @@ TEST(KinectOrbslam2LaunchTest, DrivesTheWrapperWithTheParametersItReads) {
   EXPECT_EQ(params["camera_fx"], "525.0");
   EXPECT_EQ(params["camera_baseline"], "40.0");
   EXPECT_EQ(params.count("settings_file"), 0u);  // read only by versions before 6efc879
-  params = dump("orbslam2_calibration:=args camera:=kinect2 depth_map_factor:=1 "
-                "orbslam2_settings:=/tmp/TUM1.yaml");
+  params = dump(
+      "orbslam2_calibration:=args camera:=kinect2 depth_map_factor:=1 "
+      "orbslam2_settings:=/tmp/TUM1.yaml");
   EXPECT_EQ(params["load_calibration_from_cam"], "false");
   EXPECT_EQ(params["camera_frame_id"], "kinect2_rgb_frame");
   EXPECT_EQ(params["target_frame_id"], "kinect2_link");

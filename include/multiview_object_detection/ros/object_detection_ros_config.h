@@ -57,6 +57,9 @@ struct ObjectDetectionRosConfig {
   // (its default) is resolved by ros_params: yolo_seg where its model file is found, else
   // fastestdet.
   std::string detector = "fastestdet";
+  // The detector parameter was "auto" (and `detector` is what it chose): a start-up failure says
+  // so.
+  bool detector_auto = false;
   SegmenterOptions segmenter;
   double detections_max_age_s =
       1.0;  // detector topic: how long a keyframe waits for its detections
