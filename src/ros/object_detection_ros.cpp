@@ -121,8 +121,13 @@ bool ObjectDetectionRos::checkAndLoad(const Config& config, ClassPriors* priors,
 }
 
 void ObjectDetectionRos::logStart(const Config& config, const InstanceSegmenter* segmenter) const {
-  // One line; every setting at DEBUG (rosconsole), as voxblox_ros and pcl_ros do.
-  const std::string changes = config.printChanges(Config());
+  // One line; every setting at DEBUG (rosconsole), as voxblox_ros and pcl_ros do. "Other than the
+  // defaults": than what the node makes of no parameters at all (read from a namespace that holds
+  // none), so the detector 'auto' chose, its thresholds and the resolved folders are not listed.
+  Config defaults =
+      getObjectDetectionConfigFromRosParam(ros::NodeHandle(nh_private_, "__no_parameters__"));
+  defaults.autosave_path = defaultAutosaveName(nh_private_.getNamespace());
+  const std::string changes = config.printChanges(defaults);
   ROS_INFO_STREAM("object detection: "
                   << (segmenter != nullptr ? segmenter->name() : "detections topic") << ", priors "
                   << config.priors_file << "; settings other than the defaults: "

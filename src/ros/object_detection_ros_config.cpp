@@ -123,8 +123,12 @@ std::string ObjectDetectionRosConfig::print() const {
       << "processing_queue_max_mb: " << processing_queue_max_mb << "\n"
       << "refine_every_n_keyframes: " << refine_every_n_keyframes << "\n"
       << "priors_file: " << priors_file << "\n"
-      << "publish_object_cloud: " << (publish_object_cloud ? "true" : "false") << "\n"
-      << mapperConfig().print();
+      << "publish_object_cloud: " << (publish_object_cloud ? "true" : "false") << "\n";
+  // The mapper's gravity_down_W is gravity_down above (printed once, under the parameter's name).
+  std::istringstream mapper(mapperConfig().print());
+  for (std::string line; std::getline(mapper, line);) {
+    if (line.rfind("gravity_down_W:", 0) != 0) out << line << "\n";
+  }
   return out.str();
 }
 

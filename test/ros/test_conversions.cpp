@@ -1038,6 +1038,10 @@ TEST(RosConversionsTest, ConfigPrintChangesListsOnlyWhatDiffersFromTheDefaults) 
   config.processing_queue_size = 5;
   const std::string changes = config.printChanges(defaults);
   EXPECT_EQ(changes, "processing_queue_size 5, world_frame odom");
+  // gravity_down once, under the parameter's name (the mapper's copy of it is not printed again).
+  config.gravity_down_W = Eigen::Vector3d(0.0, -1.0, 0.0);
+  EXPECT_EQ(config.printChanges(defaults),
+            "gravity_down [0, -1, 0], processing_queue_size 5, world_frame odom");
   const std::string all = config.print();
   EXPECT_GT(std::count(all.begin(), all.end(), '\n'), 50);
 }
