@@ -142,8 +142,15 @@ TEST(Orbslam2StandinTest, TheLiveLaunchFileMapsTheRedkitchenWithOrbslam2sPoses) 
       << mvod::test::readText(dir / "bag.log");
 
   const fs::path log = dir / "replay.log";
+  // Through the devel space's env.sh, as DemoReplayTest: the script imports this package's
+  // generated services, for which the environment catkin cached for the tests may hold no
+  // PYTHONPATH.
+  const fs::path devel =
+      fs::path(MVOD_DATASET_TO_BAG_BIN).parent_path().parent_path().parent_path();
+  const std::string env =
+      fs::exists(devel / "env.sh") ? quoted((devel / "env.sh").string()) + " " : "";
   const std::string replay =
-      "/usr/bin/python3 " + quoted(kSourceDir + "/scripts/demo_replay.py") + " --bag " +
+      env + "/usr/bin/python3 " + quoted(kSourceDir + "/scripts/demo_replay.py") + " --bag " +
       quoted(bag.string()) + " --output-dir " + quoted((dir / "out").string()) +
       " --launch kinect_orbslam2 --slam-trajectory " + quoted((dir / "standin.txt").string()) +
       " --detector yolo_seg --model-dir " + quoted(models) + " --no-rviz --timeout 900 > " +
