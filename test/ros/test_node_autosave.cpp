@@ -795,6 +795,20 @@ TEST(NodeMapFolderTest, ASaveThatCannotGoWhereItShouldGoesToTheFallback) {
 // Issue 57, item 4: processing_queue_max_mb bounds the queue by its images, whatever its length
 // (here 1 MB, two or three of the 320x240 keyframes, in a queue of 30 behind the slow method), and
 // /diagnostics shows the queue's memory and the process's.
+// The node's map status on /diagnostics, each handed to `on_status` under `mutex`.
+ros::Subscriber subscribeMapStatus(
+    ros::NodeHandle& nh, const std::string& node, std::mutex* mutex,
+    const std::function<void(const diagnostic_msgs::DiagnosticStatus&)>& on_status) {
+  return nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 50,
+      [node, mutex, on_status](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        const std::lock_guard<std::mutex> lock(*mutex);
+        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
+          if (status.name == node.substr(1) + ": map") on_status(status);
+        }
+      });
+}
+
 // Frames lost before the node (issue 55, item 5): a stream whose images stop for 3 frames and go
 // on. The node counts the gap from the stamps (these frames carry no sequence numbers) and warns on
 // /diagnostics with the share, instead of a map status that stays 'ok'.
@@ -805,20 +819,16 @@ TEST(NodeFrameGapsTest, FramesLostBeforeTheNodeAreCountedAndWarned) {
   double lost = -1.0;
   double received = -1.0;
   std::string warning;
-  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
-      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
-        const std::lock_guard<std::mutex> lock(mutex);
-        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
-          if (status.name != node.substr(1) + ": map") continue;
-          for (const diagnostic_msgs::KeyValue& value : status.values) {
-            const double number = std::atof(value.value.c_str());
-            if (value.key == "frames lost before the node") lost = number;
-            if (value.key == "frames received") received = number;
-          }
-          if (status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
-              status.message.find("lost before the node") != std::string::npos) {
-            warning = status.message;
-          }
+  const ros::Subscriber sub =
+      subscribeMapStatus(nh, node, &mutex, [&](const diagnostic_msgs::DiagnosticStatus& status) {
+        for (const diagnostic_msgs::KeyValue& value : status.values) {
+          const double number = std::atof(value.value.c_str());
+          if (value.key == "frames lost before the node") lost = number;
+          if (value.key == "frames received") received = number;
+        }
+        if (status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+            status.message.find("lost before the node") != std::string::npos) {
+          warning = status.message;
         }
       });
   FedNode fed(nh, node, false);
@@ -856,18 +866,14 @@ TEST(NodeMemoryTest, TheQueueIsBoundedByItsImagesMemory) {
   double max_queue_length = -1.0;
   double dropped = -1.0;
   double rss_mb = -1.0;
-  const ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
-      "/diagnostics", 50, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
-        const std::lock_guard<std::mutex> lock(mutex);
-        for (const diagnostic_msgs::DiagnosticStatus& status : msg->status) {
-          if (status.name != node.substr(1) + ": map") continue;
-          for (const diagnostic_msgs::KeyValue& value : status.values) {
-            const double number = std::atof(value.value.c_str());
-            if (value.key == "queue MB") max_queue_mb = std::max(max_queue_mb, number);
-            if (value.key == "queue length") max_queue_length = std::max(max_queue_length, number);
-            if (value.key == "keyframes dropped") dropped = number;
-            if (value.key == "process RSS MB") rss_mb = number;
-          }
+  const ros::Subscriber sub =
+      subscribeMapStatus(nh, node, &mutex, [&](const diagnostic_msgs::DiagnosticStatus& status) {
+        for (const diagnostic_msgs::KeyValue& value : status.values) {
+          const double number = std::atof(value.value.c_str());
+          if (value.key == "queue MB") max_queue_mb = std::max(max_queue_mb, number);
+          if (value.key == "queue length") max_queue_length = std::max(max_queue_length, number);
+          if (value.key == "keyframes dropped") dropped = number;
+          if (value.key == "process RSS MB") rss_mb = number;
         }
       });
   FedNode fed(nh, node, true);
