@@ -116,6 +116,9 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
   } else if (stats.waiting_for_gravity) {
     status.summary(DiagnosticStatus::WARN, "waiting for gravity");
   }
+  if (!stats.tf_stamp_problem.empty()) {
+    status.mergeSummary(DiagnosticStatus::WARN, stats.tf_stamp_problem);
+  }
   // The autosave not where it should be, or failing: ERROR until it is well (it says what to do).
   if (!stats.autosave_problem.empty()) {
     status.mergeSummary(DiagnosticStatus::ERROR, stats.autosave_problem);

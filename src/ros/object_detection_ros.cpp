@@ -209,11 +209,18 @@ void ObjectDetectionRos::startThreads(const Config& config) {
     autosaver_->start();
     ROS_INFO("autosave: every %.0f s to %s", config.autosave_period_s, autosaver_->path().c_str());
   }
-  tf_input_ = std::make_unique<TfInput>(tf_buffer_.get(), &stats_);
+  if (config.pose_source == "tf")
+    tf_stamp_check_ = std::make_unique<TfStampCheck>(config.world_frame);
+  tf_input_ = std::make_unique<TfInput>(tf_buffer_.get(), &stats_, tf_stamp_check_.get());
   tf_input_->start(nh_);
   // The stale and rate checks count from here.
   stats_.inputs().configure({config.input_min_rate_hz, config.input_timeout_s});
-  input_->subscribe([this](PendingFrame frame) { buffer_->addFrame(std::move(frame)); });
+  input_->subscribe([this](PendingFrame frame) {
+    if (tf_stamp_check_ && frame.msgs.color) {
+      tf_stamp_check_->addImage(frame.msgs.color->header.stamp.toSec());
+    }
+    buffer_->addFrame(std::move(frame));
+  });
   if (detections_) detections_->subscribe(nh_);
   keyframe_poses_->subscribe(nh_);
   buffer_->start(nh_);

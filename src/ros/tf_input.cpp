@@ -6,8 +6,8 @@
 
 namespace mvod {
 
-TfInput::TfInput(tf2_ros::Buffer* buffer, SharedStatistics* stats)
-    : buffer_(buffer), stats_(stats) {}
+TfInput::TfInput(tf2_ros::Buffer* buffer, SharedStatistics* stats, TfStampCheck* stamp_check)
+    : buffer_(buffer), stats_(stats), stamp_check_(stamp_check) {}
 
 TfInput::~TfInput() {
   if (spinner_) spinner_->stop();
@@ -39,7 +39,28 @@ void TfInput::callback(const ros::MessageEvent<const tf2_msgs::TFMessage>& event
     // A static transform's stamp is not used for look-ups, but tf2 still does arithmetic on it.
     if (!acceptInputStamp(transform.header.stamp, what, stats_)) continue;
     runGuarded(what, stats_, [&] { buffer_->setTransform(transform, authority, is_static); });
+    if (stamp_check_ != nullptr && !is_static) {
+      stamp_check_->addTransform(transform.header.frame_id, transform.child_frame_id,
+                                 transform.header.stamp.toSec(), ros::Time::now().toSec());
+    }
   }
+  if (stamp_check_ != nullptr && !is_static) judgeStamps();
+}
+
+void TfInput::judgeStamps() {
+  const ros::WallTime now = ros::WallTime::now();
+  if ((now - last_judged_).toSec() < 1.0) return;
+  last_judged_ = now;
+  std::string problem = stamp_check_->problem();
+  if (problem == stamp_problem_) return;
+  if (!problem.empty()) {
+    ROS_WARN("%s", problem.c_str());
+  } else {
+    ROS_INFO("TF from the SLAM carries its images' stamps again");
+  }
+  stamp_problem_ = problem;
+  stats_->update(
+      [&problem](ObjectDetectionStatistics& stats) { stats.tf_stamp_problem = problem; });
 }
 
 }  // namespace mvod

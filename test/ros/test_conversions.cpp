@@ -28,6 +28,7 @@
 #include "multiview_object_detection/ros/reconfigure_names.h"
 #include "multiview_object_detection/ros/rejection_window.h"
 #include "multiview_object_detection/ros/ros_params.h"
+#include "multiview_object_detection/ros/tf_stamp_check.h"
 
 namespace mvod {
 namespace {
@@ -985,6 +986,68 @@ TEST(FrameGapsTest, CountsMissingSequenceNumbersOrStampsAndNothingInASteadyStrea
     for (std::uint32_t seq = 500000; seq <= 500020; ++seq) gaps.add(seq, 3.0 + seq * 1e-6);
     EXPECT_EQ(gaps.lost(), 0);
   }
+}
+
+// A SLAM's TF stamped when it is published (ethz-asl/orb_slam_2_ros) instead of with its image's
+// stamp (issue 55, item 1): a 30 Hz camera, one pose per image, tracked in 35 ms.
+TEST(TfStampCheckTest, ATfStampedWhenPublishedIsNamedAndImageStampsOrOtherSourcesAreNot) {
+  const double period = 1.0 / 30.0;
+  const double tracking_s = 0.035;
+  // `stamp(k)`: the stamp of the pose of image k; `received(k)`: when it reaches the node.
+  auto run = [&](const std::string& parent, int images, const std::function<double(int)>& stamp,
+                 const std::function<double(int)>& received) {
+    TfStampCheck check("map");
+    for (int k = 0; k < images; ++k) {
+      check.addImage(100.0 + k * period);
+      check.addTransform(parent, "camera_link", stamp(k), received(k));
+    }
+    return check.problem();
+  };
+  auto image = [&](int k) { return 100.0 + k * period; };
+  auto tracked = [&](int k) { return image(k) + tracking_s + 0.001; };
+  // appliedAI's wrapper: the image's stamp, arriving after tracking.
+  EXPECT_EQ(run("map", 200, image, tracked), "");
+  // ethz-asl's: stamped at publishing, arriving 1 ms later.
+  const std::string problem = run(
+      "map", 200, [&](int k) { return image(k) + tracking_s; }, tracked);
+  EXPECT_NE(problem.find("TF 'map' -> 'camera_link' looks stamped when it was published"),
+            std::string::npos)
+      << problem;
+  EXPECT_NE(problem.find("none of its last 50 transforms"), std::string::npos) << problem;
+  EXPECT_NE(problem.find("ethz-asl/orb_slam_2_ros"), std::string::npos) << problem;
+  // Too few transforms to judge yet.
+  EXPECT_EQ(run(
+                "map", 40, [&](int k) { return image(k) + tracking_s; }, tracked),
+            "");
+  // tf1-style frame names.
+  EXPECT_NE(run(
+                "/map", 200, [&](int k) { return image(k) + tracking_s; }, tracked),
+            "");
+  // Another sensor's pose (a laser SLAM): its own stamps, 50 ms old when they arrive: not judged
+  // published.
+  EXPECT_EQ(run(
+                "map", 200, [&](int k) { return image(k) + 0.013; },
+                [&](int k) { return image(k) + 0.063; }),
+            "");
+  // A bag of keyframes (one image in 20) with a pose at every frame, stamped as it was recorded:
+  // too few images among the transforms to judge.
+  {
+    TfStampCheck check("map");
+    for (int k = 0; k < 400; ++k) {
+      if (k % 20 == 0) check.addImage(image(k));
+      check.addTransform("map", "camera_link", image(k) + 0.004, image(k) + 0.004);
+    }
+    EXPECT_EQ(check.problem(), "");
+  }
+  // Not out of the world frame (odometry): not watched.
+  EXPECT_EQ(run(
+                "odom", 200, [&](int k) { return image(k) + tracking_s; }, tracked),
+            "");
+  // One transform in the window at an image's stamp is enough to say nothing.
+  EXPECT_EQ(
+      run(
+          "map", 200, [&](int k) { return k == 190 ? image(k) : image(k) + tracking_s; }, tracked),
+      "");
 }
 
 TEST(RejectionWindowTest, RejectedInputIsAWarningAndMostlyRejectedAnError) {

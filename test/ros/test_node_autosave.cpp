@@ -858,6 +858,88 @@ TEST(NodeFrameGapsTest, FramesLostBeforeTheNodeAreCountedAndWarned) {
   EXPECT_NE(logs.find("3 frame(s) lost just before"), std::string::npos) << logs;
 }
 
+// A SLAM's TF stamped when it is published, not with its image's stamp (ethz-asl/orb_slam_2_ros;
+// issue 55, item 1): the node names it on /diagnostics and in its log. The same stream with the
+// TF at the images' stamps (appliedAI's wrapper) says nothing.
+TEST(NodeTfStampTest, ATfStampedWhenPublishedIsAWarningNamingTheCause) {
+  ros::NodeHandle nh;
+  const std::string node = "/tf_stamp_node";
+  const fs::path root = fs::temp_directory_path() / ("mvod_tf_stamp_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  std::mutex mutex;
+  std::string warning;
+  double received = -1.0;
+  const ros::Subscriber sub =
+      subscribeMapStatus(nh, node, &mutex, [&](const diagnostic_msgs::DiagnosticStatus& status) {
+        for (const diagnostic_msgs::KeyValue& value : status.values) {
+          if (value.key == "frames received") received = std::atof(value.value.c_str());
+        }
+        if (status.message.find("stamped when it was published") != std::string::npos) {
+          warning = status.message;
+        }
+      });
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, node, true);
+  const pid_t pid =
+      startNode((root / "maps").string(), node,
+                {"_detector:=topic", "_pose_source:=tf", "_keyframe_mode:=every_n",
+                 "_keyframe_every_n:=5", "_autosave_period_s:=0", "_diagnostic_period:=0.2"},
+                (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  KillOnExit guard{pid};
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 0) && outputs.connected(); }, 30.0));
+  // 20 frames a second; `at_publishing`: the pose's TF goes after the images, stamped then.
+  int frame = 0;
+  auto feed = [&](int frames, bool at_publishing) {
+    for (int i = 0; i < frames; ++i, ++frame) {
+      FrameMsgs msgs = stream.make(frame % stream.options().num_frames, ros::Time::now());
+      if (at_publishing) {
+        inputs.publish(msgs, false, true, false);
+        msgs.pose.header.stamp = ros::Time::now();
+        inputs.publishTf(msgs.pose);
+      } else {
+        inputs.publish(msgs, false, true, true);
+      }
+      ros::WallDuration(0.03).sleep();
+    }
+  };
+  feed(80, false);
+  ASSERT_TRUE(outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return received >= 80.0;
+      },
+      20.0))
+      << "received " << received;
+  ros::WallDuration(1.5).sleep();  // a judgement after the last frame
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_TRUE(warning.empty()) << warning;
+  }
+  feed(80, true);
+  EXPECT_TRUE(outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return !warning.empty();
+      },
+      20.0));
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    EXPECT_NE(warning.find("TF 'map' -> '" + std::string(kCameraFrame) + "'"), std::string::npos)
+        << warning;
+    EXPECT_NE(warning.find("ethz-asl/orb_slam_2_ros"), std::string::npos) << warning;
+  }
+  ::kill(pid, SIGINT);
+  ::waitpid(pid, nullptr, 0);
+  guard.pid = -1;
+  const std::string logs = readLog(root / "node.out");
+  EXPECT_NE(logs.find("looks stamped when it was published"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
 TEST(NodeMemoryTest, TheQueueIsBoundedByItsImagesMemory) {
   ros::NodeHandle nh;
   const std::string node = "/queue_mb_node";

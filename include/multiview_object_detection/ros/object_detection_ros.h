@@ -110,6 +110,7 @@ class ObjectDetectionRos {
   SharedStatistics stats_;
   std::unique_ptr<RuntimeConfig> config_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<TfStampCheck> tf_stamp_check_;  // pose_source tf only
   std::unique_ptr<TfInput> tf_input_;
   std::unique_ptr<ObjectDetectionPublishers> publishers_;
   std::unique_ptr<DetectionsBuffer> detections_;  // detector "topic" only

@@ -15,7 +15,7 @@ struct ObjectDetectionStatistics {
   int frames_rejected = 0;  // bad encoding, size, camera_info, out-of-order stamp
   // Lost before the node: gaps in the colour images' sequence numbers or stamps (FrameGaps).
   int frames_lost = 0;
-  int pose_failures = 0;    // no TF / pose in time, or an invalid pose
+  int pose_failures = 0;  // no TF / pose in time, or an invalid pose
   // The last reasons given for those two (the map status on /diagnostics names them).
   std::string last_frame_rejection;
   std::string last_pose_failure;
@@ -63,6 +63,9 @@ struct ObjectDetectionStatistics {
   double autosave_bytes = 0.0;          // the map as saved (the whole folder)
   double autosave_written_bytes = 0.0;  // what the last save wrote (new keyframe files, map.json)
   std::string autosave_folder;          // where the saves go now (empty: autosave off)
+  // The SLAM's TF looks stamped when published, not with its images' stamps (TfStampCheck);
+  // empty while it looks right.
+  std::string tf_stamp_problem;
   // Why the autosave is not where it should be, or failing, and what to do; empty when it is well.
   std::string autosave_problem;
   double detection_ms = 0.0;  // last keyframe
