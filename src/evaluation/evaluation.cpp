@@ -319,7 +319,7 @@ std::vector<EvaluatedPrediction> predictionsFromObjects(const std::vector<MapObj
   for (const MapObject& object : objects) {
     EvaluatedPrediction prediction;
     prediction.id = object.id;
-    prediction.class_name = canonicalClassName(object.class_name);
+    prediction.class_name = object.class_name;
     prediction.probability = object.probability;
     prediction.box = object.box;
     // The paper scores "the segmented object points" (Sec. 4.1): the LCCP segment of the fused

@@ -7,6 +7,8 @@
 #include <set>
 #include <tuple>
 
+#include "multiview_object_detection/datasets/class_names.h"
+
 namespace mvod {
 namespace {
 
@@ -25,10 +27,15 @@ ObjectMatches matchObjects(const std::vector<GroundTruthObject>& ground_truth,
   // Every same-class pair with its IoU, best first: a greedy one-to-one assignment.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
   std::set<std::string> annotated_classes;
+  // The evaluation classes ("suitcase" and "bag" are one).
+  std::vector<std::string> predicted(predictions.size());
+  for (size_t p = 0; p < predictions.size(); ++p) {
+    predicted[p] = canonicalClassName(predictions[p].class_name);
+  }
   for (size_t g = 0; g < ground_truth.size(); ++g) {
     annotated_classes.insert(ground_truth[g].class_name);
     for (size_t p = 0; p < predictions.size(); ++p) {
-      if (predictions[p].class_name != ground_truth[g].class_name) continue;
+      if (predicted[p] != ground_truth[g].class_name) continue;
       pairs.emplace_back(orientedBoxIoU(predictions[p].box, ground_truth[g].box, up), g, p);
     }
   }
@@ -52,19 +59,19 @@ ObjectMatches matchObjects(const std::vector<GroundTruthObject>& ground_truth,
       match.box_iou = orientedBoxIoU(p.box, ground_truth[g].box, up);
       match.centre_distance_m = horizontalDistance(p.box, ground_truth[g].box, up);
     } else {
-      for (const EvaluatedPrediction& p : predictions) {
-        if (p.class_name != match.class_name) continue;
-        const double d = horizontalDistance(p.box, ground_truth[g].box, up);
+      for (size_t p = 0; p < predictions.size(); ++p) {
+        if (predicted[p] != match.class_name) continue;
+        const double d = horizontalDistance(predictions[p].box, ground_truth[g].box, up);
         if (!(d >= match.centre_distance_m)) match.centre_distance_m = d;
       }
     }
     matches.annotated.push_back(match);
   }
   for (size_t p = 0; p < predictions.size(); ++p) {
-    if (!annotated_classes.count(predictions[p].class_name)) continue;
+    if (!annotated_classes.count(predicted[p])) continue;
     double best = 0.0;
     for (size_t g = 0; g < ground_truth.size(); ++g) {
-      if (ground_truth[g].class_name != predictions[p].class_name) continue;
+      if (ground_truth[g].class_name != predicted[p]) continue;
       if (taken_by[g] >= 0 && taken_by[g] != static_cast<int>(p)) continue;  // a duplicate
       best = std::max(best, orientedBoxIoU(predictions[p].box, ground_truth[g].box, up));
     }

@@ -17,7 +17,9 @@ namespace mvod {
 // One predicted object as the evaluation sees it.
 struct EvaluatedPrediction {
   int id = 0;
-  std::string class_name;  // canonical evaluation class
+  // The map's own class name, as every other output shows it ("suitcase"); the evaluation compares
+  // canonicalClassName()s ("bag").
+  std::string class_name;
   double probability = 0.0;
   OrientedBox box;
   // May be empty: the prediction then segments the ground-truth points (all classes) inside its

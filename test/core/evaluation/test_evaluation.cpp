@@ -221,6 +221,32 @@ TEST(EvaluationObjectMatches, EachAnnotationTakesItsBestBoxOnce) {
   EXPECT_NE(markdown.find("#8 chair, #9 chair"), std::string::npos) << markdown;
 }
 
+// One class name per object in every output (issue 56, item 1): a map object the detector called
+// "suitcase" is listed as "suitcase" (as rviz and the object messages show it) and still matches
+// an annotated "bag", the evaluation class both belong to.
+TEST(EvaluationObjectMatches, AnObjectKeepsItsOwnClassNameAndMatchesItsEvaluationClass) {
+  std::vector<GroundTruthObject> gt(1);
+  gt[0].class_name = "bag";
+  gt[0].box = makeBox({0.0, 0.0, 0.3}, {0.5, 0.3, 0.6}, 0.0);
+  MapObject suitcase;
+  suitcase.id = 39;
+  suitcase.class_name = "suitcase";
+  suitcase.box = makeBox({0.02, 0.0, 0.3}, {0.5, 0.3, 0.6}, 0.0);
+  MapObject handbag = suitcase;  // a second, false one 2 m away
+  handbag.id = 40;
+  handbag.class_name = "handbag";
+  handbag.box.center_m.x() = 2.0;
+  const std::vector<EvaluatedPrediction> predictions = predictionsFromObjects({suitcase, handbag});
+  ASSERT_EQ(predictions.size(), 2u);
+  EXPECT_EQ(predictions[0].class_name, "suitcase");
+  const ObjectMatches matches = matchObjects(gt, predictions, Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(matches.annotated.size(), 1u);
+  EXPECT_EQ(matches.annotated[0].prediction_id, 39);
+  EXPECT_EQ(matches.unmatched_prediction_ids, (std::vector<int>{40}));
+  const std::string markdown = objectMatchesToMarkdown(matches, predictions);
+  EXPECT_NE(markdown.find("#40 handbag"), std::string::npos) << markdown;
+}
+
 TEST(EvaluationClasses, SynonymsMapToCocoNames) {
   EXPECT_EQ(canonicalClassName(" Sofa "), "couch");
   EXPECT_EQ(canonicalClassName("television"), "tv");
