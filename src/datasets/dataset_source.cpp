@@ -112,10 +112,11 @@ Status openSevenScenes(const std::string& directory, const ColorCameraFiles& cam
   } else {
     source->warnings.push_back(
         directory +
-        " has no color-intrinsics.txt: colour and depth are taken as registered (one camera, "
-        "camera-intrinsics.txt for both). Real 7-Scenes (Kinect v1) colour is a second camera: "
-        "add its K as color-intrinsics.txt (the Kinect v1 default is 525 0 320 / 0 525 240 / "
-        "0 0 1), or masks land on the wrong depth pixels");
+        " has no color-intrinsics.txt: colour and depth are taken as one camera "
+        "(camera-intrinsics.txt for both). Real 7-Scenes (Kinect v1) colour is a second camera: "
+        "give its K with --color-intrinsics FILE (the Kinect v1 default is 525 0 320 / 0 525 240 "
+        "/ 0 0 1) and the offset with --depth-to-color FILE, or masks land on the wrong depth "
+        "pixels; --registered says they are one camera and silences this");
   }
   return Status::Ok();
 }

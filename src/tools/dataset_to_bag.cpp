@@ -122,6 +122,10 @@ int selectFrames(const Options& options, DatasetSource* source, std::vector<int>
     std::cerr << "dataset_to_bag: " << status.message() << "\n";
     return kExitData;
   }
+  // Warnings even with --quiet: they say the bag may not be what was meant.
+  for (const std::string& warning : source->warnings) {
+    std::cerr << "dataset_to_bag: warning: " << warning << "\n";
+  }
   for (int index : source->indices) {
     if (index >= options.first && (options.last < 0 || index <= options.last)) {
       indices->push_back(index);

@@ -209,6 +209,12 @@ TEST_F(DatasetToBagTest, SevenScenesRegistered) {
       runDatasetToBag("--dataset " + data.string() + " --output " + bag_path.string(), dir_);
   ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
   EXPECT_NE(run.stderr_text.find("3/3 frames"), std::string::npos) << run.stderr_text;
+  // No colour intrinsics and no --registered: one camera is assumed, and said (issue 56), with
+  // the options that give the colour camera or confirm one camera.
+  for (const char* words : {"warning: ", "has no color-intrinsics.txt", "--color-intrinsics FILE",
+                            "--registered"}) {
+    EXPECT_NE(run.stderr_text.find(words), std::string::npos) << words << "\n" << run.stderr_text;
+  }
 
   const BagContents bag = readBag(bag_path);
   expectTopicsAndCounts(bag, 3);
@@ -294,6 +300,7 @@ TEST_F(DatasetToBagTest, ColourCameraFromOutsideTheFolderOrRegistered) {
                             " --format 7scenes --first 1 --last 1 --rate-hz 10 --registered",
                         dir_);
   ASSERT_EQ(run.exit_code, 0) << run.stderr_text;
+  EXPECT_EQ(run.stderr_text.find("warning"), std::string::npos) << run.stderr_text;
   ColorCameraFiles one_camera;
   one_camera.registered = true;
   ASSERT_TRUE(SevenScenesDataset::open(data.string(), &dataset, one_camera).ok());
