@@ -28,8 +28,10 @@ Status checkInputStamp(const ros::Time& stamp, const ros::Time& now, const std::
   return Status::Ok();
 }
 
-bool acceptInputStamp(const ros::Time& stamp, const std::string& what, SharedStatistics* stats) {
-  const Status checked = checkInputStamp(stamp, ros::Time::now(), what);
+bool acceptInputStamp(const ros::Time& stamp, const std::string& what, SharedStatistics* stats,
+                      bool against_clock) {
+  const Status checked =
+      checkInputStamp(stamp, against_clock ? ros::Time::now() : ros::Time(), what);
   if (checked) return true;
   errorThrottled("input refused: " + checked.message());
   if (stats != nullptr) stats->update([](ObjectDetectionStatistics& s) { ++s.stamps_refused; });

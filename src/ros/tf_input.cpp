@@ -36,8 +36,10 @@ void TfInput::callback(const ros::MessageEvent<const tf2_msgs::TFMessage>& event
   for (const geometry_msgs::TransformStamped& transform : msg.transforms) {
     const std::string what = "transform '" + transform.header.frame_id + "' <- '" +
                              transform.child_frame_id + "' on " + topic + " from " + authority;
-    // A static transform's stamp is not used for look-ups, but tf2 still does arithmetic on it.
-    if (!acceptInputStamp(transform.header.stamp, what, stats_)) continue;
+    // A static transform's stamp is not used for look-ups, but tf2 still does arithmetic on it:
+    // past 2038 it is refused, ahead of the node's clock it is not (a static publisher on the wall
+    // clock beside a node on a bag's).
+    if (!acceptInputStamp(transform.header.stamp, what, stats_, !is_static)) continue;
     runGuarded(what, stats_, [&] { buffer_->setTransform(transform, authority, is_static); });
     if (stamp_check_ != nullptr && !is_static) {
       stamp_check_->addTransform(transform.header.frame_id, transform.child_frame_id,

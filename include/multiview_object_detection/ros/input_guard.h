@@ -38,7 +38,10 @@ std::string stampText(const ros::Time& stamp);
 Status checkInputStamp(const ros::Time& stamp, const ros::Time& now, const std::string& what);
 
 // True if `stamp` may go on; else the refusal is logged (throttled) and counted ("stamps refused").
-bool acceptInputStamp(const ros::Time& stamp, const std::string& what, SharedStatistics* stats);
+// `against_clock` false: only the 2038 limit (a static transform, whose stamp look-ups ignore: a
+// static_transform_publisher on the wall clock beside a node on a bag's clock is fine).
+bool acceptInputStamp(const ros::Time& stamp, const std::string& what, SharedStatistics* stats,
+                      bool against_clock = true);
 
 // Runs `body`, a callback's work. An exception it throws is logged (throttled, naming `what`),
 // counted on /diagnostics ("callback exceptions"), and the node goes on.
