@@ -121,7 +121,7 @@ fi
 
 echo
 echo "== 2/4 dataset_to_bag -> $out/demo.bag"
-"$bin/dataset_to_bag" --dataset "$dataset" --output "$out/demo.bag" "${detector_args[@]}" "${range[@]}" --quiet \
+"$bin/dataset_to_bag" --dataset "$dataset" --output "$out/demo.bag" "${detector_args[@]}" "${range[@]}" \
   2>&1 | tee "$out/dataset_to_bag.log"
 # The tool says which gravity the node needs when the dataset knows it.
 said=$(grep -o -E 'gravity_down: \[[^]]*\]' "$out/dataset_to_bag.log" | head -n 1 | sed 's/gravity_down: //' || true)

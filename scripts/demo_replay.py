@@ -421,6 +421,10 @@ class Demo:
         last_print_box = [time.time()]
         self.wait_for(settled, max(30.0, a.timeout - (time.time() - start)), 'the keyframe queue to drain')
         log('done in %.0f s: %s' % (time.time() - start, self.progress()))
+        log('time per keyframe (median of the last 100): detector %.1f ms, geometry %.1f ms; from the images '
+            'arriving to the objects published %.1f ms' % (
+                self.stat('detection median ms'), self.stat('keyframe total median ms'),
+                self.stat('latency median ms')))
         self.check_complete(player.frames)
 
         # -- results -------------------------------------------------------------------------------------

@@ -45,11 +45,31 @@ void InputMonitor::received(const std::string& topic, Clock::time_point now) {
   if (input.recent.size() > 100000) input.recent.pop_front();
 }
 
-std::vector<InputMonitor::Report> InputMonitor::reports(Clock::time_point now) const {
+std::vector<InputMonitor::Report> InputMonitor::reports(Clock::time_point now,
+                                                        const ClockState& clock) const {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<Report> out;
-  for (const std::string& topic : order_) out.push_back(report(topic, inputs_.at(topic), now));
+  for (const std::string& topic : order_) {
+    out.push_back(report(topic, inputs_.at(topic), now));
+    judgeWithClock(clock, &out.back());
+  }
   return out;
+}
+
+void InputMonitor::judgeWithClock(const ClockState& clock, Report* r) const {
+  if (!clock.sim_time || r->level != kError || clock.still_s < config_.timeout_s) return;
+  if (!clock.started) {
+    r->level = kWarn;
+    r->message = "use_sim_time is set and no /clock came in " + fixed(clock.still_s, 0) +
+                 " s, nor anything on '" + r->topic + "': is a bag playing (rosbag play --clock)?";
+    return;
+  }
+  // The input went quiet when the clock stopped (within a second of it): the bag paused or ended.
+  if (r->messages > 0 && r->silent_s <= clock.still_s + 1.0) {
+    r->level = kOk;
+    r->message = "the clock stopped " + fixed(clock.still_s, 0) +
+                 " s ago (a bag paused or ended); nothing on '" + r->topic + "' since";
+  }
 }
 
 InputMonitor::Report InputMonitor::report(const std::string& topic, const Input& input,

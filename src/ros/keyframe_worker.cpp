@@ -386,18 +386,31 @@ void KeyframeWorker::processKeyframe(const KeyframeJob& job) {
     stats.stage_times = report.times;
   });
   publishMap(header.stamp);
-  recordLatency(msSince(job.received));
+  recordTimes(msSince(job.received), detection_ms, report.times.total_ms);
 }
 
-void KeyframeWorker::recordLatency(double latency_ms) {
-  latencies_ms_.push_back(latency_ms);
-  if (latencies_ms_.size() > 100) latencies_ms_.pop_front();
-  std::vector<double> sorted(latencies_ms_.begin(), latencies_ms_.end());
+namespace {
+
+// Adds `value_ms` to the last 100 and returns their median.
+double pushMedian(std::deque<double>* recent_ms, double value_ms) {
+  recent_ms->push_back(value_ms);
+  if (recent_ms->size() > 100) recent_ms->pop_front();
+  std::vector<double> sorted(recent_ms->begin(), recent_ms->end());
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double median_ms = sorted[sorted.size() / 2];
-  stats_->update([latency_ms, median_ms](ObjectDetectionStatistics& stats) {
+  return sorted[sorted.size() / 2];
+}
+
+}  // namespace
+
+void KeyframeWorker::recordTimes(double latency_ms, double detection_ms, double geometry_ms) {
+  const double latency_median_ms = pushMedian(&latencies_ms_, latency_ms);
+  const double detection_median_ms = pushMedian(&detection_times_ms_, detection_ms);
+  const double geometry_median_ms = pushMedian(&geometry_times_ms_, geometry_ms);
+  stats_->update([&](ObjectDetectionStatistics& stats) {
     stats.latency_ms = latency_ms;
-    stats.latency_median_ms = median_ms;
+    stats.latency_median_ms = latency_median_ms;
+    stats.detection_median_ms = detection_median_ms;
+    stats.keyframe_total_median_ms = geometry_median_ms;
   });
 }
 

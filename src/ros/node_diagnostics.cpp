@@ -60,6 +60,15 @@ double residentMb() {
 }  // namespace
 
 void NodeDiagnostics::update(const ros::WallTimerEvent& /*event*/) {
+  const ros::Time clock = ros::Time::now();
+  const ros::WallTime wall = ros::WallTime::now();
+  if (clock != last_clock_) {
+    last_clock_ = clock;
+    clock_moved_ = wall;
+  }
+  clock_.sim_time = ros::Time::isSimTime();
+  clock_.started = !clock.isZero();
+  clock_.still_s = (wall - clock_moved_).toSec();
   // force_update: Updater::update() follows ros::Time, which stands still while a bag is paused.
   updater_->force_update();
 }
@@ -67,7 +76,7 @@ void NodeDiagnostics::update(const ros::WallTimerEvent& /*event*/) {
 void NodeDiagnostics::inputStatus(const std::string& topic,
                                   diagnostic_updater::DiagnosticStatusWrapper& status) {
   InputMonitor::Report report;
-  for (InputMonitor::Report& r : stats_->inputs().reports()) {
+  for (InputMonitor::Report& r : stats_->inputs().reports(InputMonitor::Clock::now(), clock_)) {
     if (r.topic == topic) report = std::move(r);
   }
   status.summary(static_cast<unsigned char>(report.level), report.message);
@@ -172,6 +181,8 @@ void NodeDiagnostics::mapStatus(diagnostic_updater::DiagnosticStatusWrapper& sta
       {"largest view ms", stats.stage_times.largest_view_ms},
       {"refinement ms", stats.stage_times.refinement_ms},
       {"keyframe total ms", stats.stage_times.total_ms},
+      {"detection median ms", stats.detection_median_ms},
+      {"keyframe total median ms", stats.keyframe_total_median_ms},
       {"latency ms", stats.latency_ms},
       {"latency median ms", stats.latency_median_ms},
       {"removed gone", stats.removed_gone},

@@ -506,7 +506,7 @@ int finishMap(const Options& options, RunStats stats, size_t num_frames,
     summary.objects_in_gravity_frame = true;
     summary.T_W_O = mvod::gravityAlignedPose(mapper->gravity(), mapper->floorHeight_m());
   }
-  if (!options.quiet) printCostGrowth(stats.stage_times);
+  if (!options.quiet) printCostGrowth(stats);
   if (!options.timings.empty() && !writeTimings(options.timings, stats)) return kExitFailure;
   const std::vector<mvod::MapObject> objects = mvod::databaseObjects(mapper->database());
   // What the table and the clouds show: objects.json is written in the same frame (objectsToJson).

@@ -36,7 +36,7 @@ mvod::MapSummary summarize(const RunStats& stats, size_t num_frames,
                            const mvod::ObjectMapper::RefinementReport& refinement);
 
 // Does the cost per keyframe grow with the map? The first and the last 20 keyframes, on stderr.
-void printCostGrowth(const std::vector<mvod::StageTimes>& stage_times);
+void printCostGrowth(const RunStats& stats);
 
 // --timings: per-keyframe stage times as CSV; false (with a message) if the file cannot be written.
 bool writeTimings(const std::string& path, const RunStats& stats);

@@ -1152,6 +1152,51 @@ TEST(InputMonitorTest, SilentInputsAreErrorsSlowOnesWarningsAndTheyRecover) {
   EXPECT_NE(reports[0].message.find("nothing on"), std::string::npos) << reports[0].message;
 }
 
+// On a bag's clock (use_sim_time; issue 56, first hour): make demo's roslaunch.log ended in red
+// "nothing on '...' for 5 s" once its bag had ended, and a node waiting for a bag said its inputs
+// were wrongly remapped. Silence the stopped clock explains is OK and says so; before any /clock,
+// a WARN asks for the bag; an input that stopped while the clock ran is still an ERROR.
+TEST(InputMonitorTest, OnABagsClockSilenceThatTheStoppedClockExplainsIsNoError) {
+  using Clock = InputMonitor::Clock;
+  const Clock::time_point t0 = Clock::now();
+  const auto at = [t0](double s) {
+    return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  };
+  InputMonitor monitor;
+  monitor.configure({/*min_rate_hz=*/1.0, /*timeout_s=*/5.0}, t0);
+  monitor.expect("/camera/rgb/image_rect_color", true);
+  monitor.expect("/detections", false);
+  InputMonitor::ClockState clock;
+  clock.sim_time = true;
+  // No /clock in 8 s: a warning asking for the bag, not a remap error.
+  clock.still_s = 8.0;
+  std::vector<InputMonitor::Report> reports = monitor.reports(at(8.0), clock);
+  EXPECT_EQ(reports[0].level, InputMonitor::kWarn) << reports[0].message;
+  EXPECT_NE(reports[0].message.find("no /clock came in 8 s"), std::string::npos)
+      << reports[0].message;
+  // The bag plays from 8 s to 20 s (10 Hz images; detections until 12 s only), then ends: the
+  // clock stops at 20 s.
+  clock.started = true;
+  for (int i = 0; i < 120; ++i) monitor.received("/camera/rgb/image_rect_color", at(8.0 + 0.1 * i));
+  monitor.received("/detections", at(12.0));
+  clock.still_s = 7.0;  // at 27 s
+  reports = monitor.reports(at(27.0), clock);
+  EXPECT_EQ(reports[0].level, InputMonitor::kOk) << reports[0].message;
+  EXPECT_NE(reports[0].message.find("the clock stopped 7 s ago (a bag paused or ended)"),
+            std::string::npos)
+      << reports[0].message;
+  // The detections stopped 8 s before the clock did: still an error.
+  EXPECT_EQ(reports[1].level, InputMonitor::kError) << reports[1].message;
+  // The clock running: the same silence is an error.
+  clock.still_s = 0.0;
+  reports = monitor.reports(at(27.0), clock);
+  EXPECT_EQ(reports[0].level, InputMonitor::kError) << reports[0].message;
+  // On the wall clock nothing changes.
+  clock.sim_time = false;
+  clock.still_s = 7.0;
+  EXPECT_EQ(monitor.reports(at(27.0), clock)[0].level, InputMonitor::kError);
+}
+
 }  // namespace mvod
 
 int main(int argc, char** argv) {

@@ -157,8 +157,11 @@ class KeyframeWorker {
   std::unique_ptr<InstanceSegmenter> segmenter_;
   const bool segmenter_injected_;
   bool gravity_from_tf_known_ = false;
-  std::deque<double> latencies_ms_;  // the last 100 keyframes'
-  void recordLatency(double latency_ms);
+  // The last 100 processed keyframes': latency, detector time, geometry time (processKeyframe).
+  std::deque<double> latencies_ms_;
+  std::deque<double> detection_times_ms_;
+  std::deque<double> geometry_times_ms_;
+  void recordTimes(double latency_ms, double detection_ms, double geometry_ms);
 };
 
 }  // namespace mvod

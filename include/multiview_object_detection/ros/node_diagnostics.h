@@ -2,9 +2,9 @@
 // shows):
 // "<node>: map" (queue, drops, failures, stage times; WARN on drops, failed autosaves, callback
 // exceptions, refused stamps, waiting for gravity; WARN or ERROR with the share of frames rejected
-// and camera poses failed over the last 10 s and the last reason: RejectionWindow) and "<node>: input <topic>" per expected input
-// (InputMonitor: ERROR when it is silent, WARN when slow). An input going silent is also logged
-// once, and its return.
+// and camera poses failed over the last 10 s and the last reason: RejectionWindow) and "<node>:
+// input <topic>" per expected input (InputMonitor: ERROR when it is silent, WARN when slow). An
+// input going silent is also logged once, and its return.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "multiview_object_detection/ros/input_monitor.h"
 #include "multiview_object_detection/ros/object_detection_statistics.h"
 #include "multiview_object_detection/ros/rejection_window.h"
 
@@ -47,6 +48,10 @@ class NodeDiagnostics {
   int faulty_at_last_ = 0;
   int autosave_failures_at_last_ = 0;
   RejectionWindow rejections_;
+  // The node's clock (ros::Time) when the timer last saw it move, and then (wall time).
+  ros::Time last_clock_;
+  ros::WallTime clock_moved_ = ros::WallTime::now();
+  InputMonitor::ClockState clock_;
 };
 
 }  // namespace mvod

@@ -74,6 +74,10 @@ struct ObjectDetectionStatistics {
   // detection and mapping): the last one and the median of the last 100.
   double latency_ms = 0.0;
   double latency_median_ms = 0.0;
+  // The detector's time and the geometry's (processKeyframe's total) per keyframe: medians of the
+  // last 100 processed.
+  double detection_median_ms = 0.0;
+  double keyframe_total_median_ms = 0.0;
 };
 
 // The counters behind one mutex, written from the callback, worker and service threads. The mutex
