@@ -38,9 +38,11 @@ link_package = pkg_dir=$(1)/src/$(PKG); mkdir -p $(1)/src; if [ -L "$$pkg_dir" ]
 
 .PHONY: workspace sanitize-workspace standin
 workspace: standin
+	@bash scripts/forget_moved_workspace.sh $(WS)
 	@$(call link_package,$(WS))
 
 standin: deps
+	@bash scripts/forget_moved_workspace.sh $(STANDIN_WS)
 	@bash scripts/build_standin.sh $(STANDIN_WS) $(CATKIN_ARGS) -j$(JOBS)
 
 build: deps workspace
@@ -76,6 +78,7 @@ SAN_ENV := ASAN_OPTIONS=alloc_dealloc_mismatch=0:detect_leaks=1:log_path=$(SAN_L
 	MVOD_FUZZ_SECONDS=60
 
 sanitize-workspace: standin
+	@bash scripts/forget_moved_workspace.sh $(SAN_WS)
 	@$(call link_package,$(SAN_WS))
 
 # Built with MVOD_STANDARD_MESSAGES=OFF: the node without vision_msgs and jsk_recognition_msgs is built and
