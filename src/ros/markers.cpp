@@ -75,12 +75,36 @@ double goldenHue(std::int64_t index) {
 std::string labelText(const MapObject& object) {
   char probability[16];
   std::snprintf(probability, sizeof(probability), "%.2f", object.probability);
-  // A completed box (amodal completion) says so: part of it was never seen.
-  return object.class_name + " #" + std::to_string(object.id) + " " + probability +
-         (object.box_completed ? " (completed)" : "");
+  return object.class_name + " #" + std::to_string(object.id) + " " + probability;
 }
 
-constexpr double kLabelHeightM = 0.15;  // text height: legible from 5-10 m in rviz
+constexpr double kLabelHeightM = 0.12;  // text height: legible from 5-10 m in rviz
+constexpr double kDashM = 0.06;         // a completed box's dashes (and gaps)
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point point;
+  point.x = p.x();
+  point.y = p.y();
+  point.z = p.z();
+  return point;
+}
+
+// The edge from `a` to `b` into a LINE_LIST: whole, or `dashed` (a completed box: part of it was
+// never seen, amodal completion), as dashes kDashM long with gaps as long.
+void appendEdge(const Eigen::Vector3d& a, const Eigen::Vector3d& b, bool dashed,
+                std::vector<geometry_msgs::Point>* points) {
+  const double length_m = (b - a).norm();
+  if (!dashed || length_m < 2.0 * kDashM) {
+    points->push_back(toPoint(a));
+    points->push_back(toPoint(b));
+    return;
+  }
+  const Eigen::Vector3d step = (b - a) / length_m;
+  for (double t = 0.0; t < length_m; t += 2.0 * kDashM) {
+    points->push_back(toPoint(a + t * step));
+    points->push_back(toPoint(a + std::min(t + kDashM, length_m) * step));
+  }
+}
 
 }  // namespace
 
@@ -119,17 +143,12 @@ visualization_msgs::MarkerArray objectsToMarkers(const std::vector<MapObject>& o
     box.scale.x = 0.02;            // line width (m)
     box.color = classColor(object.class_id);
     const std::vector<Eigen::Vector3d> corners = object.box.corners();
-    // Corner i has sign bits (x: 1, y: 2, z: 4); the edges join corners one bit apart.
+    // Corner i has sign bits (x: 1, y: 2, z: 4); the edges join corners one bit apart. A completed
+    // box is dashed.
     for (int i = 0; i < 8; ++i) {
       for (int bit = 1; bit < 8; bit <<= 1) {
         if (i & bit) continue;
-        for (const int c : {i, i | bit}) {
-          geometry_msgs::Point p;
-          p.x = corners[c].x();
-          p.y = corners[c].y();
-          p.z = corners[c].z();
-          box.points.push_back(p);
-        }
+        appendEdge(corners[i], corners[i | bit], object.box_completed, &box.points);
       }
     }
     array.markers.push_back(box);

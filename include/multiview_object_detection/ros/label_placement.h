@@ -1,7 +1,6 @@
-// Where rviz draws the map's labels. rviz turns a TEXT_VIEW_FACING label to the viewer, so labels
-// of boxes close together cross each other from most views. Labels whose texts could reach each
-// other share one column, one line each, over the oldest object of the group; a thin line joins
-// each label to its own box. Pure geometry, like markers.h.
+// Where rviz draws the map's labels: each over its own box. rviz turns a TEXT_VIEW_FACING label to
+// the viewer, so labels of boxes close together would cross from most views; such a label goes up
+// a line, as little as it must, and a thin line joins it to its box. Pure geometry, like markers.h.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,11 +18,9 @@ struct LabelPlacement {
 
 // One placement per object, in the order of `objects` (as many as texts, if fewer); texts[i] is
 // objects[i]'s label, drawn text_height_m high. "Up" is the boxes' third axis (the floor normal,
-// Eq. 4). A label reaches half its text's width around its column in every direction. In id order,
-// a label joins the nearest column whose first label it reaches, else starts one over its own box;
-// it takes the lowest line, above its column's boxes, that no earlier label it reaches holds. Newer
-// objects go above older ones: an older label moves only when its column forms (it is lifted clear
-// of the clouds around) or when a newer, taller box joins its column.
+// Eq. 4). A label reaches half its text's width around its box's centre. In id order, each label
+// takes the lowest line over its own box's top that keeps a line's spacing from every earlier
+// label it reaches; a newer object never moves an older label.
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
                                         const std::vector<std::string>& texts,
                                         double text_height_m);
