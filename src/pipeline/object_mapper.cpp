@@ -242,6 +242,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   out = KeyframeReport();
   out.detections = static_cast<int>(detections.size());
   out.object_ids.assign(detections.size(), -1);
+  out.drop_reasons.assign(detections.size(), std::string());
 
   // A bad frame changes nothing.
   const Status valid = frame.validate();
@@ -255,6 +256,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
     out.warnings.push_back(label +
                            ": waiting for gravity (no dominant horizontal plane seen yet); " +
                            std::to_string(detections.size()) + " detection(s) skipped");
+    out.drop_reasons.assign(detections.size(), "keyframe skipped: waiting for gravity");
     out.times.total_ms = msSince(start);
     return Status::Ok();
   }
@@ -271,8 +273,28 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   }
   fuseKeyframe(frame, keyframe, kept, label, clouds.depth_view, &views, &out);
   recordKeyframe(frame, keyframe, clouds.floor_layer_m, out.depth_fault, &views);
+  noteDropReasons(&out);
   out.times.total_ms = msSince(start);
   return Status::Ok();
+}
+
+void ObjectMapper::noteDropReasons(KeyframeReport* out) const {
+  // The first warning about a detection says why it went (later ones follow from it).
+  for (const std::string& warning : out->warnings) {
+    size_t index = 0;
+    std::string problem;
+    if (!object_mapper_detail::parseDetectionWarning(warning, &index, &problem)) continue;
+    if (index < out->drop_reasons.size() && out->object_ids[index] < 0 &&
+        out->drop_reasons[index].empty()) {
+      out->drop_reasons[index] = problem;
+    }
+  }
+  for (size_t i = 0; i < out->drop_reasons.size(); ++i) {
+    if (out->object_ids[i] >= 0) out->drop_reasons[i].clear();
+    if (out->object_ids[i] < 0 && out->drop_reasons[i].empty() && out->depth_fault) {
+      out->drop_reasons[i] = "keyframe taken for a sensor or SLAM fault";
+    }
+  }
 }
 
 ObjectMapper::KeptDetections ObjectMapper::keepDetections(
@@ -289,7 +311,10 @@ ObjectMapper::KeptDetections ObjectMapper::keepDetections(
                               ": score is not a probability in [0, 1], skipped");
       continue;
     }
-    if (!(detection.score >= config_.min_probability)) continue;
+    if (!(detection.score >= config_.min_probability)) {
+      out->drop_reasons[i] = "score under min_probability (lambda)";
+      continue;
+    }
     ++out->above_threshold;
     Detection2D named = detection;
     if (!nameClass(&named)) {

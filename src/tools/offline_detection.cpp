@@ -314,8 +314,8 @@ class KeyframeLoop {
     std::vector<mvod::Detection2D> detections;
     if (!detect(frame, name, &detections)) return;
     if (!options_.save_detections.empty()) saveDetections(frame, name, detections);
-    const std::vector<int> object_ids = mapKeyframe(frame, name, detections);
-    if (!options_.overlays.empty()) writeOverlay(frame, name, detections, object_ids);
+    const mvod::KeyframeReport mapped = mapKeyframe(frame, name, detections);
+    if (!options_.overlays.empty()) writeOverlay(frame, name, detections, mapped);
     keyframes_.push_back({index, frame.stamp_s, frame.T_C_D});
   }
 
@@ -397,11 +397,18 @@ class KeyframeLoop {
   // The detections with the object each became, and the map's boxes after this keyframe.
   void writeOverlay(const mvod::RgbdFrame& frame, const std::string& name,
                     const std::vector<mvod::Detection2D>& detections,
-                    const std::vector<int>& object_ids) {
+                    const mvod::KeyframeReport& mapped) {
     const std::string path = options_.overlays + "/" + name + ".overlay.png";
+    // Why each detection that was not mapped went, in the summary's plain words.
+    std::vector<std::string> reasons(detections.size());
+    for (size_t i = 0; i < reasons.size() && i < mapped.drop_reasons.size(); ++i) {
+      if (!mapped.drop_reasons[i].empty()) {
+        reasons[i] = offline_detection::plainReason(mapped.drop_reasons[i]);
+      }
+    }
     try {
-      const cv::Mat overlay = mvod::drawKeyframeOverlay(frame, detections, object_ids,
-                                                        mvod::databaseObjects(mapper_.database()));
+      const cv::Mat overlay = mvod::drawKeyframeOverlay(
+          frame, detections, mapped.object_ids, reasons, mvod::databaseObjects(mapper_.database()));
       if (!cv::imwrite(path, overlay)) {
         report(name + ": warning: cannot write " + path, false);
       }
@@ -431,8 +438,8 @@ class KeyframeLoop {
   }
 
   // Returns, per detection, the map object it became (-1: not mapped).
-  std::vector<int> mapKeyframe(const mvod::RgbdFrame& frame, const std::string& name,
-                               const std::vector<mvod::Detection2D>& detections) {
+  mvod::KeyframeReport mapKeyframe(const mvod::RgbdFrame& frame, const std::string& name,
+                                   const std::vector<mvod::Detection2D>& detections) {
     mvod::KeyframeReport keyframe;
     const mvod::Status processed = mapper_.processKeyframe(frame, detections, &keyframe);
     if (!processed) {
@@ -463,7 +470,7 @@ class KeyframeLoop {
                  " keyframes)",
              false);
     }
-    return keyframe.object_ids;
+    return keyframe;
   }
 
   // A dropped detection or skipped keyframe: counted by its plain reason for the summary, the line

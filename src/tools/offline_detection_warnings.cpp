@@ -17,6 +17,7 @@ std::string plainReason(const std::string& warning) {
       {"waiting for gravity", "keyframe skipped: no floor seen yet (gravity unknown)"},
       {"sensor or SLAM fault", "keyframe taken for a sensor or SLAM fault"},
       {"not a probability", "detection's score outside [0, 1]"},
+      {"under min_probability", "score under min_probability"},
       {"unknown class", "detection's class is not a COCO class"},
       {"no valid depth", "no depth inside its mask"},
       {"covers the whole image", "its box covers the whole image"},

@@ -80,4 +80,12 @@ std::string resolveAutoDetector(const SegmenterOptions& options);
 // Draws tinted masks, boxes and "class score" labels on a copy of the image, for people to look at.
 cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections);
 
+// Where drawDetections puts the "class score" labels on an image of `image_size`: one rectangle per
+// detection, in order (what else is drawn on the image keeps clear of them); their texts and the
+// font's baseline when asked for.
+std::vector<cv::Rect> detectionLabelSpots(const std::vector<Detection2D>& detections,
+                                          const cv::Size& image_size,
+                                          std::vector<std::string>* texts = nullptr,
+                                          int* baseline = nullptr);
+
 }  // namespace mvod

@@ -52,6 +52,9 @@ struct KeyframeReport {
   // Per detection given (in order): the map object it was fused into or inserted as; -1 when it
   // was not mapped (under λ, no box). An id the existence evidence removed is still named.
   std::vector<int> object_ids;
+  // Per detection given (in order): why it was not mapped, the problem as its warning states it
+  // ("score under min_probability" below λ); empty where it was mapped, or where nothing was said.
+  std::vector<std::string> drop_reasons;
   bool waiting_for_gravity = false;  // detections skipped: no gravity estimate yet
   // The keyframe's depth saw through most of the mapped objects it could see: a sensor or SLAM
   // fault (ExistenceModel::isFault). It did not vote and its detections were not fused; a warning
@@ -262,6 +265,8 @@ class ObjectMapper {
   std::vector<SingleView> runSingleViews(const RgbdFrame& frame, const KeptDetections& kept,
                                          const KeyframeClouds& clouds) const;
   // Eq. 5-8 in detection order, then the deferred boxes of the objects that changed.
+  // out->drop_reasons from the warnings about single detections (the first one each).
+  void noteDropReasons(KeyframeReport* out) const;
   void fuseKeyframe(const RgbdFrame& frame, int keyframe, const KeptDetections& kept,
                     const std::string& label, const std::shared_ptr<const DepthView>& depth_view,
                     std::vector<SingleView>* views, KeyframeReport* out);

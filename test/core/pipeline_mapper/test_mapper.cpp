@@ -262,6 +262,33 @@ TEST_F(ObjectMapperTest, UnknownClassIsAWarning) {
   EXPECT_EQ(mapper.database().objects().begin()->second.class_id, cocoClassId("chair"));
 }
 
+// Why each detection was not mapped, per detection (issue 56, item 3: the overlays said "(not
+// mapped)" without why): under λ, an unknown class and an empty mask each name their problem; the
+// mapped chair has none.
+TEST_F(ObjectMapperTest, EachDetectionNotMappedSaysWhy) {
+  config_.min_probability = 0.5;
+  ObjectMapper mapper(config_, priors_);
+  KeyframeReport report;
+  Detection2D empty = detectionFromMask(cv::Mat::zeros(kRows, kCols, CV_8UC1), "cup", 0.9f);
+  empty.box_px = cv::Rect(0, 0, 1, 1);
+  ASSERT_TRUE(mapper
+                  .processKeyframe(frame_,
+                                   {detectionFromMask(mask_, "chair", 0.3f),
+                                    detectionFromMask(mask_, "spaceship", 0.9f), empty,
+                                    detectionFromMask(mask_, "chair", 0.9f)},
+                                   &report)
+                  .ok());
+  ASSERT_EQ(report.drop_reasons.size(), 4u);
+  EXPECT_EQ(report.drop_reasons[0], "score under min_probability (lambda)");
+  EXPECT_NE(report.drop_reasons[1].find("unknown class"), std::string::npos)
+      << report.drop_reasons[1];
+  EXPECT_FALSE(report.drop_reasons[2].empty());
+  EXPECT_EQ(report.drop_reasons[2].find("detection "), std::string::npos)
+      << "the problem alone: " << report.drop_reasons[2];
+  ASSERT_GE(report.object_ids[3], 0);
+  EXPECT_TRUE(report.drop_reasons[3].empty()) << report.drop_reasons[3];
+}
+
 TEST_F(ObjectMapperTest, BadFrameIsAnErrorAndChangesNothing) {
   ObjectMapper mapper(config_, priors_);
   KeyframeReport report;
