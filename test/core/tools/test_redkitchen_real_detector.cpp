@@ -29,7 +29,7 @@ const std::string kAnnotationDir = kSourceDir + "/test/data/7scenes_redkitchen_a
 
 std::string quoted(const std::string& arg) { return "'" + arg + "'"; }
 
-TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableAndChairs) {
+TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects) {
   const std::string frames = test::sharedPath("data/7scenes_redkitchen/data");
   const std::string models = test::sharedPath("models");
   if (frames.empty() || models.empty() || !fs::exists(fs::path(models) / "yolov5n-seg.onnx")) {
@@ -85,6 +85,25 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableAndChairs) {
     }
   }
   EXPECT_LE(unmatched_furniture, 2) << table;
+
+  // The small objects (issue 54, item 5), as measured on 2026-12-06: the Daedalus journal on the
+  // Computer magazine (annotation 8) its own book, 0.035 m from its centre (goal 0.05: met); the
+  // two mugs (6, 7) at IoU 0.34 and 0.26 and the wall monitors (13, 14) at 0.28 and 0.17 (goals 0.6
+  // and 0.5: not met); the brochure pile (11) at 0.23. A map that loses any of them fails here.
+  ASSERT_GE(matches.annotated.size(), 15u);
+  const AnnotatedObjectMatch& daedalus = matches.annotated[8];
+  ASSERT_EQ(daedalus.class_name, "book");
+  EXPECT_GE(daedalus.prediction_id, 0) << table;
+  EXPECT_LE(daedalus.centre_distance_m, 0.05) << table;
+  for (const int mug : {6, 7}) {
+    ASSERT_EQ(matches.annotated[mug].class_name, "cup");
+    EXPECT_GE(matches.annotated[mug].box_iou, 0.2) << "mug " << mug << "\n" << table;
+  }
+  for (const int monitor : {13, 14}) {
+    ASSERT_EQ(matches.annotated[monitor].class_name, "tv");
+    EXPECT_GE(matches.annotated[monitor].box_iou, 0.1) << "monitor " << monitor << "\n" << table;
+  }
+  EXPECT_GE(matches.annotated[11].prediction_id, 0) << table;
   RecordProperty("per_object", table);
   if (!HasFailure()) fs::remove_all(work);
 }
