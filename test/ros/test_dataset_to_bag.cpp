@@ -211,8 +211,8 @@ TEST_F(DatasetToBagTest, SevenScenesRegistered) {
   EXPECT_NE(run.stderr_text.find("3/3 frames"), std::string::npos) << run.stderr_text;
   // No colour intrinsics and no --registered: one camera is assumed, and said (issue 56), with
   // the options that give the colour camera or confirm one camera.
-  for (const char* words : {"warning: ", "has no color-intrinsics.txt", "--color-intrinsics FILE",
-                            "--registered"}) {
+  for (const char* words :
+       {"warning: ", "has no color-intrinsics.txt", "--color-intrinsics FILE", "--registered"}) {
     EXPECT_NE(run.stderr_text.find(words), std::string::npos) << words << "\n" << run.stderr_text;
   }
 

@@ -870,8 +870,10 @@ TEST(NodeTfStampTest, ATfStampedWhenPublishedIsAWarningNamingTheCause) {
   std::mutex mutex;
   std::string warning;
   double received = -1.0;
+  int statuses = 0;
   const ros::Subscriber sub =
       subscribeMapStatus(nh, node, &mutex, [&](const diagnostic_msgs::DiagnosticStatus& status) {
+        ++statuses;
         for (const diagnostic_msgs::KeyValue& value : status.values) {
           if (value.key == "frames received") received = std::atof(value.value.c_str());
         }
@@ -891,7 +893,8 @@ TEST(NodeTfStampTest, ATfStampedWhenPublishedIsAWarningNamingTheCause) {
   KillOnExit guard{pid};
   ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
   ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 0) && outputs.connected(); }, 30.0));
-  // 20 frames a second; `at_publishing`: the pose's TF goes after the images, stamped then.
+  // A stream of about 20 frames a second (the pause is the camera's frame period, not a wait for
+  // the node); `at_publishing`: the pose's TF goes after the images, stamped then.
   int frame = 0;
   auto feed = [&](int frames, bool at_publishing) {
     for (int i = 0; i < frames; ++i, ++frame) {
@@ -914,7 +917,18 @@ TEST(NodeTfStampTest, ATfStampedWhenPublishedIsAWarningNamingTheCause) {
       },
       20.0))
       << "received " << received;
-  ros::WallDuration(1.5).sleep();  // a judgement after the last frame
+  // Three more map statuses: the node's judgement (made as the transforms came) is in them.
+  int statuses_then = 0;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    statuses_then = statuses;
+  }
+  ASSERT_TRUE(outputs.waitFor(
+      [&] {
+        const std::lock_guard<std::mutex> lock(mutex);
+        return statuses >= statuses_then + 3;
+      },
+      20.0));
   {
     const std::lock_guard<std::mutex> lock(mutex);
     EXPECT_TRUE(warning.empty()) << warning;

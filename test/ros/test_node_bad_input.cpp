@@ -513,13 +513,16 @@ TEST_F(NodeBadInputTest, ResetClearsTheTfBufferSoTheSameStampsGetTheirNewPoses) 
 // static transform's stamp, so its distance from the node's clock says nothing (issue 56, first
 // hour). Here it is 2 days ahead of the node's clock and holds the camera's pose.
 TEST_F(NodeBadInputTest, AStaticTransformStampedByAnotherClockIsUsed) {
-  const ros::Time stamp = stampAt(400);
-  FrameMsgs frame = stream_->make(2, stamp);
   const std::string camera = "camera_on_a_static_mount";
-  frame.rgb.header.frame_id = camera;
-  frame.depth.header.frame_id = camera;
-  frame.info.header.frame_id = camera;
-  frame.detections.header.frame_id = camera;
+  const auto mounted = [&](const ros::Time& stamp) {
+    FrameMsgs frame = stream_->make(2, stamp);
+    frame.rgb.header.frame_id = camera;
+    frame.depth.header.frame_id = camera;
+    frame.info.header.frame_id = camera;
+    frame.detections.header.frame_id = camera;
+    return frame;
+  };
+  const FrameMsgs frame = mounted(stampAt(400));
   geometry_msgs::TransformStamped mount;
   mount.header.stamp = ros::Time::now() + ros::Duration(2 * 86400.0);
   mount.header.frame_id = kWorldFrame;
@@ -531,9 +534,13 @@ TEST_F(NodeBadInputTest, AStaticTransformStampedByAnotherClockIsUsed) {
   tf2_ros::StaticTransformBroadcaster static_tf;
   const ros::Time since = ros::Time::now();
   static_tf.sendTransform(mount);
-  ros::WallDuration(0.5).sleep();
-  inputs_->publish(frame, false, true, false);
-  EXPECT_TRUE(tf_node_->waitForObjectsAt(stamp, 20.0)) << tf_node_->allLogs();
+  // A frame a second until one is mapped (the first may reach the node before the transform does).
+  bool mapped = false;
+  for (int second = 400; second < 420 && !mapped; ++second) {
+    inputs_->publish(mounted(stampAt(second)), false, true, false);
+    mapped = tf_node_->waitForObjectsAt(stampAt(second), 1.0);
+  }
+  EXPECT_TRUE(mapped) << tf_node_->allLogs();
   EXPECT_TRUE(tf_node_->findLogs({"input refused"}, {}, since).empty()) << tf_node_->allLogs();
 }
 

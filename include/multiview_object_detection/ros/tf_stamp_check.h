@@ -34,8 +34,8 @@ class TfStampCheck {
   static constexpr std::size_t kWindow = 50;
   // A transform carries an image's stamp when they are this close.
   static constexpr double kSameStampS = 0.001;
-  // "Stamped when published": the stamp within this of the arrival (on one machine).
-  static constexpr double kPublishedWithinS = 0.02;
+  // "Stamped when published": the stamp within this of the arrival (on one machine, loaded too).
+  static constexpr double kPublishedWithinS = 0.05;
   // The share of the window that must look published.
   static constexpr double kPublishedShare = 0.9;
   // Images within the window's stamps needed to judge it.

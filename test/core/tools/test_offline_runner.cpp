@@ -56,6 +56,18 @@ class OfflineRunnerTest : public ::testing::Test {
     return objectsFromJson(text, objects, summary);
   }
 
+  // The default synthetic room, `frames` frames, in the 7-Scenes layout in work_/dataset with its
+  // perfect detections in work_/detections (a failure to write them fails the test).
+  SyntheticScene writeSyntheticDataset(int frames) {
+    SyntheticSceneConfig config;
+    config.num_frames = frames;
+    SyntheticScene scene = SyntheticScene::makeDefault(config);
+    const Status written =
+        scene.writeSevenScenes((work_ / "dataset").string(), (work_ / "detections").string());
+    EXPECT_TRUE(written.ok()) << written.message();
+    return scene;
+  }
+
   fs::path work_;
 };
 
@@ -258,16 +270,15 @@ TEST_F(OfflineRunnerTest, SyntheticSceneWithPerfectDetections) {
 // --corrected-poses moves the map of the default; with --no-history (no keyframe history kept)
 // the same corrections are ignored and the map is the uncorrected one.
 TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
-  SyntheticSceneConfig scene_config;
-  scene_config.num_frames = 20;
-  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  constexpr int kFrames = 20;
+  writeSyntheticDataset(kFrames);
+  ASSERT_FALSE(HasFailure());
   const fs::path dataset = work_ / "dataset";
   const fs::path detections = work_ / "detections";
-  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
   // The corrections: every pose moved 0.2 m along x.
   const fs::path corrected = work_ / "corrected";
   fs::create_directories(corrected);
-  for (int i = 0; i < scene_config.num_frames; ++i) {
+  for (int i = 0; i < kFrames; ++i) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", i);
     Eigen::Isometry3d T_W_D;
@@ -324,15 +335,14 @@ TEST_F(OfflineRunnerTest, NoHistoryIgnoresCorrections) {
 // (six significant digits): the map is the one without corrections, object for object (it used to
 // be rebuilt from poses that differ in the sixth digit).
 TEST_F(OfflineRunnerTest, CorrectedPosesEqualToThePosesChangeNothing) {
-  SyntheticSceneConfig scene_config;
-  scene_config.num_frames = 24;
-  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  constexpr int kFrames = 24;
+  writeSyntheticDataset(kFrames);
+  ASSERT_FALSE(HasFailure());
   const fs::path dataset = work_ / "dataset";
   const fs::path detections = work_ / "detections";
-  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
   const fs::path same = work_ / "same";
   fs::create_directories(same);
-  for (int i = 0; i < scene_config.num_frames; ++i) {
+  for (int i = 0; i < kFrames; ++i) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame-%06d.pose.txt", i);
     Eigen::Isometry3d T_W_D;
@@ -382,12 +392,10 @@ TEST_F(OfflineRunnerTest, CorrectedPosesEqualToThePosesChangeNothing) {
 // Dropped detections are counted in the summary by a plain reason; each one's line only with
 // --verbose (issue 47: about 60 "warning:" lines per 1000 frames in the mapper's words).
 TEST_F(OfflineRunnerTest, DroppedDetectionsAreCountedByReasonAndShownWithVerbose) {
-  SyntheticSceneConfig scene_config;
-  scene_config.num_frames = 20;
-  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  writeSyntheticDataset(20);
+  ASSERT_FALSE(HasFailure());
   const fs::path dataset = work_ / "dataset";
   const fs::path detections = work_ / "detections";
-  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
   // Every frame's file gets a unicorn (no COCO class) and a detection scored 1.5.
   int files = 0;
   for (const fs::directory_entry& entry : fs::directory_iterator(detections)) {
@@ -431,12 +439,10 @@ TEST_F(OfflineRunnerTest, DroppedDetectionsAreCountedByReasonAndShownWithVerbose
 // The time per keyframe of the first and last 20 keyframes names the detector's time beside the
 // geometry's (issue 56: "time per keyframe 139.8 ms" left out the detector's 1144 ms).
 TEST_F(OfflineRunnerTest, TimePerKeyframeShowsTheDetectorBesideTheGeometry) {
-  SyntheticSceneConfig scene_config;
-  scene_config.num_frames = 40;
-  const SyntheticScene scene = SyntheticScene::makeDefault(scene_config);
+  writeSyntheticDataset(40);
+  ASSERT_FALSE(HasFailure());
   const fs::path dataset = work_ / "dataset";
   const fs::path detections = work_ / "detections";
-  ASSERT_TRUE(scene.writeSevenScenes(dataset.string(), detections.string()).ok());
   const RunResult result =
       runTool({"--dataset", dataset.string(), "--detections", detections.string(), "--every", "1",
                "--priors", priorsPath(), "--output", (work_ / "objects.json").string()},
