@@ -31,8 +31,8 @@ Eigen::Vector3d labelsUp(const std::vector<const MapObject*>& objects) {
 
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
                                         const std::vector<std::string>& texts,
-                                        double text_height_m) {
-  const size_t n = std::min(objects.size(), texts.size());
+                                        const std::vector<double>& text_heights_m) {
+  const size_t n = std::min({objects.size(), texts.size(), text_heights_m.size()});
   const Eigen::Vector3d up = labelsUp(objects);
   // In id order; below, i and k index this order.
   std::vector<size_t> order(n);
@@ -41,22 +41,26 @@ std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& obj
             [&](size_t a, size_t b) { return objects[a]->id < objects[b]->id; });
   std::vector<Eigen::Vector3d> floor_m(n), top_m(n);  // box centre in the floor plane; box top
   std::vector<double> lowest_m(n), half_width_m(n);   // lowest label height; reach around column
+  std::vector<double> text_m(n);                      // text height
   for (size_t i = 0; i < n; ++i) {
     const OrientedBox& box = objects[order[i]]->box;
+    text_m[i] = text_heights_m[order[i]];
     double half_up_m = 0.0;  // the box's half extent along up
     for (int a = 0; a < 3; ++a) {
       half_up_m += 0.5 * std::abs(box.size_m[a]) * std::abs(box.rotation.col(a).dot(up));
     }
     top_m[i] = box.center_m + half_up_m * up;
-    lowest_m[i] = top_m[i].dot(up) + kClearanceM + 0.5 * text_height_m;
+    lowest_m[i] = top_m[i].dot(up) + kClearanceM + 0.5 * text_m[i];
     floor_m[i] = top_m[i] - top_m[i].dot(up) * up;
-    half_width_m[i] =
-        0.5 * kCharWidth * text_height_m * static_cast<double>(texts[order[i]].size());
+    half_width_m[i] = 0.5 * kCharWidth * text_m[i] * static_cast<double>(texts[order[i]].size());
   }
   // Lines, in id order: each label over its own box, on the lowest line at or over its base that
   // keeps a line's spacing from every label placed before whose text could reach this one (their
   // half widths apart on the floor). Only such neighbours lift a label; the rest stay on their box.
-  const double spacing_m = kLineSpacing * text_height_m;
+  // Two labels' centres keep a line's spacing of their mean text height.
+  const auto spacing_m = [&](size_t a, size_t b) {
+    return kLineSpacing * 0.5 * (text_m[a] + text_m[b]);
+  };
   std::vector<double> height_m(n, 0.0);
   std::vector<LabelPlacement> placements(n);
   for (size_t i = 0; i < n; ++i) {
@@ -67,12 +71,12 @@ std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& obj
       }
     }
     std::vector<double> candidates_m = {lowest_m[i]};
-    for (const size_t k : neighbours) candidates_m.push_back(height_m[k] + spacing_m);
+    for (const size_t k : neighbours) candidates_m.push_back(height_m[k] + spacing_m(i, k));
     std::sort(candidates_m.begin(), candidates_m.end());
     for (const double z_m : candidates_m) {
       if (z_m < lowest_m[i]) continue;
       const bool free = std::none_of(neighbours.begin(), neighbours.end(), [&](size_t k) {
-        return std::abs(height_m[k] - z_m) < spacing_m - 1e-9;
+        return std::abs(height_m[k] - z_m) < spacing_m(i, k) - 1e-9;
       });
       if (free) {
         height_m[i] = z_m;

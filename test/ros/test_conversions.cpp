@@ -474,7 +474,7 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   ASSERT_EQ(label.ns, "labels");
   EXPECT_EQ(label.id, 3);
   EXPECT_EQ(label.type, visualization_msgs::Marker::TEXT_VIEW_FACING);
-  EXPECT_EQ(label.text, "chair #3 0.87");
+  EXPECT_EQ(label.text, "chair #3");
   // A completed box (amodal completion) is dashed, its label as any other (issue 56: "(completed)"
   // ran over the neighbouring labels): every dash lies on one of the box's edges, and there are
   // more than 12 of them.
@@ -482,7 +482,7 @@ TEST(RosConversionsTest, MarkersDrawBoxEdgesAndLabelsAndDeleteRemovedIds) {
   completed[0].box_completed = true;
   const visualization_msgs::MarkerArray dashed =
       objectsToMarkers(completed, makeHeader("map", 1.0), nullptr);
-  EXPECT_EQ(dashed.markers[1].text, "chair #3 0.87");
+  EXPECT_EQ(dashed.markers[1].text, "chair #3");
   const visualization_msgs::Marker& dashes = dashed.markers[0];
   ASSERT_EQ(dashes.ns, "boxes");
   EXPECT_GT(dashes.points.size(), 48u);
@@ -578,13 +578,21 @@ TEST(RosConversionsTest, LabelsStandOverTheirOwnBoxesWithoutCrossing) {
       const double apart_m = std::hypot(label.pose.position.x - b.pose.position.x,
                                         label.pose.position.y - b.pose.position.y);
       // Half a text height per character: narrower than any font rviz draws.
-      if (apart_m >= 0.25 * label.scale.z * (label.text.size() + b.text.size())) continue;
-      EXPECT_GE(std::abs(label.pose.position.z - b.pose.position.z), label.scale.z)
+      if (apart_m >= 0.25 * (label.scale.z * label.text.size() + b.scale.z * b.text.size())) {
+        continue;
+      }
+      EXPECT_GE(std::abs(label.pose.position.z - b.pose.position.z),
+                0.5 * (label.scale.z + b.scale.z))
           << "'" << label.text << "' and '" << b.text << "' cross";
     }
   }
   // Seven labels within reach of each other: at most seven lines over the lowest box top.
   EXPECT_LT(highest_over_top_m, 7 * 1.3 * labels[1].scale.z + 0.2);
+  // Furniture's labels read from across the room; the cup's is smaller (issue 56: the labels of
+  // the books and cups on the redkitchen's table covered each other).
+  EXPECT_EQ(labels[1].text, "dining table #1");
+  EXPECT_LT(labels[7].scale.z, 0.7 * labels[2].scale.z);
+  EXPECT_EQ(labels[8].scale.z, labels[2].scale.z);
   // The table, first, and the tv, alone, sit just over their boxes.
   EXPECT_LT(labels[1].pose.position.z, 0.75 + 0.05 + labels[1].scale.z);
   EXPECT_LT(labels[8].pose.position.z, 1.3 + 0.05 + labels[8].scale.z);

@@ -17,12 +17,12 @@ struct LabelPlacement {
 };
 
 // One placement per object, in the order of `objects` (as many as texts, if fewer); texts[i] is
-// objects[i]'s label, drawn text_height_m high. "Up" is the boxes' third axis (the floor normal,
-// Eq. 4). A label reaches half its text's width around its box's centre. In id order, each label
-// takes the lowest line over its own box's top that keeps a line's spacing from every earlier
+// objects[i]'s label, drawn text_heights_m[i] high. "Up" is the boxes' third axis (the floor
+// normal, Eq. 4). A label reaches half its text's width around its box's centre. In id order, each
+// label takes the lowest line over its own box's top that keeps a line's spacing from every earlier
 // label it reaches; a newer object never moves an older label.
 std::vector<LabelPlacement> placeLabels(const std::vector<const MapObject*>& objects,
                                         const std::vector<std::string>& texts,
-                                        double text_height_m);
+                                        const std::vector<double>& text_heights_m);
 
 }  // namespace mvod

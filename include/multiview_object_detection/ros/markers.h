@@ -20,7 +20,8 @@ std_msgs::ColorRGBA classColor(int class_id);
 std_msgs::ColorRGBA objectColor(int object_id);
 
 // ns "boxes": LINE_LIST of the 12 box edges coloured by class; ns "labels": TEXT_VIEW_FACING
-// "chair #3 0.87" above the box, or in a column with the labels it would cross (label_placement.h);
+// "chair #3" over the box (0.12 m high; 0.07 m for objects under 0.5 m), lifted a line where it
+// would cross an older neighbour's (label_placement.h);
 // ns "label_lines": a thin line from the box top to its label; marker id = object id. Ids in
 // *published_ids that are no longer in `objects` get DELETE markers in all three namespaces; on
 // return *published_ids holds the current ids.
