@@ -36,6 +36,28 @@ void RgbdInput::subscribe(FrameCallback callback) {
   color_stamps_->connectInput(color_sub_);
   depth_stamps_->connectInput(depth_sub_);
   color_info_stamps_->connectInput(color_info_sub_);
+  if (!config_.depth_registered) {
+    depth_info_sub_.subscribe(nh_, topics_.depth_info, queue_size);
+    stats_->inputs().expect(topics_.depth_info, true);
+    depth_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.depth_info, stats_);
+    depth_info_stamps_->connectInput(depth_info_sub_);
+  }
+  const auto jump_back = [this](const std::string& topic, const ros::Time& last,
+                                const ros::Time& now) { restartSynchronizer(topic, last, now); };
+  color_stamps_->onJumpBack(jump_back);
+  depth_stamps_->onJumpBack(jump_back);
+  color_info_stamps_->onJumpBack(jump_back);
+  if (depth_info_stamps_) depth_info_stamps_->onJumpBack(jump_back);
+  makeSynchronizer();
+}
+
+void RgbdInput::makeSynchronizer() {
+  // The old one first: its destructor disconnects it from the stamp filters.
+  approx_sync3_.reset();
+  exact_sync3_.reset();
+  approx_sync4_.reset();
+  exact_sync4_.reset();
+  const int queue_size = config_.queue_size;
   using boost::placeholders::_1;
   using boost::placeholders::_2;
   using boost::placeholders::_3;
@@ -52,24 +74,37 @@ void RgbdInput::subscribe(FrameCallback callback) {
           ApproxPolicy3(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_);
       approx_sync3_->registerCallback(callback);
     }
-  } else {
-    depth_info_sub_.subscribe(nh_, topics_.depth_info, queue_size);
-    stats_->inputs().expect(topics_.depth_info, true);
-    depth_info_stamps_ = std::make_unique<StampFilter<CameraInfo>>(topics_.depth_info, stats_);
-    depth_info_stamps_->connectInput(depth_info_sub_);
-    const auto callback = boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, _4);
-    if (config_.exact_sync) {
-      exact_sync4_ = std::make_unique<message_filters::Synchronizer<ExactPolicy4>>(
-          ExactPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
-          *depth_info_stamps_);
-      exact_sync4_->registerCallback(callback);
-    } else {
-      approx_sync4_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy4>>(
-          ApproxPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
-          *depth_info_stamps_);
-      approx_sync4_->registerCallback(callback);
-    }
+    return;
   }
+  const auto callback = boost::bind(&RgbdInput::rgbdCallback, this, _1, _2, _3, _4);
+  if (config_.exact_sync) {
+    exact_sync4_ = std::make_unique<message_filters::Synchronizer<ExactPolicy4>>(
+        ExactPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
+        *depth_info_stamps_);
+    exact_sync4_->registerCallback(callback);
+  } else {
+    approx_sync4_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy4>>(
+        ApproxPolicy4(queue_size), *color_stamps_, *depth_stamps_, *color_info_stamps_,
+        *depth_info_stamps_);
+    approx_sync4_->registerCallback(callback);
+  }
+}
+
+void RgbdInput::restartSynchronizer(const std::string& topic, const ros::Time& last,
+                                    const ros::Time& now) {
+  // The synchroniser holds the old stream's last messages: matched against the new stream's
+  // earlier ones they would pair frames seconds apart, and message_filters would warn "Messages
+  // of type N arrived out of order" (issue 56). The inputs come on one callback thread, so no
+  // message is inside the synchroniser now.
+  warnThrottled("time went back on '" + topic + "' (" + std::to_string(last.toSec()) + " -> " +
+                std::to_string(now.toSec()) +
+                " s: a bag played again, or the clock reset): the RGB-D synchroniser starts "
+                "afresh; the unmatched messages of before are dropped");
+  for (auto* filter : {color_stamps_.get(), depth_stamps_.get()}) filter->forgetLastStamp();
+  for (auto* filter : {color_info_stamps_.get(), depth_info_stamps_.get()}) {
+    if (filter != nullptr) filter->forgetLastStamp();
+  }
+  makeSynchronizer();
 }
 
 void RgbdInput::unsubscribe() {

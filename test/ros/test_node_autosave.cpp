@@ -954,6 +954,71 @@ TEST(NodeTfStampTest, ATfStampedWhenPublishedIsAWarningNamingTheCause) {
   fs::remove_all(root);
 }
 
+// A bag played again (or a clock reset) while the synchroniser still holds a message of the old
+// stream: message_filters warned "Messages of type 0 arrived out of order" and held the old
+// message against the new stream (issue 56, after ~reset and a replay). The node now starts its
+// synchroniser afresh, says why, and takes the new stream's frames.
+TEST(NodeInputTimeJumpTest, ABagPlayedAgainRestartsTheSynchroniser) {
+  ros::NodeHandle nh;
+  const std::string node = "/time_jump_node";
+  const fs::path root =
+      fs::temp_directory_path() / ("mvod_time_jump_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "maps");
+  std::mutex mutex;
+  double received = -1.0;
+  const ros::Subscriber sub =
+      subscribeMapStatus(nh, node, &mutex, [&](const diagnostic_msgs::DiagnosticStatus& status) {
+        for (const diagnostic_msgs::KeyValue& value : status.values) {
+          if (value.key == "frames received") received = std::atof(value.value.c_str());
+        }
+      });
+  SyntheticStream stream{SyntheticStream::Options()};
+  InputPublisher inputs(nh);
+  NodeOutputs outputs(nh, node, true);
+  const pid_t pid =
+      startNode((root / "maps").string(), node,
+                {"_detector:=topic", "_pose_source:=topic", "_keyframe_mode:=every_n",
+                 "_keyframe_every_n:=1", "_autosave_period_s:=0", "_diagnostic_period:=0.2"},
+                (root / "node.out").string());
+  ASSERT_GT(pid, 0);
+  KillOnExit guard{pid};
+  ASSERT_TRUE(ros::service::waitForService(node + "/get_objects", 30000));
+  ASSERT_TRUE(outputs.waitFor([&] { return inputs.connected(1, 1) && outputs.connected(); }, 30.0));
+  const auto received_at_least = [&](double count) {
+    return outputs.waitFor(
+        [&] {
+          const std::lock_guard<std::mutex> lock(mutex);
+          return received >= count;
+        },
+        30.0);
+  };
+  const ros::Time start = ros::Time::now();
+  auto feed = [&](const ros::Time& first, int frames) {
+    for (int i = 0; i < frames; ++i) {
+      inputs.publish(stream.make(i % stream.options().num_frames, first + ros::Duration(0.1 * i)));
+    }
+  };
+  feed(start, 5);
+  ASSERT_TRUE(received_at_least(5.0)) << "received " << received;
+  // The old stream's last colour image and camera_info, without their depth image: they stay in
+  // the synchroniser.
+  FrameMsgs last = stream.make(5, start + ros::Duration(0.5));
+  inputs.info_.publish(last.info);
+  inputs.rgb_.publish(last.rgb);
+  ros::WallDuration(0.2).sleep();
+  // The bag again, from its start: 10 s earlier.
+  feed(start - ros::Duration(10.0), 5);
+  EXPECT_TRUE(received_at_least(10.0)) << "received " << received;
+  ::kill(pid, SIGINT);
+  ::waitpid(pid, nullptr, 0);
+  guard.pid = -1;
+  const std::string logs = readLog(root / "node.out");
+  EXPECT_EQ(logs.find("arrived out of order"), std::string::npos) << logs;
+  EXPECT_NE(logs.find("the RGB-D synchroniser starts afresh"), std::string::npos) << logs;
+  fs::remove_all(root);
+}
+
 TEST(NodeMemoryTest, TheQueueIsBoundedByItsImagesMemory) {
   ros::NodeHandle nh;
   const std::string node = "/queue_mb_node";

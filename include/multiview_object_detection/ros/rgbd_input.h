@@ -57,6 +57,11 @@ class RgbdInput {
   using ExactPolicy4 =
       message_filters::sync_policies::ExactTime<Image, Image, CameraInfo, CameraInfo>;
 
+  // The synchroniser, new and empty, on the stamp filters.
+  void makeSynchronizer();
+  // A stamp went back on one input: the synchroniser starts afresh (a throttled warning).
+  void restartSynchronizer(const std::string& topic, const ros::Time& last, const ros::Time& now);
+
   void rgbdCallback(const sensor_msgs::ImageConstPtr& color,
                     const sensor_msgs::ImageConstPtr& depth,
                     const sensor_msgs::CameraInfoConstPtr& color_info,
