@@ -19,7 +19,7 @@ namespace mvod {
 namespace {
 
 using object_mapper_detail::addStageTimes;
-using object_mapper_detail::detectionLabel;
+using object_mapper_detail::warnDetection;
 
 using Clock = StopwatchClock;
 
@@ -264,7 +264,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
   const KeptDetections kept = keepDetections(frame, detections, label, &out);
   // Eq. 1: one cloud per detection, back-projected once for the whole frame.
   Clock::time_point t = Clock::now();
-  const KeyframeClouds clouds = prepareKeyframe(frame, kept, label, &out.warnings);
+  const KeyframeClouds clouds = prepareKeyframe(frame, kept, label, &out);
   out.times.extraction_ms = msSince(t);
   std::vector<SingleView> views = runSingleViews(frame, kept, clouds);
   if (cancelled()) {
@@ -279,16 +279,7 @@ Status ObjectMapper::processKeyframe(const RgbdFrame& frame,
 }
 
 void ObjectMapper::noteDropReasons(KeyframeReport* out) const {
-  // The first warning about a detection says why it went (later ones follow from it).
-  for (const std::string& warning : out->warnings) {
-    size_t index = 0;
-    std::string problem;
-    if (!object_mapper_detail::parseDetectionWarning(warning, &index, &problem)) continue;
-    if (index < out->drop_reasons.size() && out->object_ids[index] < 0 &&
-        out->drop_reasons[index].empty()) {
-      out->drop_reasons[index] = problem;
-    }
-  }
+  // A mapped detection has no reason; an unmapped one of a fault keyframe without its own, that.
   for (size_t i = 0; i < out->drop_reasons.size(); ++i) {
     if (out->object_ids[i] >= 0) out->drop_reasons[i].clear();
     if (out->object_ids[i] < 0 && out->drop_reasons[i].empty() && out->depth_fault) {
@@ -307,8 +298,7 @@ ObjectMapper::KeptDetections ObjectMapper::keepDetections(
     if (!(detection.score >= 0.f && detection.score <= 1.f)) {
       // A probability is what the map stores and averages (Eq. 8); a percentage would make a map
       // that cannot be reloaded.
-      out->warnings.push_back(label + ": " + detectionLabel(i, detection) +
-                              ": score is not a probability in [0, 1], skipped");
+      warnDetection(label, i, detection, "score is not a probability in [0, 1], skipped", out);
       continue;
     }
     if (!(detection.score >= config_.min_probability)) {
@@ -318,13 +308,12 @@ ObjectMapper::KeptDetections ObjectMapper::keepDetections(
     ++out->above_threshold;
     Detection2D named = detection;
     if (!nameClass(&named)) {
-      out->warnings.push_back(label + ": " + detectionLabel(i, detection) +
-                              ": unknown class (not a COCO class name), skipped");
+      warnDetection(label, i, detection, "unknown class (not a COCO class name), skipped", out);
       continue;
     }
     std::string problem;
     if (!boxLeavesBackground(frame, named, &problem)) {
-      out->warnings.push_back(label + ": " + detectionLabel(i, detection) + ": " + problem);
+      warnDetection(label, i, detection, problem, out);
       continue;
     }
     kept.detections.push_back(std::move(named));
@@ -363,7 +352,7 @@ bool ObjectMapper::boxLeavesBackground(const RgbdFrame& frame, const Detection2D
 ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& frame,
                                                            const KeptDetections& kept,
                                                            const std::string& label,
-                                                           std::vector<std::string>* warnings) {
+                                                           KeyframeReport* out) {
   // The whole view, once: the floor's height, and the surfaces around each detection for the
   // consistent selection and the evidence fusion.
   KeyframeClouds clouds;
@@ -388,7 +377,7 @@ ObjectMapper::KeyframeClouds ObjectMapper::prepareKeyframe(const RgbdFrame& fram
          existenceActive())) {
       clouds.depth_view = makeDepthView(frame.depth, frame.K_depth, frame.T_W_D);
     }
-    clouds.clouds_D = extractClouds(frame, kept, label, warnings);
+    clouds.clouds_D = extractClouds(frame, kept, label, out);
   };
   parallelInvoke(threadCount(), view_and_floor, depth_and_clouds);
   return clouds;
@@ -417,7 +406,7 @@ std::shared_ptr<DepthView> ObjectMapper::makeDepthView(const cv::Mat& depth,
 std::vector<PointCloud> ObjectMapper::extractClouds(const RgbdFrame& frame,
                                                     const KeptDetections& kept,
                                                     const std::string& label,
-                                                    std::vector<std::string>* warnings) const {
+                                                    KeyframeReport* out) const {
   const std::vector<Detection2D>& detections = kept.detections;
   std::vector<PointCloud> clouds_D;
   const Status extracted = extractor_.extract(frame, detections, &clouds_D);
@@ -428,8 +417,8 @@ std::vector<PointCloud> ObjectMapper::extractClouds(const RgbdFrame& frame,
     std::vector<PointCloud> single;
     const Status status = extractor_.extract(frame, {detections[k]}, &single);
     if (!status || single.size() != 1) {
-      warnings->push_back(label + ": " + detectionLabel(kept.index[k], detections[k]) + ": " +
-                          (status ? std::string("extraction failed") : status.message()));
+      warnDetection(label, kept.index[k], detections[k],
+                    status ? std::string("extraction failed") : status.message(), out);
       continue;
     }
     clouds_D[k] = std::move(single[0]);

@@ -18,7 +18,7 @@ namespace {
 
 using Clock = StopwatchClock;
 using object_mapper_detail::addStageTimes;
-using object_mapper_detail::detectionLabel;
+using object_mapper_detail::warnDetection;
 
 }  // namespace
 
@@ -49,8 +49,7 @@ void ObjectMapper::fuseKeyframe(const RgbdFrame& frame, int keyframe, const Kept
     addStageTimes(view.times, &out->times);
     out->times.largest_view_ms = std::max(out->times.largest_view_ms, view.wall_ms);
     if (!view.status) {
-      out->warnings.push_back(label + ": " + detectionLabel(kept.index[k], detection) + ": " +
-                              view.status.message());
+      warnDetection(label, kept.index[k], detection, view.status.message(), out);
       continue;
     }
     ObjectObservation& observation = view.observation;

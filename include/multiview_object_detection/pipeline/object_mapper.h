@@ -251,7 +251,7 @@ class ObjectMapper {
   // Eq. 1 and the shared inputs, on two jobs of the pool: the view and the floor from it; the
   // depth view and the detections' clouds.
   KeyframeClouds prepareKeyframe(const RgbdFrame& frame, const KeptDetections& kept,
-                                 const std::string& label, std::vector<std::string>* warnings);
+                                 const std::string& label, KeyframeReport* out);
   // Adds the view's floor layer to the floor estimate; the layer's own height, NaN if none.
   double addFloorSample(const SegmentSelector::FrameView& view);
   std::shared_ptr<DepthView> makeDepthView(const cv::Mat& depth, const CameraIntrinsics& K_depth,
@@ -259,13 +259,13 @@ class ObjectMapper {
   // One cloud per kept detection; a detection whose extraction fails gets an empty cloud and a
   // warning, the others their clouds.
   std::vector<PointCloud> extractClouds(const RgbdFrame& frame, const KeptDetections& kept,
-                                        const std::string& label,
-                                        std::vector<std::string>* warnings) const;
+                                        const std::string& label, KeyframeReport* out) const;
   // Sec. 3.2-3.3 for every kept detection, in parallel (largest clouds first).
   std::vector<SingleView> runSingleViews(const RgbdFrame& frame, const KeptDetections& kept,
                                          const KeyframeClouds& clouds) const;
   // Eq. 5-8 in detection order, then the deferred boxes of the objects that changed.
-  // out->drop_reasons from the warnings about single detections (the first one each).
+  // Completes out->drop_reasons (warnDetection set the first reason of each detection as it
+  // warned): none for a mapped detection, the fault for an unmapped one of a fault keyframe.
   void noteDropReasons(KeyframeReport* out) const;
   void fuseKeyframe(const RgbdFrame& frame, int keyframe, const KeptDetections& kept,
                     const std::string& label, const std::shared_ptr<const DepthView>& depth_view,
