@@ -261,7 +261,11 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
   // Sec. 3.5.1 first; Algorithm 1 then only sees the survivors.
   if (config_.prior_filter.enable) {
     report.atypical_ids = prior_filter_.atypicalObjects(database_);
-    for (const int id : report.atypical_ids) database_.remove(id);
+    for (const int id : report.atypical_ids) {
+      report.atypical_reasons.push_back(
+          prior_filter_.atypicalReason(database_.objects().at(id), database_.priors()));
+      database_.remove(id);
+    }
   }
   if (config_.intersection_filter.enable) {
     std::vector<std::pair<int, int>> duplicates;

@@ -39,8 +39,14 @@ void KeyframeWorker::refineLocked(const std::string& why) {
       merged += (merged.empty() ? "" : ", ") + std::to_string(pair.first) + " into " +
                 std::to_string(pair.second);
     }
-    ROS_INFO("refinement (%s): removed atypical %s, intersecting %s%s%s (%.1f ms)", why.c_str(),
-             idList(report.atypical_ids).c_str(), idList(report.intersecting_ids).c_str(),
+    // Each atypical object with why: too large (neighbours taken as one), too small or thin.
+    std::string atypical;
+    for (size_t k = 0; k < report.atypical_ids.size(); ++k) {
+      atypical += (k > 0 ? "; #" : "#") + std::to_string(report.atypical_ids[k]);
+      if (k < report.atypical_reasons.size()) atypical += " " + report.atypical_reasons[k];
+    }
+    ROS_INFO("refinement (%s): removed atypical [%s], intersecting %s%s%s (%.1f ms)", why.c_str(),
+             atypical.c_str(), idList(report.intersecting_ids).c_str(),
              merged.empty() ? "" : "; duplicates merged: ", merged.c_str(), report.time_ms);
   }
 }

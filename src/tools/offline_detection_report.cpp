@@ -130,6 +130,11 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                     const mvod::MapSummary& summary) {
   const mvod::StageTimes& med = summary.stage_ms_median;
   const mvod::MapSummary::Counts& counts = summary.counts;
+  // Atypical both ways: a too large box is often neighbours taken as one, a too small one a
+  // fragment or a false detection (issue 54, item 3).
+  const int too_large = static_cast<int>(
+      std::count_if(refinement.atypical_reasons.begin(), refinement.atypical_reasons.end(),
+                    [](const std::string& why) { return why.rfind("too large", 0) == 0; }));
   // The keyframe's whole time, detector and geometry (they run one after the other).
   std::vector<double> keyframe_ms;
   for (size_t k = 0; k < stats.stage_times.size(); ++k) {
@@ -138,7 +143,8 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
   std::fprintf(stderr,
                "%zu frames, %d keyframes (%zu with detections, %d taken for sensor or SLAM "
                "faults), %d errors; %zu objects "
-               "(removed: %zu atypical, %zu intersecting, of which %zu merged into a duplicate; "
+               "(removed: %zu atypical (%d too large, %d too small or thin), %zu intersecting, of "
+               "which %zu merged into a duplicate; "
                "%d gone by the existence evidence)\n"
                "stage medians (ms): detection %.1f  extraction %.1f  filter %.1f  lccp %.1f  "
                "manhattan %.1f  fusion %.1f  existence %.1f  total %.1f (geometry; with the "
@@ -146,7 +152,8 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
                num_frames, stats.keyframes, stats.stage_times.size(), stats.keyframes_faulty,
-               stats.errors, num_objects, refinement.atypical_ids.size(),
+               stats.errors, num_objects, refinement.atypical_ids.size(), too_large,
+               static_cast<int>(refinement.atypical_ids.size()) - too_large,
                refinement.intersecting_ids.size(), refinement.merged_ids.size(), stats.removed_gone,
                median(stats.detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
                med.manhattan_ms, med.fusion_ms, med.existence_ms, med.total_ms, median(keyframe_ms),
@@ -186,7 +193,11 @@ void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
                    reason.c_str());
     }
   };
-  for (const int id : refinement.atypical_ids) line(id, "atypical size for its class (Eq. 9)");
+  for (size_t k = 0; k < refinement.atypical_ids.size(); ++k) {
+    line(refinement.atypical_ids[k], k < refinement.atypical_reasons.size()
+                                         ? refinement.atypical_reasons[k]
+                                         : "atypical size for its class (Eq. 9)");
+  }
   for (const int id : refinement.intersecting_ids) {
     std::string reason = "mostly inside another object (Eq. 10, 11)";
     for (const auto& merged : refinement.merged_ids) {

@@ -106,6 +106,8 @@ class ObjectMapper {
 
   struct RefinementReport {
     std::vector<int> atypical_ids;
+    // Per atypical_ids: why (PriorSizeFilter::atypicalReason).
+    std::vector<std::string> atypical_reasons;
     std::vector<int> intersecting_ids;
     // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
     // (deleted id, id merged into).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace mvod {
@@ -10,6 +11,13 @@ namespace {
 
 // Full (Eq. 11 case 4) is η_B = 1; the polygon clipping is exact up to rounding.
 constexpr double kFullTolerance = 1e-6;
+
+// A ratio to its prior in two significant figures, without an exponent: 0.0028, 0.18, 8.1, 120.
+std::string ratioText(double ratio) {
+  char text[32];
+  std::snprintf(text, sizeof(text), ratio < 10.0 ? "%.2g" : "%.0f", ratio);
+  return text;
+}
 
 std::string streamNumber(double value) {
   std::ostringstream out;
@@ -76,23 +84,38 @@ std::string PriorSizeFilter::Config::print() const {
 }
 
 bool PriorSizeFilter::isTypical(const MapObject& object, const ClassPriors& priors) const {
+  return atypicalReason(object, priors).empty();
+}
+
+std::string PriorSizeFilter::atypicalReason(const MapObject& object,
+                                            const ClassPriors& priors) const {
   std::string class_name = object.class_name;
   if (class_name.empty() && object.class_id >= 0 &&
       object.class_id < static_cast<int>(cocoClassNames().size())) {
     class_name = cocoClassNames()[object.class_id];
   }
   const ClassPrior* prior = priors.find(class_name);
-  if (prior == nullptr || !prior->has_size) return config_.keep_classes_without_prior;
-
+  if (prior == nullptr || !prior->has_size) {
+    return config_.keep_classes_without_prior ? std::string()
+                                              : "no size prior for its class (Eq. 9)";
+  }
   const Eigen::Vector3d& size = object.box.size_m;
-  if (!size.allFinite() || !(size.minCoeff() >= 0.0)) return false;
+  if (!size.allFinite() || !(size.minCoeff() >= 0.0)) return "no valid box size (Eq. 9)";
   // Eq. 9. The prior's L, W, H and the box's need not be in the same order: only the volume and the
   // shortest edge are compared.
-  const double volume = size.prod();
-  const double prior_volume = prior->size_m.prod();
-  return volume >= config_.volume_min_ratio * prior_volume &&
-         volume <= config_.volume_max_ratio * prior_volume &&
-         size.minCoeff() >= config_.edge_min_ratio * prior->size_m.minCoeff();
+  const double volume_ratio = size.prod() / prior->size_m.prod();
+  const double edge_ratio = size.minCoeff() / prior->size_m.minCoeff();
+  const std::string of = " for a " + class_name + ": ";
+  if (!(volume_ratio >= config_.volume_min_ratio)) {
+    return "too small" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)";
+  }
+  if (!(volume_ratio <= config_.volume_max_ratio)) {
+    return "too large" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)";
+  }
+  if (!(edge_ratio >= config_.edge_min_ratio)) {
+    return "too thin" + of + "shortest edge " + ratioText(edge_ratio) + " x its prior's (Eq. 9)";
+  }
+  return std::string();
 }
 
 std::vector<int> PriorSizeFilter::atypicalObjects(const ObjectDatabase& database) const {

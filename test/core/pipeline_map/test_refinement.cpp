@@ -401,6 +401,30 @@ TEST_F(PriorSizeFilterTest, TooSmallAndTooBigAreRemoved) {
   EXPECT_FALSE(typical(Eigen::Vector3d(0.0, 0.0, 0.0)));
 }
 
+// The refinement says which way an object is atypical (issue 54, item 3): a box far larger than
+// its class is often neighbours taken as one, a far smaller or thinner one a fragment.
+TEST_F(PriorSizeFilterTest, TheReasonSaysTooLargeTooSmallOrTooThin) {
+  const PriorSizeFilter filter;
+  const auto reason = [&](const Eigen::Vector3d& size_m) {
+    return filter.atypicalReason(
+        makeObject(1, "chair", makeBox(Eigen::Vector3d(1, 1, 0.5), size_m)), priors_);
+  };
+  EXPECT_EQ(reason(Eigen::Vector3d(0.5, 0.5, 0.9)), "");
+  // 0.1 x 0.15 x 0.05 m: 0.00075 m^3, 0.0028 of the prior's 0.27225 m^3.
+  EXPECT_EQ(reason(Eigen::Vector3d(0.10, 0.15, 0.05)),
+            "too small for a chair: volume 0.0028 x its prior's (Eq. 9)");
+  EXPECT_EQ(reason(Eigen::Vector3d(2.0, 2.0, 2.0)),
+            "too large for a chair: volume 29 x its prior's (Eq. 9)");
+  // A slab of a chair's volume: 0.05 m against the prior's shortest edge 0.55 m.
+  EXPECT_EQ(reason(Eigen::Vector3d(2.0, 2.0, 0.05)),
+            "too thin for a chair: shortest edge 0.091 x its prior's (Eq. 9)");
+  // Each reason agrees with isTypical.
+  for (const Eigen::Vector3d& size :
+       {Eigen::Vector3d(0.3, 0.4, 0.5), Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 1, 1)}) {
+    EXPECT_EQ(reason(size).empty(), typical(size)) << size.transpose();
+  }
+}
+
 TEST_F(PriorSizeFilterTest, VolumeLimitsAreTheRatiosTimesThePriorVolume) {
   const Eigen::Vector3d prior(0.55, 0.55, 0.9);
   // Scaling the prior shape by s scales the volume by s^3 (and keeps the edges long enough).

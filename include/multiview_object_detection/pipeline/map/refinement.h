@@ -2,6 +2,7 @@
 // 11, Algorithm 1).
 #pragma once
 
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -27,6 +28,9 @@ class PriorSizeFilter {
 
   // Eq. 9: true when the box of `object` is a plausible size for its class.
   bool isTypical(const MapObject& object, const ClassPriors& priors) const;
+  // Why Eq. 9 rejects `object`, in a user's words ("too small for a chair: volume 0.20 x its
+  // prior's (Eq. 9)"; "too large", "too thin" likewise); empty when it is typical.
+  std::string atypicalReason(const MapObject& object, const ClassPriors& priors) const;
   // Ids of the objects Eq. 9 rejects.
   std::vector<int> atypicalObjects(const ObjectDatabase& database) const;
 
