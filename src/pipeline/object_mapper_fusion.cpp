@@ -260,12 +260,12 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
   RefinementReport report;
   // Sec. 3.5.1 first; Algorithm 1 then only sees the survivors.
   if (config_.prior_filter.enable) {
-    report.atypical_ids = prior_filter_.atypicalObjects(database_);
-    for (const int id : report.atypical_ids) {
-      report.atypical_reasons.push_back(
-          prior_filter_.atypicalReason(database_.objects().at(id), database_.priors()));
-      database_.remove(id);
-    }
+    std::vector<PriorSizeFilter::Verdict> verdicts;
+    report.atypical_ids =
+        prior_filter_.atypicalObjects(database_, &verdicts, &report.atypical_reasons);
+    report.atypical_too_large = static_cast<int>(
+        std::count(verdicts.begin(), verdicts.end(), PriorSizeFilter::Verdict::kTooLarge));
+    for (const int id : report.atypical_ids) database_.remove(id);
   }
   if (config_.intersection_filter.enable) {
     std::vector<std::pair<int, int>> duplicates;

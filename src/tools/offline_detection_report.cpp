@@ -130,11 +130,6 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                     const mvod::MapSummary& summary) {
   const mvod::StageTimes& med = summary.stage_ms_median;
   const mvod::MapSummary::Counts& counts = summary.counts;
-  // Atypical both ways: a too large box is often neighbours taken as one, a too small one a
-  // fragment or a false detection (issue 54, item 3).
-  const int too_large = static_cast<int>(
-      std::count_if(refinement.atypical_reasons.begin(), refinement.atypical_reasons.end(),
-                    [](const std::string& why) { return why.rfind("too large", 0) == 0; }));
   // The keyframe's whole time, detector and geometry (they run one after the other).
   std::vector<double> keyframe_ms;
   for (size_t k = 0; k < stats.stage_times.size(); ++k) {
@@ -152,8 +147,9 @@ void printRunReport(const RunStats& stats, size_t num_frames, size_t num_objects
                "counts: %d detections, %d >= lambda, %d with a box, %d inserted, %d fused; "
                "%d objects before refinement\n",
                num_frames, stats.keyframes, stats.stage_times.size(), stats.keyframes_faulty,
-               stats.errors, num_objects, refinement.atypical_ids.size(), too_large,
-               static_cast<int>(refinement.atypical_ids.size()) - too_large,
+               stats.errors, num_objects, refinement.atypical_ids.size(),
+               refinement.atypical_too_large,
+               static_cast<int>(refinement.atypical_ids.size()) - refinement.atypical_too_large,
                refinement.intersecting_ids.size(), refinement.merged_ids.size(), stats.removed_gone,
                median(stats.detection_ms), med.extraction_ms, med.filter_ms, med.lccp_ms,
                med.manhattan_ms, med.fusion_ms, med.existence_ms, med.total_ms, median(keyframe_ms),

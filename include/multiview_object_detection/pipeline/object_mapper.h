@@ -106,8 +106,10 @@ class ObjectMapper {
 
   struct RefinementReport {
     std::vector<int> atypical_ids;
-    // Per atypical_ids: why (PriorSizeFilter::atypicalReason).
+    // Per atypical_ids: why, in a user's words (PriorSizeFilter::judge); and how many were too
+    // large (the others too small or thin, or of no valid size).
     std::vector<std::string> atypical_reasons;
+    int atypical_too_large = 0;
     std::vector<int> intersecting_ids;
     // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
     // (deleted id, id merged into).

@@ -84,11 +84,15 @@ std::string PriorSizeFilter::Config::print() const {
 }
 
 bool PriorSizeFilter::isTypical(const MapObject& object, const ClassPriors& priors) const {
-  return atypicalReason(object, priors).empty();
+  return judge(object, priors) == Verdict::kTypical;
 }
 
-std::string PriorSizeFilter::atypicalReason(const MapObject& object,
-                                            const ClassPriors& priors) const {
+PriorSizeFilter::Verdict PriorSizeFilter::judge(const MapObject& object, const ClassPriors& priors,
+                                                std::string* reason) const {
+  const auto say = [reason](Verdict verdict, const std::string& text) {
+    if (reason != nullptr) *reason = text;
+    return verdict;
+  };
   std::string class_name = object.class_name;
   if (class_name.empty() && object.class_id >= 0 &&
       object.class_id < static_cast<int>(cocoClassNames().size())) {
@@ -96,33 +100,46 @@ std::string PriorSizeFilter::atypicalReason(const MapObject& object,
   }
   const ClassPrior* prior = priors.find(class_name);
   if (prior == nullptr || !prior->has_size) {
-    return config_.keep_classes_without_prior ? std::string()
-                                              : "no size prior for its class (Eq. 9)";
+    return config_.keep_classes_without_prior
+               ? say(Verdict::kTypical, "")
+               : say(Verdict::kNoPrior, "no size prior for its class (Eq. 9)");
   }
   const Eigen::Vector3d& size = object.box.size_m;
-  if (!size.allFinite() || !(size.minCoeff() >= 0.0)) return "no valid box size (Eq. 9)";
+  if (!size.allFinite() || !(size.minCoeff() >= 0.0)) {
+    return say(Verdict::kNoSize, "no valid box size (Eq. 9)");
+  }
   // Eq. 9. The prior's L, W, H and the box's need not be in the same order: only the volume and the
   // shortest edge are compared.
   const double volume_ratio = size.prod() / prior->size_m.prod();
   const double edge_ratio = size.minCoeff() / prior->size_m.minCoeff();
   const std::string of = " for a " + class_name + ": ";
   if (!(volume_ratio >= config_.volume_min_ratio)) {
-    return "too small" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)";
+    return say(Verdict::kTooSmall,
+               "too small" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)");
   }
   if (!(volume_ratio <= config_.volume_max_ratio)) {
-    return "too large" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)";
+    return say(Verdict::kTooLarge,
+               "too large" + of + "volume " + ratioText(volume_ratio) + " x its prior's (Eq. 9)");
   }
   if (!(edge_ratio >= config_.edge_min_ratio)) {
-    return "too thin" + of + "shortest edge " + ratioText(edge_ratio) + " x its prior's (Eq. 9)";
+    return say(Verdict::kTooThin, "too thin" + of + "shortest edge " + ratioText(edge_ratio) +
+                                      " x its prior's (Eq. 9)");
   }
-  return std::string();
+  return say(Verdict::kTypical, "");
 }
 
-std::vector<int> PriorSizeFilter::atypicalObjects(const ObjectDatabase& database) const {
+std::vector<int> PriorSizeFilter::atypicalObjects(const ObjectDatabase& database,
+                                                  std::vector<Verdict>* verdicts,
+                                                  std::vector<std::string>* reasons) const {
   std::vector<int> ids;
   if (!config_.enable) return ids;
+  std::string reason;
   for (const auto& entry : database.objects()) {
-    if (!isTypical(entry.second, database.priors())) ids.push_back(entry.first);
+    const Verdict verdict = judge(entry.second, database.priors(), &reason);
+    if (verdict == Verdict::kTypical) continue;
+    ids.push_back(entry.first);
+    if (verdicts != nullptr) verdicts->push_back(verdict);
+    if (reasons != nullptr) reasons->push_back(reason);
   }
   return ids;
 }

@@ -406,8 +406,10 @@ TEST_F(PriorSizeFilterTest, TooSmallAndTooBigAreRemoved) {
 TEST_F(PriorSizeFilterTest, TheReasonSaysTooLargeTooSmallOrTooThin) {
   const PriorSizeFilter filter;
   const auto reason = [&](const Eigen::Vector3d& size_m) {
-    return filter.atypicalReason(
-        makeObject(1, "chair", makeBox(Eigen::Vector3d(1, 1, 0.5), size_m)), priors_);
+    std::string why = "not set";
+    filter.judge(makeObject(1, "chair", makeBox(Eigen::Vector3d(1, 1, 0.5), size_m)), priors_,
+                 &why);
+    return why;
   };
   EXPECT_EQ(reason(Eigen::Vector3d(0.5, 0.5, 0.9)), "");
   // 0.1 x 0.15 x 0.05 m: 0.00075 m^3, 0.0028 of the prior's 0.27225 m^3.
@@ -494,6 +496,15 @@ TEST_F(PriorSizeFilterTest, AtypicalObjectsOfADatabase) {
        makeObject(9, "chair", makeBox(Eigen::Vector3d(4, 0, 1), Eigen::Vector3d(2, 2, 2)))},
       priors_);
   EXPECT_EQ(PriorSizeFilter().atypicalObjects(database), (std::vector<int>{5, 8, 9}));
+  // Per id, which way (5: a 5 cm slab of a chair; 8: a fragment; 9: 2 m across).
+  using Verdict = PriorSizeFilter::Verdict;
+  std::vector<Verdict> verdicts;
+  std::vector<std::string> reasons;
+  PriorSizeFilter().atypicalObjects(database, &verdicts, &reasons);
+  EXPECT_EQ(verdicts,
+            (std::vector<Verdict>{Verdict::kTooThin, Verdict::kTooSmall, Verdict::kTooLarge}));
+  ASSERT_EQ(reasons.size(), 3u);
+  EXPECT_EQ(reasons[2].rfind("too large for a chair", 0), 0u) << reasons[2];
   PriorSizeFilter::Config config;
   config.keep_classes_without_prior = false;
   EXPECT_EQ(PriorSizeFilter(config).atypicalObjects(database), (std::vector<int>{5, 6, 8, 9}));

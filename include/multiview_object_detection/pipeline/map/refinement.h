@@ -26,13 +26,18 @@ class PriorSizeFilter {
   explicit PriorSizeFilter(const Config& config) : config_(config) {}
   const Config& config() const { return config_; }
 
+  // Eq. 9's verdict on a box: typical, or which limit it breaks.
+  enum class Verdict { kTypical, kTooSmall, kTooLarge, kTooThin, kNoPrior, kNoSize };
+  // Eq. 9 on the box of `object`; *reason (when given) says why it is atypical in a user's words
+  // ("too small for a chair: volume 0.035 x its prior's (Eq. 9)"), empty when it is typical.
+  Verdict judge(const MapObject& object, const ClassPriors& priors,
+                std::string* reason = nullptr) const;
   // Eq. 9: true when the box of `object` is a plausible size for its class.
   bool isTypical(const MapObject& object, const ClassPriors& priors) const;
-  // Why Eq. 9 rejects `object`, in a user's words ("too small for a chair: volume 0.20 x its
-  // prior's (Eq. 9)"; "too large", "too thin" likewise); empty when it is typical.
-  std::string atypicalReason(const MapObject& object, const ClassPriors& priors) const;
-  // Ids of the objects Eq. 9 rejects.
-  std::vector<int> atypicalObjects(const ObjectDatabase& database) const;
+  // Ids of the objects Eq. 9 rejects, in id order; per id its verdict and reason (when given).
+  std::vector<int> atypicalObjects(const ObjectDatabase& database,
+                                   std::vector<Verdict>* verdicts = nullptr,
+                                   std::vector<std::string>* reasons = nullptr) const;
 
  private:
   Config config_;
