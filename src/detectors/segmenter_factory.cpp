@@ -162,29 +162,31 @@ Status createInstanceSegmenter(const SegmenterOptions& given,
   return Status::Ok();
 }
 
-std::vector<cv::Rect> detectionLabelSpots(const std::vector<Detection2D>& detections,
-                                          const cv::Size& image_size,
-                                          std::vector<std::string>* texts_out, int* baseline_out) {
+DetectionLabels layoutDetectionLabels(const std::vector<Detection2D>& detections,
+                                      const cv::Size& image_size) {
   // "class score" over each box's top-left corner, at the free spot nearest it: boxes that share
   // a top edge would otherwise cover each other's labels.
-  std::vector<std::string> texts;
+  DetectionLabels labels;
   std::vector<cv::Point> anchors;
   std::vector<cv::Size> sizes;
-  int baseline = 0;
   for (const Detection2D& det : detections) {
     char text[160];
     std::snprintf(text, sizeof(text), "%s %.2f", det.class_name.c_str(), det.score);
-    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.5, 1, &baseline);
-    texts.emplace_back(text);
-    sizes.emplace_back(size.width, size.height + baseline + 2);
+    const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.5, 1, &labels.baseline);
+    labels.texts.emplace_back(text);
+    sizes.emplace_back(size.width, size.height + labels.baseline + 2);
     anchors.emplace_back(det.box_px.x + size.width / 2, det.box_px.y - 2 - sizes.back().height / 2);
   }
-  if (texts_out != nullptr) *texts_out = std::move(texts);
-  if (baseline_out != nullptr) *baseline_out = baseline;
-  return layoutLabels(anchors, sizes, cv::Rect(cv::Point(), image_size), {2, 80, 0});
+  labels.spots = layoutLabels(anchors, sizes, cv::Rect(cv::Point(), image_size), {2, 80, 0});
+  return labels;
 }
 
 cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections) {
+  return drawDetections(image_bgr, detections, layoutDetectionLabels(detections, image_bgr.size()));
+}
+
+cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections,
+                       const DetectionLabels& labels) {
   cv::Mat canvas = image_bgr.clone();
   std::vector<cv::Scalar> colours;
   for (size_t i = 0; i < detections.size(); ++i) {
@@ -208,14 +210,12 @@ cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>&
     }
     cv::rectangle(canvas, det.box_px, colours.back(), 2);
   }
-  std::vector<std::string> texts;
-  int baseline = 0;
-  const std::vector<cv::Rect> spots =
-      detectionLabelSpots(detections, canvas.size(), &texts, &baseline);
-  for (size_t i = 0; i < spots.size(); ++i) {
-    cv::rectangle(canvas, spots[i], colours[i], cv::FILLED);
-    const cv::Point origin(spots[i].x, spots[i].y + spots[i].height - baseline);
-    cv::putText(canvas, texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1);
+  for (size_t i = 0; i < labels.spots.size() && i < colours.size(); ++i) {
+    const cv::Rect& spot = labels.spots[i];
+    cv::rectangle(canvas, spot, colours[i], cv::FILLED);
+    const cv::Point origin(spot.x, spot.y + spot.height - labels.baseline);
+    cv::putText(canvas, labels.texts[i], origin, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0),
+                1);
   }
   return canvas;
 }

@@ -129,8 +129,9 @@ cv::Mat drawKeyframeOverlay(const RgbdFrame& frame, const std::vector<Detection2
     texts.push_back("#" + std::to_string(object.id) + " " + object.class_name);
   }
   cv::addWeighted(boxes, kBoxOpacity, canvas, 1.0 - kBoxOpacity, 0.0, canvas);
-  drawBoxLabels(tops, texts, detectionLabelSpots(labelled, canvas.size()), &canvas);
-  return drawDetections(canvas, labelled);
+  const DetectionLabels detection_labels = layoutDetectionLabels(labelled, canvas.size());
+  drawBoxLabels(tops, texts, detection_labels.spots, &canvas);
+  return drawDetections(canvas, labelled, detection_labels);
 }
 
 }  // namespace mvod

@@ -77,15 +77,21 @@ std::string resolveModelPath(const SegmenterOptions& options, const std::string&
 // creation then says what is missing). Any other name is returned as it is.
 std::string resolveAutoDetector(const SegmenterOptions& options);
 
+// The "class score" labels of detections on an image: one rectangle per detection, in order, at
+// the free spot nearest its box's top-left corner, with its text and the font's baseline.
+struct DetectionLabels {
+  std::vector<cv::Rect> spots;
+  std::vector<std::string> texts;
+  int baseline = 0;
+};
+DetectionLabels layoutDetectionLabels(const std::vector<Detection2D>& detections,
+                                      const cv::Size& image_size);
+
 // Draws tinted masks, boxes and "class score" labels on a copy of the image, for people to look at.
 cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections);
-
-// Where drawDetections puts the "class score" labels on an image of `image_size`: one rectangle per
-// detection, in order (what else is drawn on the image keeps clear of them); their texts and the
-// font's baseline when asked for.
-std::vector<cv::Rect> detectionLabelSpots(const std::vector<Detection2D>& detections,
-                                          const cv::Size& image_size,
-                                          std::vector<std::string>* texts = nullptr,
-                                          int* baseline = nullptr);
+// The same with the labels laid out already (layoutDetectionLabels on this image's size), for a
+// caller that keeps its own drawings clear of them.
+cv::Mat drawDetections(const cv::Mat& image_bgr, const std::vector<Detection2D>& detections,
+                       const DetectionLabels& labels);
 
 }  // namespace mvod

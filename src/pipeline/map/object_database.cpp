@@ -215,12 +215,12 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
                                                           bool defer_rebox, int object_id) {
   beginKeyframe(observation.keyframe);
   FusionResult result;
-  MapObject* nearest = nearestSameClass(observation, &result.distance_m);
   // Evidence fusion: the voxels of this view's cut and of what it saw around it, computed once
   // (by the single-view stage, or here).
   const bool evidence = config_.fusion == "evidence";
   const std::shared_ptr<const FusionKeys> keys = evidence ? fusionKeysOf(observation) : nullptr;
   MapObject* target = nullptr;
+  bool nearest_searched = false;  // result.distance_m holds Eq. 6's min d_i
   if (config_.disable_fusion || object_id == -1) {
     target = nullptr;
   } else if (object_id >= 0) {
@@ -229,9 +229,12 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
   } else if (evidence) {
     const std::vector<Candidate> candidates = candidatesOf(observation, *keys);
     if (!candidates.empty()) target = candidates.front().object;
-  } else if (nearest != nullptr &&
-             result.distance_m <= priors_.fusionDistance(observation.class_name)) {
-    target = nearest;  // Eq. 6
+  } else {
+    MapObject* nearest = nearestSameClass(observation, &result.distance_m);
+    nearest_searched = true;
+    if (nearest != nullptr && result.distance_m <= priors_.fusionDistance(observation.class_name)) {
+      target = nearest;  // Eq. 6
+    }
   }
   if (target != nullptr) {
     result.distance_m = (target->seenBox().center_m - observation.box.center_m).norm();
@@ -245,6 +248,8 @@ ObjectDatabase::FusionResult ObjectDatabase::fuseOrInsert(const ObjectObservatio
     result.object_id = target->id;
     return result;
   }
+  // Inserted: how far the nearest object of its class is (Eq. 6's min d_i), before it joins them.
+  if (!nearest_searched) nearestSameClass(observation, &result.distance_m);
   result.decision = Decision::kInserted;
   result.object_id = insert(observation, keys.get());
   return result;
