@@ -295,6 +295,9 @@ Status decodeMaskRcnn(const cv::Mat& detection_out, const cv::Mat& detection_mas
     cv::resize(small, stretched, detection.box_px.size(), 0, 0, cv::INTER_LINEAR);
     detection.mask = cv::Mat::zeros(detection.box_px.size(), CV_8UC1);
     detection.mask.setTo(255, stretched > config.mask_threshold);
+    detection.mask_cell_px =
+        static_cast<float>(std::max(static_cast<double>(detection.box_px.width) / mask_w,
+                                    static_cast<double>(detection.box_px.height) / mask_h));
     candidates.push_back(std::move(detection));
   }
   // The network already applies NMS; this only removes exact repeats the graph may emit.

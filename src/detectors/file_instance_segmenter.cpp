@@ -129,6 +129,19 @@ bool parseBox(const json& entry, const cv::Size& image_size, Detection2D* detect
   return true;
 }
 
+// The optional "mask_cell_px" (Detection2D::mask_cell_px; absent = 0).
+bool parseMaskCell(const json& entry, Detection2D* detection, std::string* problem) {
+  const auto cell_it = entry.find("mask_cell_px");
+  if (cell_it == entry.end() || cell_it->is_null()) return true;
+  const double cell_px = cell_it->is_number() ? cell_it->get<double>() : -1.0;
+  if (!std::isfinite(cell_px) || cell_px < 0.0 || cell_px > 1e4) {
+    *problem = "\"mask_cell_px\" is not a number of pixels in [0, 10000]";
+    return false;
+  }
+  detection->mask_cell_px = static_cast<float>(cell_px);
+  return true;
+}
+
 // Reads one entry without touching its mask file; false with *problem set when the entry has to
 // be skipped.
 bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& image_size,
@@ -140,7 +153,8 @@ bool parseEntry(const json& entry, const fs::path& directory, const cv::Size& im
   }
   bool has_box = false;
   if (!parseClass(entry, detection, problem) || !parseScore(entry, detection, problem) ||
-      !parseBox(entry, image_size, detection, &has_box, problem)) {
+      !parseBox(entry, image_size, detection, &has_box, problem) ||
+      !parseMaskCell(entry, detection, problem)) {
     return false;
   }
   const auto mask_it = entry.find("mask");
@@ -343,6 +357,9 @@ Status FileInstanceSegmenter::write(const std::string& directory, const std::str
     entry["score"] = std::round(static_cast<double>(detection.score) * 1e6) / 1e6;
     const cv::Rect& b = detection.box_px;
     entry["box"] = json::array({b.x, b.y, b.x + b.width, b.y + b.height});
+    if (detection.mask_cell_px > 0.f) {
+      entry["mask_cell_px"] = std::round(static_cast<double>(detection.mask_cell_px) * 1e3) / 1e3;
+    }
     if (!detection.mask.empty()) {
       if (detection.mask.type() != CV_8UC1) {
         return Status::Error(frame_name + ": detection " + std::to_string(k) +

@@ -223,6 +223,7 @@ Status decodeYoloSeg(const cv::Mat& output0, const cv::Mat& output1, const Lette
     detection.mask = instanceMask(protos, coefficients, candidate, detection.box_px, letterbox,
                                   config.mask_threshold);
     if (cv::countNonZero(detection.mask) == 0) continue;
+    detection.mask_cell_px = static_cast<float>(kYoloProtoStride / letterbox.scale);
     detector_common::setClass(labels[candidate.label], &detection);
     detection.score = candidate.score;
     detections->push_back(std::move(detection));

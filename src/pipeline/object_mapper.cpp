@@ -107,6 +107,7 @@ void ObjectMapper::Config::usePaperMethod() {
   box.outline_cell_m = 0.0;
   box.normal_estimation = "radius";
   extractor.min_consistent_neighbours = 0;
+  extractor.max_depth_edge_margin_px = 0;
   extractor.near_sampling_leaf_m = 0.0;
   filter.outlier_removal = "statistical";
   lccp.implementation = "pcl";

@@ -73,6 +73,7 @@ ObjectCloudExtractor::Config getObjectCloudExtractorConfigFromRosParam(
   p.read("pixel_stride", &c.pixel_stride);
   p.readNumber("near_sampling_leaf_m", &c.near_sampling_leaf_m);
   p.read("min_consistent_neighbours", &c.min_consistent_neighbours);
+  p.read("max_depth_edge_margin_px", &c.max_depth_edge_margin_px);
   p.readNumber("consistency_tolerance_m", &c.consistency_tolerance_m);
   p.readNumber("depth_step_per_m2", &c.depth_step_per_m2);
   return c;

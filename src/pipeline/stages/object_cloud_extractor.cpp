@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -42,6 +43,11 @@ struct MaskLookup {
   cv::Mat mask;      // CV_8UC1
   cv::Point origin;  // colour pixel of mask pixel (0, 0)
   cv::Rect box;      // non-zero pixels, colour pixels; empty = nothing to select
+  int depth_edge_margin_px = 0;
+  // Per depth pixel of near_edge_region, the depth of the nearest near-side edge within the margin
+  // (+inf where there is none); null when the margin is 0. Shared by the masks of one margin.
+  const cv::Mat* near_edge_m = nullptr;
+  cv::Point near_edge_origin;  // depth pixel of near_edge_m's (0, 0)
 };
 
 }  // namespace
@@ -60,6 +66,10 @@ Status ObjectCloudExtractor::Config::isValid() const {
   if (mask_erosion_px < 0 || mask_erosion_px > 100) {
     return Status::Error("mask_erosion_px must be in [0, 100] (got " +
                          std::to_string(mask_erosion_px) + ")");
+  }
+  if (max_depth_edge_margin_px < 0 || max_depth_edge_margin_px > 50) {
+    return Status::Error("max_depth_edge_margin_px must be in [0, 50] (got " +
+                         std::to_string(max_depth_edge_margin_px) + ")");
   }
   if (min_consistent_neighbours < 0 || min_consistent_neighbours > 4) {
     return Status::Error("min_consistent_neighbours must be in [0, 4] (got " +
@@ -89,6 +99,7 @@ std::string ObjectCloudExtractor::Config::print() const {
       << "pixel_stride: " << pixel_stride << "\n"
       << "near_sampling_leaf_m: " << near_sampling_leaf_m << "\n"
       << "min_consistent_neighbours: " << min_consistent_neighbours << "\n"
+      << "max_depth_edge_margin_px: " << max_depth_edge_margin_px << "\n"
       << "consistency_tolerance_m: " << consistency_tolerance_m << "\n"
       << "depth_step_per_m2: " << depth_step_per_m2 << "\n";
   return out.str();
@@ -148,6 +159,14 @@ PointCloud ObjectCloudExtractor::backProjectDepth(const cv::Mat& depth, const Ca
 
 namespace {
 
+// A detection's margin (Config::max_depth_edge_margin_px): its mask's cell, rounded, at most the
+// maximum; 0 without a known cell.
+int depthEdgeMarginPx(const Detection2D& detection, const ObjectCloudExtractor::Config& config) {
+  const float cell_px = detection.mask_cell_px;
+  if (!(cell_px > 1.f) || !std::isfinite(cell_px)) return 0;
+  return static_cast<int>(std::min<long>(std::lround(cell_px), config.max_depth_edge_margin_px));
+}
+
 // The detections' masks prepared for look-ups (eroded by mask_erosion_px first), all checked
 // before any work, so a bad one leaves no partial output. An empty mask gives no pixels.
 Status prepareMasks(const RgbdFrame& frame, const std::vector<Detection2D>& detections,
@@ -190,6 +209,7 @@ Status prepareMasks(const RgbdFrame& frame, const std::vector<Detection2D>& dete
       lookup.origin = origin;
     }
     lookup.box = nonZeroBounds(lookup.mask) + lookup.origin;
+    lookup.depth_edge_margin_px = depthEdgeMarginPx(detections[i], config);
   }
   return Status::Ok();
 }
@@ -216,6 +236,11 @@ inline bool onNearSamplingGrid(int u, int v, double z, double px_per_m) {
   return stride <= 1 || (u % stride == 0 && v % stride == 0);
 }
 
+// The depth tolerance at z: the consistency tolerance plus three of the sensor's depth steps.
+inline double depthToleranceM(double z, const ObjectCloudExtractor::Config& config) {
+  return config.consistency_tolerance_m + 3.0 * config.depth_step_per_m2 * z * z;
+}
+
 // Depth-edge outliers: a pixel is kept when enough of its four neighbours (at the stride) have a
 // depth within a few of the sensor's depth steps of its own. A line of flying pixels between an
 // object and the background, or an isolated speckle, has at most two such neighbours; a
@@ -228,8 +253,7 @@ bool consistentDepth(const cv::Mat& depth, int u, int v, double z,
   const int min_neighbours = config.min_consistent_neighbours;
   if (min_neighbours <= 0) return true;
   const int stride = config.pixel_stride;
-  const double tolerance_m =
-      config.consistency_tolerance_m + 3.0 * config.depth_step_per_m2 * z * z;
+  const double tolerance_m = depthToleranceM(z, config);
   static constexpr int kDu[4] = {1, -1, 0, 0};
   static constexpr int kDv[4] = {0, 0, 1, -1};
   int agreeing = 0;
@@ -254,6 +278,74 @@ void fillDepthRow(const cv::Mat& depth, int v, int first_column, int width, doub
                  ? std::nan("")
                  : depthMetres(depth, u, v, min_m, max_m);
   }
+}
+
+// The depth of every near-side edge pixel (+inf elsewhere). A near-side edge pixel has a
+// 4-neighbour farther than it by more than the depth tolerance: the silhouette of a mug against
+// the table behind it. A surface seen at a grazing angle, however steep, has none (its
+// neighbouring pixels step by less than the tolerance).
+// Over `region` of the depth image (the result's pixel (0, 0) is region.tl()).
+cv::Mat nearEdgeDepths(const cv::Mat& depth, const cv::Rect& region,
+                       const ObjectCloudExtractor::Config& config) {
+  const float inf = std::numeric_limits<float>::infinity();
+  // The region's depths with a one-pixel border (NaN outside the image).
+  const cv::Rect grown(region.x - 1, region.y - 1, region.width + 2, region.height + 2);
+  cv::Mat depth_m(grown.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  const cv::Rect inside = grown & cv::Rect(0, 0, depth.cols, depth.rows);
+  for (int v = inside.y; v < inside.br().y; ++v) {
+    ObjectCloudExtractor::depthRowAt(depth, v, inside.x, 1, inside.width, config.min_valid_depth_m,
+                                     config.max_valid_depth_m,
+                                     depth_m.ptr<float>(v - grown.y) + (inside.x - grown.x));
+  }
+  cv::Mat edge_m(region.size(), CV_32FC1, cv::Scalar(inf));
+  const auto farther = [&](float z, int u, int v) {  // grown's pixel; false for NaN
+    const float zn = depth_m.ptr<float>(v)[u];
+    return zn - z > depthToleranceM(zn, config);
+  };
+  for (int v = 1; v <= region.height; ++v) {
+    const float* row = depth_m.ptr<float>(v);
+    float* edge_row = edge_m.ptr<float>(v - 1);
+    for (int u = 1; u <= region.width; ++u) {
+      const float z = row[u];
+      if (!std::isfinite(z)) continue;
+      if (farther(z, u + 1, v) || farther(z, u - 1, v) || farther(z, u, v + 1) ||
+          farther(z, u, v - 1)) {
+        edge_row[u - 1] = z;
+      }
+    }
+  }
+  return edge_m;
+}
+
+// Each mask's near-edge look-up (MaskLookup::near_edge_m): the nearest near-side edge depth within
+// its margin (a square window, the minimum of nearEdgeDepths over it), one map per margin in use.
+// `region`: the depth pixels that may be looked up (a registered frame: the masks' boxes).
+void attachNearEdges(const cv::Mat& depth, const cv::Rect& region,
+                     const ObjectCloudExtractor::Config& config, std::vector<MaskLookup>* masks,
+                     std::map<int, cv::Mat>* near_edge_by_margin) {
+  cv::Mat edge_m;
+  for (MaskLookup& m : *masks) {
+    const int margin_px = m.depth_edge_margin_px;
+    if (margin_px <= 0 || m.box.empty()) continue;
+    cv::Mat& near_edge_m = (*near_edge_by_margin)[margin_px];
+    if (near_edge_m.empty()) {
+      if (edge_m.empty()) edge_m = nearEdgeDepths(depth, region, config);
+      const cv::Mat window =
+          cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * margin_px + 1, 2 * margin_px + 1));
+      cv::erode(edge_m, near_edge_m, window, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+                cv::Scalar(std::numeric_limits<float>::infinity()));
+    }
+    m.near_edge_m = &near_edge_m;
+    m.near_edge_origin = region.tl();
+  }
+}
+
+// Whether mask m takes the depth pixel (u, v) at z: not on the far side of a depth edge within
+// its margin.
+inline bool clearOfDepthEdge(const MaskLookup& m, int u, int v, double z, double tolerance_m) {
+  return m.near_edge_m == nullptr ||
+         !(z - m.near_edge_m->ptr<float>(v - m.near_edge_origin.y)[u - m.near_edge_origin.x] >
+           tolerance_m);
 }
 
 // Same pixel grid (a registered frame): only depth pixels inside some mask matter. The stride grid
@@ -299,8 +391,8 @@ void extractRegistered(const RgbdFrame& frame, const std::vector<MaskLookup>& ma
       const double z = here[k];
       if (!std::isfinite(z)) continue;
       if (!onNearSamplingGrid(u, v, z, near_px_per_m)) continue;
+      const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
       if (min_neighbours > 0) {
-        const double tolerance_m = tolerance_base_m + tolerance_per_m2 * z * z;
         // false for NaN
         const int agreeing = (std::abs(here[k + stride] - z) <= tolerance_m) +
                              (std::abs(here[k - stride] - z) <= tolerance_m) +
@@ -315,7 +407,8 @@ void extractRegistered(const RgbdFrame& frame, const std::vector<MaskLookup>& ma
       for (const size_t i : row_masks) {
         const MaskLookup& m = masks[i];
         if (u < m.box.x || u >= m.box.br().x) continue;
-        if (m.mask.ptr<uint8_t>(v - m.origin.y)[u - m.origin.x] != 0) {
+        if (m.mask.ptr<uint8_t>(v - m.origin.y)[u - m.origin.x] != 0 &&
+            clearOfDepthEdge(m, u, v, z, tolerance_m)) {
           (*clouds_D)[i].push_back(p_D);
         }
       }
@@ -339,14 +432,16 @@ void extractUnregistered(const RgbdFrame& frame, const std::vector<MaskLookup>& 
     return any_box.contains(cv::Point(uc, vc)) &&
            covered.ptr<uint8_t>(vc - any_box.y)[uc - any_box.x] != 0;
   };
-  // Adds p_D to every detection whose mask covers colour pixel (uc, vc).
-  auto assign = [&](int uc, int vc, const Eigen::Vector3f& p_D) {
+  // Adds depth pixel (u, v)'s p_D to every detection whose mask covers colour pixel (uc, vc) and
+  // takes it (clearOfDepthEdge).
+  auto assign = [&](int uc, int vc, int u, int v, const Eigen::Vector3d& p_D) {
     if (!any_box.contains(cv::Point(uc, vc))) return;
     for (size_t i = 0; i < masks.size(); ++i) {
       if (!masks[i].box.contains(cv::Point(uc, vc))) continue;
       const MaskLookup& m = masks[i];
-      if (m.mask.ptr<uint8_t>(vc - m.origin.y)[uc - m.origin.x] != 0) {
-        (*clouds_D)[i].push_back(p_D);
+      if (m.mask.ptr<uint8_t>(vc - m.origin.y)[uc - m.origin.x] != 0 &&
+          clearOfDepthEdge(m, u, v, p_D.z(), depthToleranceM(p_D.z(), config))) {
+        (*clouds_D)[i].push_back(p_D.cast<float>());
       }
     }
   };
@@ -361,7 +456,7 @@ void extractUnregistered(const RgbdFrame& frame, const std::vector<MaskLookup>& 
       // Behind the colour camera or outside its image: in no mask.
       if (colorPixelOf(frame, p_D, &pixel) && inSomeMask(pixel.x, pixel.y) &&
           consistentDepth(depth, u, v, z, config)) {
-        assign(pixel.x, pixel.y, p_D.cast<float>());
+        assign(pixel.x, pixel.y, u, v, p_D);
       }
     }
   }
@@ -388,6 +483,17 @@ Status ObjectCloudExtractor::extract(const RgbdFrame& frame,
   for (const MaskLookup& m : masks) any_box |= m.box;
   if (any_box.empty()) return Status::Ok();
   const cv::Mat covered = coveredByMasks(masks, any_box);
+  std::map<int, cv::Mat> near_edge_by_margin;
+  // A registered frame looks depth up only inside the boxes; the margin's window reaches past them
+  // (erode's border: no edge beyond the region, which only drops edges the window cannot use).
+  const cv::Rect depth_rect(0, 0, frame.depth.cols, frame.depth.rows);
+  const int reach_px = config_.max_depth_edge_margin_px;
+  const cv::Rect near_edge_region =
+      frame.registered ? cv::Rect(any_box.x - reach_px, any_box.y - reach_px,
+                                  any_box.width + 2 * reach_px, any_box.height + 2 * reach_px) &
+                             depth_rect
+                       : depth_rect;
+  attachNearEdges(frame.depth, near_edge_region, config_, &masks, &near_edge_by_margin);
   if (frame.registered) {
     extractRegistered(frame, masks, any_box, covered, config_, clouds_D);
   } else {

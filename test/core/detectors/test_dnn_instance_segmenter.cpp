@@ -170,7 +170,8 @@ TEST_F(MaskRcnnDecodeTest, MaskOfTheDetectedClassIsStretchedOverTheBox) {
   EXPECT_EQ(chair.class_name, "chair");
   EXPECT_EQ(chair.class_id, cocoClassId("chair"));
   EXPECT_EQ(chair.box_px, cv::Rect(160, 120, 320, 240));
-  ASSERT_EQ(chair.mask.size(), chair.box_px.size());  // box-sized
+  ASSERT_EQ(chair.mask.size(), chair.box_px.size());            // box-sized
+  EXPECT_FLOAT_EQ(chair.mask_cell_px, 320.f / masks_.size[3]);  // its mask stretched over the box
   // Left ~7/15 of the box is set, nothing outside the box.
   const cv::Mat full = maskInRegion(chair, cv::Size(640, 480), cv::Rect(0, 0, 640, 480));
   const int area = cv::countNonZero(full);

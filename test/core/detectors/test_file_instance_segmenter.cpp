@@ -53,6 +53,7 @@ TEST_F(FileInstanceSegmenterTest, WriteThenDetectRoundTrip) {
   cv::ellipse(written[0].mask, cv::Point(10, 12), cv::Size(6, 8), 0, 0, 360, cv::Scalar(255),
               cv::FILLED);
   written[0].box_px = cv::boundingRect(written[0].mask);
+  written[0].mask_cell_px = 4.f;  // a coarse mask's grid, kept with it
 
   written[1].class_name = "cup";  // box only: no mask file, the box is the mask
   written[1].score = 0.55f;
@@ -83,6 +84,7 @@ TEST_F(FileInstanceSegmenterTest, WriteThenDetectRoundTrip) {
     EXPECT_GE(read[k].class_id, 0);
     EXPECT_FLOAT_EQ(read[k].score, written[k].score);
     EXPECT_EQ(read[k].box_px, written[k].box_px);
+    EXPECT_FLOAT_EQ(read[k].mask_cell_px, written[k].mask_cell_px);  // 0: none written
     ASSERT_EQ(read[k].mask.type(), CV_8UC1);
     ASSERT_EQ(read[k].mask.size(), image_.size());
   }
@@ -141,7 +143,11 @@ TEST_F(FileInstanceSegmenterTest, BadEntriesAreSkippedWithAWarning) {
             " {\"class_name\": \"cup\", \"score\": 0.5},\n"
             " {\"class_name\": 3, \"score\": 0.5, \"box\": [0, 0, 4, 4]},\n"
             " \"not an object\",\n"
-            " {\"class_id\": 62, \"score\": 0.6, \"box\": [2, 2, 6, 6]}\n"
+            " {\"class_id\": 62, \"score\": 0.6, \"box\": [2, 2, 6, 6]},\n"
+            " {\"class_name\": \"cup\", \"score\": 0.5, \"box\": [0, 0, 4, 4], "
+            "\"mask_cell_px\": -4},\n"
+            " {\"class_name\": \"cup\", \"score\": 0.5, \"box\": [0, 0, 4, 4], "
+            "\"mask_cell_px\": \"4\"}\n"
             "]\n");
   std::vector<Detection2D> read;
   std::vector<std::string> warnings;
@@ -151,7 +157,7 @@ TEST_F(FileInstanceSegmenterTest, BadEntriesAreSkippedWithAWarning) {
   EXPECT_EQ(read[0].class_name, "chair");
   EXPECT_EQ(read[0].class_id, cocoClassId("chair"));
   EXPECT_EQ(read[1].class_name, cocoClassNames()[62]);  // named from its class_id
-  ASSERT_EQ(warnings.size(), 11u);
+  ASSERT_EQ(warnings.size(), 13u);
   const std::string path = (dir_ / "frame-000010.json").string();
   for (const std::string& warning : warnings) {
     EXPECT_EQ(warning.rfind(path, 0), 0u) << warning;
@@ -161,6 +167,8 @@ TEST_F(FileInstanceSegmenterTest, BadEntriesAreSkippedWithAWarning) {
   EXPECT_NE(warnings[1].find("entry 2"), std::string::npos) << warnings[1];
   EXPECT_NE(warnings[1].find("10x10"), std::string::npos) << warnings[1];
   EXPECT_NE(warnings[2].find("missing.png"), std::string::npos) << warnings[2];
+  EXPECT_NE(warnings[11].find("mask_cell_px"), std::string::npos) << warnings[11];
+  EXPECT_NE(warnings[12].find("mask_cell_px"), std::string::npos) << warnings[12];
 
   // Without a warnings vector the good entries still come through.
   ASSERT_TRUE(detect(&read, nullptr).ok());

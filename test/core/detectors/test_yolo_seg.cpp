@@ -118,6 +118,7 @@ TEST(YoloSegDecodeTest, BoxesClassesNmsAndMasksInImagePixels) {
   EXPECT_NEAR(first.score, 0.81f, 1e-5);
   EXPECT_EQ(first.box_px, cv::Rect(100, 100, 200, 220));
   ASSERT_EQ(first.mask.size(), first.box_px.size());  // box-sized
+  EXPECT_FLOAT_EQ(first.mask_cell_px, 4.f);           // 160 x 160 prototypes at 640, image scale 1
   // Its left half, within a pixel of the prototype's edge (the box's corner pixels sample the
   // zeros outside the box: the official crop-then-upsample loses them too).
   EXPECT_EQ(cv::countNonZero(first.mask(cv::Rect(0, 1, 99, 218))), 99 * 218);
@@ -142,6 +143,7 @@ TEST(YoloSegDecodeTest, BoxesOfA320InputScaleBackToTheImage) {
   ASSERT_EQ(detections.size(), 1u);
   EXPECT_EQ(detections[0].class_name, "tv");
   EXPECT_EQ(detections[0].box_px, cv::Rect(80, 40, 160, 160));
+  EXPECT_FLOAT_EQ(detections[0].mask_cell_px, 8.f);  // 80 x 80 prototypes at 320, image scale 2
   EXPECT_EQ(cv::countNonZero(detections[0].mask(cv::Rect(3, 3, 154, 154))), 154 * 154);
   EXPECT_GE(cv::countNonZero(detections[0].mask), 160 * 160 - 4 * 9);  // but the corners
 }

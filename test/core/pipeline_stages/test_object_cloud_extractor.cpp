@@ -362,6 +362,87 @@ TEST(ObjectCloudExtractorTest, NonZeroBoundsIsOpenCvsBoundingRect) {
   }
 }
 
+// A box 1.2 m before a wall, and a mask that runs 10 px past the box onto the wall (a mask
+// computed on a coarse grid runs up to a cell past its object). The counts of box and wall points
+// in the detection's cloud, in a registered frame and in one with two cameras.
+struct BoxAndWall {
+  int box_points = 0;
+  int wall_points = 0;
+};
+std::vector<BoxAndWall> boxBeforeAWall(const ObjectCloudExtractor::Config& config,
+                                       float mask_cell_px, int* mask_wall_pixels, int* box_pixels) {
+  const CameraIntrinsics K{60.0, 60.0, 31.5, 23.5, 64, 48};
+  cv::Mat depth(48, 64, CV_16UC1, cv::Scalar(2000));
+  const cv::Rect box_px(24, 16, 16, 16);
+  depth(box_px).setTo(800);
+  cv::Mat mask = cv::Mat::zeros(48, 64, CV_8UC1);
+  mask(cv::Rect(box_px.x - 10, box_px.y - 10, box_px.width + 20, box_px.height + 20)).setTo(255);
+  *mask_wall_pixels = cv::countNonZero(mask) - box_px.area();
+  *box_pixels = box_px.area();
+  Detection2D detection = maskDetection(mask);
+  detection.mask_cell_px = mask_cell_px;
+  RgbdFrame registered = makeRegisteredFrame(depth, K);
+  RgbdFrame two_cameras = registered;
+  two_cameras.registered = false;  // the identity T_C_D: the same pixels
+  std::vector<BoxAndWall> counts;
+  for (const RgbdFrame* frame : {&registered, &two_cameras}) {
+    std::vector<PointCloud> clouds;
+    EXPECT_TRUE(ObjectCloudExtractor(config).extract(*frame, {detection}, &clouds).ok());
+    BoxAndWall c;
+    for (const Eigen::Vector3f& p : clouds.at(0))
+      (p.z() < 1.0f ? c.box_points : c.wall_points) += 1;
+    counts.push_back(c);
+  }
+  return counts;
+}
+
+// The wall's pixels within one mask cell of the box are left out and every pixel of the box is
+// kept; with the cell above max_depth_edge_margin_px, only those within the maximum; a mask of no
+// known cell (0) or a maximum of 0 (the paper's method) keeps them all.
+TEST(ObjectCloudExtractorTest, MaskBorderPastADepthEdgeIsLeftOutWithinTheMaskCell) {
+  // The wall pixels within m px (Chebyshev) of the 16 x 16 box, of the mask's 10 px ring.
+  const auto ring = [](int m) { return (16 + 2 * m) * (16 + 2 * m) - 16 * 16; };
+  struct Case {
+    float cell_px;
+    int max_margin_px;
+    int wall_left_out;
+  };
+  const Case cases[] = {
+      {4.f, 8, ring(4)}, {20.f, 8, ring(8)}, {0.f, 8, 0}, {4.f, 0, 0}, {1.f, 8, 0}};
+  for (const Case& c : cases) {
+    ObjectCloudExtractor::Config config = rawConfig();
+    config.max_depth_edge_margin_px = c.max_margin_px;
+    int mask_wall = 0;
+    int box = 0;
+    const std::vector<BoxAndWall> counts = boxBeforeAWall(config, c.cell_px, &mask_wall, &box);
+    ASSERT_EQ(counts.size(), 2u);
+    for (size_t k = 0; k < counts.size(); ++k) {
+      const std::string what = std::string(k == 0 ? "registered" : "two cameras") + ", cell " +
+                               std::to_string(c.cell_px) + ", max " +
+                               std::to_string(c.max_margin_px);
+      EXPECT_EQ(counts[k].box_points, box) << what;
+      EXPECT_EQ(counts[k].wall_points, mask_wall - c.wall_left_out) << what;
+    }
+  }
+}
+
+// A floor seen at a grazing angle steps by centimetres from one pixel row to the next, more than
+// the depth tolerance over the margin's 4 rows, but no step between neighbours is a depth edge:
+// the margin leaves all of it.
+TEST(ObjectCloudExtractorTest, DepthEdgeMarginKeepsASurfaceSeenAtAGrazingAngle) {
+  const CameraIntrinsics K{60.0, 60.0, 31.5, 23.5, 64, 48};
+  cv::Mat depth(48, 64, CV_16UC1);
+  for (int v = 0; v < 48; ++v) depth.row(v).setTo(3000 + 30 * (47 - v));  // 3 cm a row
+  const cv::Mat mask(48, 64, CV_8UC1, cv::Scalar(255));
+  Detection2D detection = maskDetection(mask);
+  detection.mask_cell_px = 4.f;
+  std::vector<PointCloud> clouds;
+  ASSERT_TRUE(ObjectCloudExtractor(rawConfig())
+                  .extract(makeRegisteredFrame(depth, K), {detection}, &clouds)
+                  .ok());
+  EXPECT_EQ(clouds[0].size(), mask.total());
+}
+
 // Two cameras (7-Scenes, Kinect without registration): colour at another resolution and focal
 // length, offset by T_C_D. The extractor must select exactly the depth points whose projection into
 // the colour image lands in the mask.

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "multiview_object_detection/datasets/ground_truth.h"
@@ -88,8 +89,10 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
 
   // The small objects (issue 54, item 5), as measured on 2026-12-06: the Daedalus journal on the
   // Computer magazine (annotation 8) its own book, 0.035 m from its centre (goal 0.05: met); the
-  // two mugs (6, 7) at IoU 0.34 and 0.26 and the wall monitors (13, 14) at 0.28 and 0.17 (goals 0.6
-  // and 0.5: not met); the brochure pile (11) at 0.23. A map that loses any of them fails here.
+  // brochure pile (11) at 0.23. The two mugs (6, 7) at IoU 0.39 and 0.46 and the wall monitors
+  // (13, 14) at 0.35 and 0.22 (goals 0.6 and 0.5: not met), with the mask borders at depth edges
+  // left out (extractor/max_depth_edge_margin_px; without it 0.34, 0.26, 0.28 and 0.17). A map that
+  // loses any of them fails here.
   ASSERT_GE(matches.annotated.size(), 15u);
   const AnnotatedObjectMatch& daedalus = matches.annotated[8];
   ASSERT_EQ(daedalus.class_name, "book");
@@ -97,11 +100,13 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
   EXPECT_LE(daedalus.centre_distance_m, 0.05) << table;
   for (const int mug : {6, 7}) {
     ASSERT_EQ(matches.annotated[mug].class_name, "cup");
-    EXPECT_GE(matches.annotated[mug].box_iou, 0.2) << "mug " << mug << "\n" << table;
+    EXPECT_GE(matches.annotated[mug].box_iou, 0.3) << "mug " << mug << "\n" << table;
   }
-  for (const int monitor : {13, 14}) {
+  const std::pair<int, double> monitors[] = {{13, 0.3}, {14, 0.2}};
+  for (const auto& [monitor, min_iou] : monitors) {
     ASSERT_EQ(matches.annotated[monitor].class_name, "tv");
-    EXPECT_GE(matches.annotated[monitor].box_iou, 0.1) << "monitor " << monitor << "\n" << table;
+    EXPECT_GE(matches.annotated[monitor].box_iou, min_iou) << "monitor " << monitor << "\n"
+                                                           << table;
   }
   EXPECT_GE(matches.annotated[11].prediction_id, 0) << table;
   RecordProperty("per_object", table);

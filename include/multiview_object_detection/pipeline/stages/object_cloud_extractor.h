@@ -31,6 +31,13 @@ class ObjectCloudExtractor {
     int min_consistent_neighbours = 3;
     double consistency_tolerance_m = 0.01;
     double depth_step_per_m2 = 2.85e-3;  // Kinect v1 disparity steps: Δz = 2.85e-3 z^2
+    // Mask borders at depth edges: a mask computed on a coarse grid (Detection2D::mask_cell_px)
+    // runs up to a cell past its object's silhouette. A masked depth pixel within one cell of a
+    // surface nearer than it by more than the same tolerance is the background the mask ran onto
+    // (the table past a mug's rim, the wall beside a monitor) and is left out. The cell is used up
+    // to this many pixels (YOLOv5-seg's cell: 4 px at its 640 input, 8 px at 320, on a 640 x 480
+    // image); 0 = off (the paper's method). Masks of unknown or pixel resolution have no margin.
+    int max_depth_edge_margin_px = 8;
     Status isValid() const;
     std::string print() const;
   };

@@ -20,6 +20,10 @@ struct Detection2D {
   float score = 0.f;
   cv::Rect box_px;
   cv::Mat mask;
+  // The side, in colour pixels, of the grid the detector computed the mask on: its border is
+  // uncertain by about one cell (YOLOv5-seg's prototypes: 4 px at its 640 input on a 640-px-wide
+  // image; Mask R-CNN's m x m mask stretched over the box). 0 = pixel-exact or not known.
+  float mask_cell_px = 0.f;
 };
 
 // Where the mask's pixel (0, 0) lies in a colour image of `image_size`: box_px.tl() for a
