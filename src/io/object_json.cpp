@@ -65,14 +65,42 @@ Status readRotation(const json& value, const std::string& prefix, Eigen::Matrix3
   return Status::Ok();
 }
 
+// A box's centre, size (not negative) and rotation.
+Status readBoxFields(const json& value, const std::string& prefix, OrientedBox* box) {
+  Status status;
+  if (!(status = readVector3(value, prefix, "center", &box->center_m))) return status;
+  if (!(status = readVector3(value, prefix, "size", &box->size_m))) return status;
+  if ((box->size_m.array() < 0.0).any()) return fieldError(prefix + "size", "negative");
+  return readRotation(value, prefix, &box->rotation);
+}
+
 // The box (centre, size, rotation) and its yaw.
 Status readBox(const json& value, const std::string& prefix, MapObject* object) {
   Status status;
-  if (!(status = readVector3(value, prefix, "center", &object->box.center_m))) return status;
-  if (!(status = readVector3(value, prefix, "size", &object->box.size_m))) return status;
-  if ((object->box.size_m.array() < 0.0).any()) return fieldError(prefix + "size", "negative");
-  if (!(status = readRotation(value, prefix, &object->box.rotation))) return status;
+  if (!(status = readBoxFields(value, prefix, &object->box))) return status;
   return readNumber(value, prefix, "yaw", &object->yaw_rad);
+}
+
+// The views' boxes (optional: a map saved before them boxes its objects by the union until new
+// views come); the last kMaxViewBoxes of a longer list.
+Status readViewBoxes(const json& value, const std::string& prefix, MapObject* object) {
+  const auto list = value.find("view_boxes");
+  if (list == value.end()) return Status::Ok();
+  if (!list->is_array()) {
+    return fieldError(prefix + "view_boxes",
+                      "expected [{\"center\": [x, y, z], \"size\": [sx, sy, sz], "
+                      "\"rotation\": [[...], [...], [...]]}, ...]");
+  }
+  const std::size_t first = list->size() > kMaxViewBoxes ? list->size() - kMaxViewBoxes : 0;
+  for (std::size_t i = first; i < list->size(); ++i) {
+    const std::string where = prefix + "view_boxes[" + std::to_string(i) + "]";
+    if (!(*list)[i].is_object()) return fieldError(where, "expected an object");
+    OrientedBox box;
+    const Status status = readBoxFields((*list)[i], where + ".", &box);
+    if (!status) return status;
+    object->view_boxes.push_back(box);
+  }
+  return Status::Ok();
 }
 
 // First and last keyframe and stamp.
@@ -322,6 +350,13 @@ json evidenceToJson(const MapObject& object) {
   return {{"voxel_size_m", object.evidence_voxel_size_m}, {"voxels", std::move(list_json)}};
 }
 
+// A rotation as a 3 x 3 array of rows.
+json rotationToJson(const Eigen::Matrix3d& R) {
+  json rows = json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back(json::array({R(r, 0), R(r, 1), R(r, 2)}));
+  return rows;
+}
+
 // The free-space cells, sorted.
 json freeSpaceToJson(const MapObject& object) {
   std::vector<std::pair<Eigen::Vector3i, FreeSpaceCount>> cells;
@@ -341,11 +376,6 @@ json freeSpaceToJson(const MapObject& object) {
 }  // namespace
 
 json objectToJson(const MapObject& object, bool include_clouds) {
-  json rotation = json::array();
-  for (int r = 0; r < 3; ++r) {
-    rotation.push_back(json::array(
-        {object.box.rotation(r, 0), object.box.rotation(r, 1), object.box.rotation(r, 2)}));
-  }
   json entry = {{"id", object.id},
                 {"class_name", object.class_name},
                 {"class_id", object.class_id},
@@ -353,7 +383,7 @@ json objectToJson(const MapObject& object, bool include_clouds) {
                 {"observations", object.observations},
                 {"center", vectorToJson(object.box.center_m)},
                 {"size", vectorToJson(object.box.size_m)},
-                {"rotation", rotation},
+                {"rotation", rotationToJson(object.box.rotation)},
                 {"yaw", object.yaw_rad},
                 {"num_points", object.points_W.size()},
                 {"first_keyframe", object.first_keyframe},
@@ -381,6 +411,15 @@ json objectToJson(const MapObject& object, bool include_clouds) {
     entry["segment"] = cloudToJson(object.segment_W);
     if (!object.evidence.empty()) entry["evidence"] = evidenceToJson(object);
     if (!object.free_space.empty()) entry["free_space"] = freeSpaceToJson(object);
+    if (!object.view_boxes.empty()) {
+      json view_boxes = json::array();
+      for (const OrientedBox& box : object.view_boxes) {
+        view_boxes.push_back({{"center", vectorToJson(box.center_m)},
+                              {"size", vectorToJson(box.size_m)},
+                              {"rotation", rotationToJson(box.rotation)}});
+      }
+      entry["view_boxes"] = std::move(view_boxes);
+    }
   }
   return entry;
 }
@@ -389,8 +428,9 @@ Status objectFromJson(const json& value, const std::string& path, MapObject* out
   if (!value.is_object()) return fieldError(path, "expected an object");
   const std::string prefix = path + ".";
   MapObject object;
-  for (const auto read : {readIdentity, readBox, readSeen, readClouds, readClassScores,
-                          readEvidence, readFreeSpace, readCompletion, readExistence}) {
+  for (const auto read :
+       {readIdentity, readBox, readSeen, readClouds, readClassScores, readEvidence, readFreeSpace,
+        readCompletion, readExistence, readViewBoxes}) {
     const Status status = read(value, prefix, &object);
     if (!status) return status;
   }

@@ -116,6 +116,7 @@ void ObjectMapper::Config::usePaperMethod() {
   intersection_filter.flat_top_clearance_m = 0.0;
   database.amodal.enable = false;
   database.existence.enable = false;
+  database.view_consensus_m = 0.0;
   corrections.enable = false;
 }
 

@@ -240,6 +240,7 @@ ObjectDatabase::Config getObjectDatabaseConfigFromRosParam(const ros::NodeHandle
   p.readNumber("min_overlap_to_fuse", &c.min_overlap_to_fuse);
   p.read("same_class_overlap_voxels", &c.same_class_overlap_voxels);
   p.readNumber("surface_band_m", &c.surface_band_m);
+  p.readNumber("view_consensus_m", &c.view_consensus_m);
   c.amodal =
       getAmodalCompletionConfigFromRosParam(child(nh_database, "amodal"), start.amodal, errors);
   c.existence =

@@ -33,6 +33,10 @@ Status ObjectDatabase::Config::isValid() const {
     return Status::Error("surface_band_m must be a finite value >= 0 (got " +
                          std::to_string(surface_band_m) + ")");
   }
+  if (!(std::isfinite(view_consensus_m) && view_consensus_m >= 0.0)) {
+    return Status::Error("view_consensus_m must be a finite value >= 0 (got " +
+                         std::to_string(view_consensus_m) + ")");
+  }
   const Status amodal_status = amodal.isValid();
   if (!amodal_status) return amodal_status;
   const Status existence_status = existence.isValid();
@@ -51,7 +55,8 @@ std::string ObjectDatabase::Config::print() const {
       << "fusion: " << fusion << "\n"
       << "min_overlap_to_fuse: " << min_overlap_to_fuse << "\n"
       << "same_class_overlap_voxels: " << same_class_overlap_voxels << "\n"
-      << "surface_band_m: " << surface_band_m << "\n";
+      << "surface_band_m: " << surface_band_m << "\n"
+      << "view_consensus_m: " << view_consensus_m << "\n";
   std::istringstream amodal_lines(amodal.print());
   for (std::string line; std::getline(amodal_lines, line);) out << "amodal." << line << "\n";
   std::istringstream existence_lines(existence.print());
@@ -319,6 +324,7 @@ void ObjectDatabase::fuseEvidence(const ObjectObservation& observation, const Fu
     countInside(voxelKeys(object->segment_W, config_.fusion_voxel_size_m), &object->evidence);
   }
   addVotes(observation, keys, config_.fusion_voxel_size_m, &object->evidence);
+  addViewBox(observation.box, object);
   if (defer_rebox) {
     deferRebox(*object, observation.depth_view);
     return;
@@ -327,6 +333,14 @@ void ObjectDatabase::fuseEvidence(const ObjectObservation& observation, const Fu
     addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object->evidence);
   }
   rebox(object, process, observation.depth_view.get());
+}
+
+void ObjectDatabase::addViewBox(const OrientedBox& box, MapObject* object) {
+  if (object->view_boxes.size() >= kMaxViewBoxes) {
+    object->view_boxes.erase(object->view_boxes.begin(),
+                             object->view_boxes.end() - (kMaxViewBoxes - 1));
+  }
+  object->view_boxes.push_back(box);
 }
 
 void ObjectDatabase::deferRebox(const MapObject& object,
@@ -374,6 +388,7 @@ int ObjectDatabase::insert(const ObjectObservation& observation, const FusionKey
       addSignedDistances(*observation.depth_view, config_.fusion_voxel_size_m, &object.evidence);
     }
     object.evidence_voxel_size_m = config_.fusion_voxel_size_m;
+    addViewBox(observation.box, &object);
     for (const auto& entry : object.evidence) object.points_W.push_back(voxelCentre(entry.first));
   } else {
     object.points_W = PointCloudFilter::voxelize(observation.points_W, config_.fusion_voxel_size_m);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "multiview_object_detection/pipeline/map/object_database.h"
+#include "multiview_object_detection/pipeline/map/view_consensus.h"
 #include "multiview_object_detection/pipeline/utils/parallel.h"
 #include "multiview_object_detection/pipeline/utils/radix_sort.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
@@ -76,6 +77,7 @@ void ObjectDatabase::rebox(MapObject* object, const FusedCloudProcessor& process
     object->segment_W = std::move(segment_W);
     object->box = box;
     object->yaw_rad = yaw_rad;
+    viewConsensusBox(object->view_boxes, config_.view_consensus_m, &object->box);
     completeBox(object, view);
   }  // else: the previous box (completed or not) stays.
 }
@@ -169,6 +171,7 @@ bool ObjectDatabase::mergeInto(int into_id, int from_id, const FusedCloudProcess
   into.existence.detected += from.existence.detected;
   into.existence.missed += from.existence.missed;
   into.existence.seen_through += from.existence.seen_through;
+  for (const OrientedBox& view_box : from.view_boxes) addViewBox(view_box, &into);
   remove(from_id);
   rebox(&into, process, nullptr);
   return true;

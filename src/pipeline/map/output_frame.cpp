@@ -44,6 +44,10 @@ std::vector<MapObject> objectsInFrame(const std::vector<MapObject>& objects_W,
     if (with_clouds) {
       copy.points_W = transformCloud(object.points_W, T_O_W);
       copy.segment_W = transformCloud(object.segment_W, T_O_W);
+      copy.view_boxes.reserve(object.view_boxes.size());
+      for (const OrientedBox& view_box : object.view_boxes) {
+        copy.view_boxes.push_back(transformBox(view_box, T_O_W));
+      }
     } else {
       // Only the sizes, which the messages count (num_points: the segment, else the cloud).
       if (object.segment_W.empty()) {

@@ -261,6 +261,54 @@ TEST(JsonIoTest, EvidenceRoundTripsAndIsValidated) {
   }
 }
 
+TEST(JsonIoTest, ViewBoxesRoundTripAndAreValidated) {
+  MapObject object = makeObject(5, "cup", 0.2, 4);
+  object.view_boxes.push_back(object.box);
+  OrientedBox turned;
+  turned.center_m = Eigen::Vector3d(1.25, -0.5, 0.75);
+  turned.size_m = Eigen::Vector3d(0.125, 0.0625, 0.1);
+  turned.rotation = Eigen::AngleAxisd(-1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  object.view_boxes.push_back(turned);
+  const std::string text = objectsToJson({object}, makeSummary(), true);
+  std::vector<MapObject> loaded;
+  MapSummary summary;
+  ASSERT_TRUE(objectsFromJson(text, &loaded, &summary).ok());
+  ASSERT_EQ(loaded.size(), 1u);
+  ASSERT_EQ(loaded[0].view_boxes.size(), 2u);
+  for (std::size_t v = 0; v < 2; ++v) {
+    EXPECT_TRUE(loaded[0].view_boxes[v].center_m.isApprox(object.view_boxes[v].center_m, 1e-12));
+    EXPECT_TRUE(loaded[0].view_boxes[v].size_m.isApprox(object.view_boxes[v].size_m, 1e-12));
+    EXPECT_TRUE(loaded[0].view_boxes[v].rotation.isApprox(object.view_boxes[v].rotation, 1e-12));
+  }
+  EXPECT_EQ(objectsToJson(loaded, summary, true), text);
+  // Without clouds, the views' boxes are left out with the evidence.
+  EXPECT_EQ(objectsToJson({object}, makeSummary(), false).find("view_boxes"), std::string::npos);
+  // A file from before them loads, without views' boxes.
+  std::string old_file = text;
+  const std::size_t from = old_file.find(",\"view_boxes\":");
+  ASSERT_NE(from, std::string::npos);
+  const std::size_t to = old_file.find("]}]", from);
+  ASSERT_NE(to, std::string::npos);
+  old_file.erase(from, to + 3 - from);
+  ASSERT_TRUE(objectsFromJson(old_file, &loaded, &summary).ok()) << old_file;
+  EXPECT_TRUE(loaded[0].view_boxes.empty());
+  // Broken ones are refused with the field named.
+  for (const char* bad : {"3", "[3]",
+                          "[{\"center\":[0,0,0],\"size\":[1,1,-1],"
+                          "\"rotation\":[[1,0,0],[0,1,0],[0,0,1]]}]",
+                          "[{\"center\":[0,0,0],\"size\":[1,1,1],"
+                          "\"rotation\":[[2,0,0],[0,1,0],[0,0,1]]}]",
+                          "[{\"size\":[1,1,1],\"rotation\":[[1,0,0],[0,1,0],[0,0,1]]}]"}) {
+    std::string broken = old_file;
+    const std::size_t at = broken.find("\"yaw\"");
+    ASSERT_NE(at, std::string::npos);
+    broken.insert(at, "\"view_boxes\":" + std::string(bad) + ",");
+    const Status status = objectsFromJson(broken, &loaded, &summary);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("view_boxes"), std::string::npos) << status.message();
+  }
+}
+
 TEST(JsonIoTest, RoundTripWithoutClouds) {
   const std::vector<MapObject> objects = {makeObject(3, "tv", 1.2, 20)};
   const MapSummary summary = makeSummary();

@@ -920,6 +920,9 @@ TEST_F(ObjectDatabaseTest, MergingADuplicateAddsItsEvidenceAndRemovesIt) {
   // The merged box: the processor's, from the union (its centre between the two patches).
   EXPECT_GT(merged.box.center_m.x(), before_a.box.center_m.x());
   EXPECT_NEAR(merged.class_scores.at("chair"), 0.8 + 0.6 + 0.5, 1e-12);
+  // Both objects' views box it.
+  EXPECT_EQ(merged.view_boxes.size(), before_a.view_boxes.size() + before_b.view_boxes.size());
+  EXPECT_EQ(merged.view_boxes.size(), 3u);
   // An object without evidence (a map from the paper's fusion) is not merged.
   MapObject legacy = merged;
   legacy.id = 42;
@@ -927,6 +930,61 @@ TEST_F(ObjectDatabaseTest, MergingADuplicateAddsItsEvidenceAndRemovesIt) {
   database.setObjects({merged, legacy});
   EXPECT_FALSE(database.mergeInto(a, 42, centroidProcessor(&calls)));
   EXPECT_EQ(database.size(), 2u);
+}
+
+// Views of one patch whose poses are off by up to 3.5 cm along x: the union of their cuts is that
+// much longer than the patch; the views' consensus box is not (view_consensus.h). 0 = the union.
+TEST_F(ObjectDatabaseTest, ViewsOffByPoseErrorAreBoxedByTheirConsensus) {
+  // The bounds of the supported voxels, half a voxel out on each side.
+  const FusedCloudProcessor bounds = [](const std::string&, const PointCloud& points_W,
+                                        const std::vector<Eigen::Vector3f>&, PointCloud* segment_W,
+                                        OrientedBox* box, double* yaw_rad) {
+    Eigen::Vector3f low = points_W.front();
+    Eigen::Vector3f high = points_W.front();
+    for (const auto& p : points_W) {
+      low = low.cwiseMin(p);
+      high = high.cwiseMax(p);
+    }
+    box->center_m = (0.5f * (low + high)).cast<double>();
+    box->size_m = (high - low).cast<double>() + Eigen::Vector3d::Constant(0.01);
+    box->rotation.setIdentity();
+    *segment_W = points_W;
+    *yaw_rad = 0.0;
+    return true;
+  };
+  double length_m[2] = {0.0, 0.0};
+  for (const double consensus_m : {0.0, 0.06}) {
+    ObjectDatabase::Config config;
+    config.view_consensus_m = consensus_m;
+    ObjectDatabase database(config, priors_);
+    for (int v = 0; v < 8; ++v) {
+      database.fuseOrInsert(observation("chair", {0.9825 + 0.005 * v, 2.0, 0.5}, 0.8, v), bounds);
+    }
+    ASSERT_EQ(database.size(), 1u);
+    const MapObject& object = database.objects().begin()->second;
+    EXPECT_EQ(object.view_boxes.size(), 8u);
+    length_m[consensus_m > 0.0 ? 1 : 0] = object.box.size_m.x();
+    EXPECT_NEAR(object.box.center_m.x(), 1.0, 0.003);
+  }
+  EXPECT_NEAR(length_m[0], 0.235, 0.006);  // the union: 20 cm of patch and 3.5 cm of spread
+  EXPECT_LT(length_m[1], length_m[0] - 0.01);
+  EXPECT_GE(length_m[1], 0.2);
+}
+
+TEST_F(ObjectDatabaseTest, AnObjectKeepsTheBoxesOfItsLatestViewsOnly) {
+  ObjectDatabase database(ObjectDatabase::Config(), priors_);
+  int calls = 0;
+  const int views = static_cast<int>(kMaxViewBoxes) + 2;
+  for (int v = 0; v < views; ++v) {
+    ObjectObservation obs = observation("chair", {1.0, 2.0, 0.5}, 0.8, v);
+    obs.box.size_m.z() = 0.001 * v;  // tells the views apart
+    database.fuseOrInsert(obs, centroidProcessor(&calls));
+  }
+  ASSERT_EQ(database.size(), 1u);
+  const MapObject& object = database.objects().begin()->second;
+  ASSERT_EQ(object.view_boxes.size(), kMaxViewBoxes);
+  EXPECT_DOUBLE_EQ(object.view_boxes.front().size_m.z(), 0.002);
+  EXPECT_DOUBLE_EQ(object.view_boxes.back().size_m.z(), 0.001 * (views - 1));
 }
 
 TEST_F(ObjectDatabaseTest, DeferredReboxingBoxesEachObjectOnceWithTheSameResult) {

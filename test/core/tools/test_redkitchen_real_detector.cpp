@@ -87,20 +87,22 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
   }
   EXPECT_LE(unmatched_furniture, 2) << table;
 
-  // The small objects (issue 54, item 5), as measured on 2026-12-06: the Daedalus journal on the
-  // Computer magazine (annotation 8) its own book, 0.035 m from its centre (goal 0.05: met); the
-  // brochure pile (11) at 0.23. The two mugs (6, 7) at IoU 0.39 and 0.46 and the wall monitors
-  // (13, 14) at 0.35 and 0.22 (goals 0.6 and 0.5: not met), with the mask borders at depth edges
-  // left out (extractor/max_depth_edge_margin_px; without it 0.34, 0.26, 0.28 and 0.17). A map that
-  // loses any of them fails here.
+  // The small objects (issue 54, item 5), as measured on 2026-12-07: the Daedalus journal on the
+  // Computer magazine (annotation 8) its own book, 0.035 m from its centre (goal 0.05: met), at IoU
+  // 0.34; the brochure pile (11) at 0.29. The two mugs (6, 7) at IoU 0.51 and 0.51 and the wall
+  // monitors (13, 14) at 0.35 and 0.22 (goals 0.6 and 0.5: not met). The mask borders at depth
+  // edges (extractor/max_depth_edge_margin_px) took the mugs from 0.34 and 0.26 and the monitors
+  // from 0.28 and 0.17; the views' consensus box (database/view_consensus_m) the mugs from 0.39 and
+  // 0.46 and the books from 0.24 and 0.23. A map that loses any of them fails here.
   ASSERT_GE(matches.annotated.size(), 15u);
   const AnnotatedObjectMatch& daedalus = matches.annotated[8];
   ASSERT_EQ(daedalus.class_name, "book");
   EXPECT_GE(daedalus.prediction_id, 0) << table;
   EXPECT_LE(daedalus.centre_distance_m, 0.05) << table;
+  EXPECT_GE(daedalus.box_iou, 0.3) << table;
   for (const int mug : {6, 7}) {
     ASSERT_EQ(matches.annotated[mug].class_name, "cup");
-    EXPECT_GE(matches.annotated[mug].box_iou, 0.3) << "mug " << mug << "\n" << table;
+    EXPECT_GE(matches.annotated[mug].box_iou, 0.45) << "mug " << mug << "\n" << table;
   }
   const std::pair<int, double> monitors[] = {{13, 0.3}, {14, 0.2}};
   for (const auto& [monitor, min_iou] : monitors) {
@@ -109,6 +111,7 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
                                                            << table;
   }
   EXPECT_GE(matches.annotated[11].prediction_id, 0) << table;
+  EXPECT_GE(matches.annotated[11].box_iou, 0.25) << table;
   RecordProperty("per_object", table);
   if (!HasFailure()) fs::remove_all(work);
 }

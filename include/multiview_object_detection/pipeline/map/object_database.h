@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -87,7 +88,13 @@ struct MapObject {
   double last_seen_s = 0.0;
   // Whether it is still there: the keyframes' votes (existence.h).
   ExistenceEvidence existence;
+  // Evidence fusion: the boxes of the views fused here (ObjectObservation::box), the last
+  // kMaxViewBoxes of them; the box is their consensus where they agree (view_consensus.h).
+  std::vector<OrientedBox> view_boxes;
 };
+
+// MapObject::view_boxes keeps this many of the latest views.
+constexpr std::size_t kMaxViewBoxes = 128;
 
 // Re-runs filter + LCCP + box on a fused world-frame cloud (Eq. 7). Returns false when nothing
 // usable is left, in which case the object keeps its previous segment and box.
@@ -138,6 +145,11 @@ class ObjectDatabase {
     // Evidence fusion: boxes of classes with a known depth (ClassPrior::amodal_depth_m) extended
     // into the side the views never saw through (a chair under a table, only its backrest seen).
     AmodalCompletion::Config amodal;
+    // Evidence fusion: an object whose views agree on its extent up to this much on every axis
+    // (the union of their cuts against the quartiles of their boxes' ends) is boxed by the views'
+    // consensus, not by the union, which the error of the poses between the views widens
+    // (view_consensus.h). About the pose error between views of one object. 0 = the union.
+    double view_consensus_m = 0.06;
     // Evidence fusion: whether objects are still there, from every keyframe's depth; the gone are
     // removed (ObjectMapper).
     ExistenceModel::Config existence;
@@ -288,6 +300,8 @@ class ObjectDatabase {
   // Amodal completion of a freshly estimated box: the view's free space around it counted (view
   // may be null), and the box extended when its counts decide a side.
   void completeBox(MapObject* object, const DepthView* view) const;
+  // Evidence fusion: the observation's box among the object's views (at most kMaxViewBoxes).
+  static void addViewBox(const OrientedBox& box, MapObject* object);
 
   Config config_;
   ClassPriors priors_;
