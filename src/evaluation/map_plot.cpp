@@ -112,7 +112,8 @@ struct Canvas {
   }
 };
 
-// The extent of everything drawn plus the margin, scaled to fit max_size_px. False: nothing finite.
+// The extent of everything drawn plus the margin, scaled to fit max_size_px, or the region asked
+// for at max_size_px. False: nothing finite.
 bool fitCanvas(const std::vector<Eigen::Vector2d>& points, const std::vector<Polygon2d>& gt_boxes,
                const std::vector<Polygon2d>& pred_boxes, const BirdsEyeConfig& config,
                Canvas* canvas) {
@@ -131,10 +132,15 @@ bool fitCanvas(const std::vector<Eigen::Vector2d>& points, const std::vector<Pol
   if (!(lo.x() <= hi.x())) return false;
   lo -= Eigen::Vector2d::Constant(config.margin_m);
   hi += Eigen::Vector2d::Constant(config.margin_m);
+  const bool region = !config.region.isEmpty() && config.region.sizes().minCoeff() > 0.0;
+  if (region) {
+    lo = config.region.min();
+    hi = config.region.max();
+  }
   const Eigen::Vector2d extent = hi - lo;
   double scale = config.pixels_per_m;
   const double longest = std::max(extent.x(), extent.y());
-  if (longest * scale > config.max_size_px) scale = config.max_size_px / longest;
+  if (region || longest * scale > config.max_size_px) scale = config.max_size_px / longest;
   canvas->lo = lo;
   canvas->hi = hi;
   canvas->scale = scale;

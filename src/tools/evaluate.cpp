@@ -1,6 +1,7 @@
 // evaluate: scores an objects.json against ground truth (Sec. 4.1). Per class: AP of object
 // segmentation by the IoU of voxelised point sets (match at IoU >= 0.5, VOC all-point AP; the
 // paper's Tables 1 and 2) and oriented-box AP at 3D IoU 0.25 and 0.5. Prints a Markdown table.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -50,6 +51,10 @@ const char* const kUsage =
     "  --clouds DIR         folder of object_<id>_<class>_fused.ply clouds\n"
     "  --plot FILE          bird's-eye PNG of the (first) scene: detected boxes over the\n"
     "                       ground truth (or over their own clouds without ground truth)\n"
+    "  --plot-region X0,Y0,X1,Y1\n"
+    "                       only this part of the plot (m, in its grid's coordinates: a\n"
+    "                       table top), 1600 px on its longer side, grid 0.1 m when that\n"
+    "                       side is at most 3 m\n"
     "  --voxel-size M       voxel of the segmentation IoU, metres (default: 0.05)\n"
     "  --up AXIS            world up: x, y, z, -x, -y, -z or auto (default: auto =\n"
     "                       y for SceneNN, whose meshes are y-up; for .json the \"up\"\n"
@@ -74,7 +79,23 @@ struct Options {
   std::string per_object;
   std::string up = "auto";
   double voxel_size_m = 0.05;
+  Eigen::AlignedBox2d plot_region;  // empty: the whole plot
 };
+
+// "X0,Y0,X1,Y1" with X0 < X1 and Y0 < Y1, all finite.
+bool parseRegion(const std::string& text, Eigen::AlignedBox2d* region) {
+  double v[4];
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &tail) != 4) {
+    return false;
+  }
+  for (const double x : v) {
+    if (!std::isfinite(x)) return false;
+  }
+  if (!(v[0] < v[2] && v[1] < v[3])) return false;
+  *region = Eigen::AlignedBox2d(Eigen::Vector2d(v[0], v[1]), Eigen::Vector2d(v[2], v[3]));
+  return true;
+}
 
 bool parseAxis(const std::string& text, Eigen::Vector3d* axis) {
   const bool negative = !text.empty() && text[0] == '-';
@@ -135,6 +156,12 @@ int parseArguments(int argc, char** argv, Options* options) {
       return std::string("--up must be x, y, z, -x, -y, -z or auto");
     }
     options->up = text;
+    return std::string();
+  });
+  cli::addValue(&app, "--plot-region", [options](const std::string& text) {
+    if (!parseRegion(text, &options->plot_region)) {
+      return std::string("--plot-region needs X0,Y0,X1,Y1 (m) with X0 < X1 and Y0 < Y1");
+    }
     return std::string();
   });
   cli::addNumber(
@@ -256,8 +283,11 @@ int loadScene(const Options& options, size_t k, const mvod::EvaluationOptions& e
 
 // --plot: the first scene from above. False when it cannot be written.
 bool writePlot(const std::string& path, const mvod::EvaluationScene& scene,
-               const Eigen::Vector3d& up_W) {
-  const cv::Mat image = mvod::drawBirdsEyeMap(scene.ground_truth, scene.predictions, up_W);
+               const Eigen::Vector3d& up_W, const Eigen::AlignedBox2d& region) {
+  mvod::BirdsEyeConfig config;
+  config.region = region;
+  if (!region.isEmpty() && region.sizes().maxCoeff() <= 3.0) config.grid_spacing_m = 0.1;
+  const cv::Mat image = mvod::drawBirdsEyeMap(scene.ground_truth, scene.predictions, up_W, config);
   bool written = false;
   try {
     written = cv::imwrite(path, image);
@@ -340,7 +370,8 @@ int main(int argc, char** argv) {
     }
   }
   int exit_code = kExitOk;
-  if (!options.plot.empty() && !writePlot(options.plot, scenes.front(), evaluation.up_W)) {
+  if (!options.plot.empty() &&
+      !writePlot(options.plot, scenes.front(), evaluation.up_W, options.plot_region)) {
     exit_code = kExitFailure;
   }
   if (options.ground_truth.empty()) return exit_code;

@@ -3,6 +3,7 @@
 // `evaluate --plot` and `make demo` write it.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -16,6 +17,9 @@ struct BirdsEyeConfig {
   double margin_m = 0.5;        // around everything drawn
   double grid_spacing_m = 1.0;  // 0 = no grid
   int max_points = 60000;       // context points drawn (ground truth, else predicted clouds)
+  // Only this part of the plan (m, in the grid's coordinates), drawn at max_size_px on its longer
+  // side: a table top's mugs and books. Empty (the default): everything drawn, at pixels_per_m.
+  Eigen::AlignedBox2d region;
 };
 
 // Plan view in the floor plane of up_W: image right = e1 (the world axis most orthogonal to up),

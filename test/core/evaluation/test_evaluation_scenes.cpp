@@ -149,6 +149,39 @@ TEST(BirdsEyeMap, DrawsGroundTruthAndColouredPredictionsWhereTheyAre) {
   EXPECT_FALSE(blank.empty());
 }
 
+// A region of the plan (a table top): only it, at max_size_px on its longer side.
+TEST(BirdsEyeMap, ARegionIsDrawnAloneAtTheFullSize) {
+  const GroundTruthObject table =
+      groundTruth("dining table", yawedBox({2, 1, 0.375}, {1.6, 0.9, 0.75}, 0.0));
+  const GroundTruthObject mug = groundTruth("cup", yawedBox({2.2, 1.1, 0.8}, {0.1, 0.08, 0.1}, 0));
+  BirdsEyeConfig config;
+  config.max_size_px = 1000;
+  config.grid_spacing_m = 0.1;
+  config.region = Eigen::AlignedBox2d(Eigen::Vector2d(1.9, 0.9), Eigen::Vector2d(2.4, 1.2));
+  const cv::Mat image =
+      drawBirdsEyeMap({table, mug}, {prediction(3, mug, 0.7)}, Eigen::Vector3d::UnitZ(), config);
+  ASSERT_EQ(image.cols, 1000);  // 0.5 m at 2000 px/m
+  ASSERT_EQ(image.rows, 46 + 600);
+  auto pixel = [&](double x, double y) {
+    return image.at<cv::Vec3b>(static_cast<int>(std::lround(46 + (1.2 - y) * 2000.0)),
+                               static_cast<int>(std::lround((x - 1.9) * 2000.0)));
+  };
+  auto is_coloured = [](const cv::Vec3b& c) {
+    return std::max({c[0], c[1], c[2]}) - std::min({c[0], c[1], c[2]}) > 80;
+  };
+  // The mug's predicted outline (its left edge, x = 2.15) 500 px from the image's left edge.
+  bool outline = false;
+  for (int dx = -2; dx <= 2; ++dx) outline = outline || is_coloured(pixel(2.15 + dx / 2000.0, 1.1));
+  EXPECT_TRUE(outline);
+  // Without the region: the whole table at pixels_per_m, the mug a few pixels.
+  BirdsEyeConfig whole = config;
+  whole.region = Eigen::AlignedBox2d();
+  EXPECT_LT(
+      drawBirdsEyeMap({table, mug}, {prediction(3, mug, 0.7)}, Eigen::Vector3d::UnitZ(), whole)
+          .cols,
+      400);
+}
+
 // A narrow map (one chair): the legend shrinks to the image's width instead of running off it.
 TEST(BirdsEyeMap, LegendFitsANarrowMap) {
   const GroundTruthObject chair = groundTruth("chair", yawedBox({1, 1, 0.45}, {0.5, 0.5, 0.9}, 0));
