@@ -125,6 +125,7 @@ struct SegmentSelector::Work {
         on_floor(in.prior != nullptr && in.prior->on_floor),
         own_horizontal(in.prior != nullptr && in.prior->hasLargeHorizontalSurface()),
         lies_flat(in.prior != nullptr && in.prior->liesFlat()),
+        on_wall(in.prior != nullptr && in.prior->on_wall),
         bounding(num_segments, 0),
         resting(num_segments, 0),
         kept(num_segments, 0) {}
@@ -140,6 +141,12 @@ struct SegmentSelector::Work {
     *normal_W = n;
     *point_W = T_W_D * planes[s].point.cast<float>();
     return true;
+  }
+  // A vertical planar segment (a wall): its normal within the support tilt of horizontal.
+  bool vertical(int s, double max_rms_m) const {
+    if (!(planes[s].rms_m <= max_rms_m)) return false;
+    const Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
+    return std::abs(n.dot(up)) <= std::sqrt(std::max(0.0, 1.0 - cos_tilt * cos_tilt));
   }
   // A segment's footprint: the convex hull of its points on the horizontal plane.
   std::vector<cv::Point2f> footprintHull(int s) const {
@@ -171,6 +178,7 @@ struct SegmentSelector::Work {
   const bool on_floor;
   const bool own_horizontal;    // a horizontal plane running past is the object's (a table top)
   const bool lies_flat;         // the object lies flat on a support (a book on a table)
+  const bool on_wall;           // the object hangs flat on a wall (a wall monitor)
   std::vector<char> in_mask;    // per point: its colour pixel in the detection's mask
   std::vector<int> core_count;  // per segment: its points in the detection's core
   std::vector<Plane> planes;    // per segment; rms_m infinite: under 20 points, no plane
@@ -343,7 +351,9 @@ Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
     if (work->excluded(s) || core_count[s] == 0) continue;
     if (seed < 0 || core_count[s] > core_count[seed]) seed = s;
   }
-  if (seed < 0 && work->lies_flat && chooseFlatSupport(work)) return Status::Ok();
+  if (seed < 0 && (work->lies_flat || work->on_wall) && chooseFlatSupport(work)) {
+    return Status::Ok();
+  }
   if (seed < 0 && (result.bounding_segments > 0 || result.resting_segments > 0)) {
     // The core holds only bounding surfaces and what rests on them (a chair pushed under a table
     // shows its backrest above the top, at the edge of its box): the largest other segment of
@@ -365,13 +375,17 @@ Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
 }
 
 bool SegmentSelector::chooseFlatSupport(Work* work) const {
-  // A book on a table is part of the table's plane in depth: the horizontal bounding segment with
-  // the most core points is what it lies on.
+  // A book on a table is part of the table's plane in depth, a wall monitor of the wall's: the
+  // bounding segment with the most core points that is horizontal (lies_flat) or vertical (on_wall)
+  // is what it lies or hangs on.
   int support = -1;
   for (int s = 0; s < work->num_segments; ++s) {
     Eigen::Vector3f n, p;
     if (!work->bounding[s] || work->core_count[s] == 0) continue;
-    if (!work->horizontal(s, config_.plane_max_thickness_m, &n, &p)) continue;
+    const bool lies_on =
+        work->lies_flat && work->horizontal(s, config_.plane_max_thickness_m, &n, &p);
+    const bool hangs_on = work->on_wall && work->vertical(s, config_.plane_max_thickness_m);
+    if (!lies_on && !hangs_on) continue;
     if (support < 0 || work->core_count[s] > work->core_count[support]) support = s;
   }
   work->flat_support = support;

@@ -186,7 +186,7 @@ Status parseClass(const YAML::Node& value, const std::string& where, double defa
       const Status status =
           readDistance(field.second, where + ".amodal_depth_m", &prior->amodal_depth_m);
       if (!status) return status;
-    } else if (key == "on_floor" || key == "flat_top") {
+    } else if (key == "on_floor" || key == "flat_top" || key == "on_wall") {
       bool flag = false;
       try {
         if (!field.second.IsScalar()) throw YAML::Exception(YAML::Mark(), "not a scalar");
@@ -195,11 +195,13 @@ Status parseClass(const YAML::Node& value, const std::string& where, double defa
         return Status::Error(where + "." + key + " must be true or false (got " +
                              describe(field.second) + ")");
       }
-      (key == "on_floor" ? prior->on_floor : prior->flat_top) = flag;
+      (key == "on_floor"   ? prior->on_floor
+       : key == "flat_top" ? prior->flat_top
+                           : prior->on_wall) = flag;
     } else {
       return Status::Error(where + ": unknown key '" + key +
                            "' (expected size_m, fusion_distance_m, on_floor, flat_top, "
-                           "amodal_depth_m)");
+                           "on_wall, amodal_depth_m)");
     }
   }
   return Status::Ok();

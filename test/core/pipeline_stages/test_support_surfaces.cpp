@@ -83,6 +83,33 @@ class SupportSurfacesTest : public ::testing::Test {
     return true;
   }
 
+  static ClassPrior sizedPrior(const std::string& class_name, const Eigen::Vector3d& size_m,
+                               double fusion_distance_m) {
+    ClassPrior prior;
+    prior.class_name = class_name;
+    prior.has_size = true;
+    prior.size_m = size_m;
+    prior.fusion_distance_m = fusion_distance_m;
+    return prior;
+  }
+
+  // One keyframe with one mask detection of prior's class; false when it gave no object.
+  bool runMask(const ClassPrior& prior, const RgbdFrame& frame, const cv::Mat& mask,
+               OrientedBox* result) const {
+    ClassPriors priors;
+    priors.set(prior);
+    ObjectMapper mapper(config_, priors);
+    KeyframeReport report;
+    EXPECT_TRUE(mapper
+                    .processKeyframe(frame, {test::detectionFromMask(mask, prior.class_name, 0.6f)},
+                                     &report)
+                    .ok());
+    for (const std::string& warning : report.warnings) std::printf("  %s\n", warning.c_str());
+    if (mapper.database().size() != 1u) return false;
+    *result = mapper.database().objects().begin()->second.box;
+    return true;
+  }
+
   static double top(const OrientedBox& box) { return box.center_m.z() + 0.5 * box.size_m.z(); }
   static double maxY(const OrientedBox& box) {
     double y = -1e9;
@@ -188,22 +215,8 @@ TEST_F(SupportSurfacesTest, ARealMaskOfTheTableIsTheTable) {
   const RgbdFrame frame = scene_.render(T_W_D_, "table", &box, &mask);
   cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(17, 17)));
   ASSERT_GT(cv::countNonZero(mask), 20000);
-  const auto run_mask = [&](const ClassPrior& prior, OrientedBox* result) {
-    ClassPriors priors;
-    priors.set(prior);
-    ObjectMapper mapper(config_, priors);
-    KeyframeReport report;
-    EXPECT_TRUE(mapper
-                    .processKeyframe(frame, {test::detectionFromMask(mask, prior.class_name, 0.6f)},
-                                     &report)
-                    .ok());
-    for (const std::string& warning : report.warnings) std::printf("  %s\n", warning.c_str());
-    if (mapper.database().size() != 1u) return false;
-    *result = mapper.database().objects().begin()->second.box;
-    return true;
-  };
   OrientedBox ours;
-  ASSERT_TRUE(run_mask(table_, &ours)) << "the table refused";
+  ASSERT_TRUE(runMask(table_, frame, mask, &ours)) << "the table refused";
   EXPECT_NEAR(top(ours), 0.76, 0.03);
   EXPECT_GT(std::max(ours.size_m.x(), ours.size_m.y()), 1.2);  // most of its 1.4 m
 
@@ -213,7 +226,7 @@ TEST_F(SupportSurfacesTest, ARealMaskOfTheTableIsTheTable) {
   small.flat_top = false;
   small.size_m = Eigen::Vector3d(0.7, 0.7, 0.75);
   OrientedBox theirs;
-  EXPECT_FALSE(run_mask(small, &theirs)) << "the scene does not test the surface rule";
+  EXPECT_FALSE(runMask(small, frame, mask, &theirs)) << "the scene does not test the surface rule";
 }
 
 // A magazine lying on the table is part of its plane in depth (5 mm thick): LCCP cannot cut it out,
@@ -226,25 +239,10 @@ TEST_F(SupportSurfacesTest, AMagazineLyingOnTheTableIsAThinBoxOnIt) {
   cv::Mat mask;
   const RgbdFrame frame = scene.render(T_W_D_, "magazine", &box, &mask);
   ASSERT_GT(cv::countNonZero(mask), 1000);
-  ClassPrior book;
-  book.class_name = "book";
-  book.has_size = true;
-  book.size_m = Eigen::Vector3d(0.23, 0.16, 0.03);
-  book.fusion_distance_m = 0.1;
+  const ClassPrior book = sizedPrior("book", Eigen::Vector3d(0.23, 0.16, 0.03), 0.1);
   ASSERT_TRUE(book.liesFlat());
-  const auto run_mask = [&](const ClassPrior& prior, OrientedBox* result) {
-    ClassPriors priors;
-    priors.set(prior);
-    ObjectMapper mapper(config_, priors);
-    KeyframeReport report;
-    EXPECT_TRUE(
-        mapper.processKeyframe(frame, {test::detectionFromMask(mask, "book", 0.6f)}, &report).ok());
-    if (mapper.database().size() != 1u) return false;
-    *result = mapper.database().objects().begin()->second.box;
-    return true;
-  };
   OrientedBox ours;
-  ASSERT_TRUE(run_mask(book, &ours));
+  ASSERT_TRUE(runMask(book, frame, mask, &ours));
   EXPECT_NEAR(ours.center_m.x(), -0.225, 0.03);
   EXPECT_NEAR(ours.center_m.y(), 0.2, 0.03);
   EXPECT_NEAR(top(ours), 0.765, 0.02);
@@ -255,7 +253,38 @@ TEST_F(SupportSurfacesTest, AMagazineLyingOnTheTableIsAThinBoxOnIt) {
   ClassPrior thick = book;
   thick.size_m = Eigen::Vector3d(0.23, 0.16, 0.10);
   OrientedBox theirs;
-  EXPECT_FALSE(run_mask(thick, &theirs)) << "the scene does not test the lies-flat rule";
+  EXPECT_FALSE(runMask(thick, frame, mask, &theirs))
+      << "the scene does not test the lies-flat rule";
+}
+
+// A wall monitor 5 mm proud of its wall, seen from 2.5 m: in depth its front and the wall are one
+// plane, which runs past the detection. An on_wall class is the wall's points inside its mask.
+TEST_F(SupportSurfacesTest, AMonitorOnTheWallIsTheWallInsideItsMask) {
+  test::PartScene scene;
+  scene.parts.push_back(test::Part{"", {-2.0, 2.0, 0.0}, {2.0, 2.1, 2.6}});
+  scene.parts.push_back(test::Part{"monitor", {-0.3, 1.995, 1.2}, {0.3, 2.0, 1.55}});
+  cv::Rect box;
+  cv::Mat mask;
+  const RgbdFrame frame =
+      scene.render(test::lookAt(Eigen::Vector3d(0.4, -0.4, 1.4), Eigen::Vector3d(0.0, 2.0, 1.375)),
+                   "monitor", &box, &mask);
+  ASSERT_GT(cv::countNonZero(mask), 2000);
+  ClassPrior tv = sizedPrior("tv", Eigen::Vector3d(1.0, 0.1, 0.6), 0.5);
+  tv.on_wall = true;
+  OrientedBox ours;
+  ASSERT_TRUE(runMask(tv, frame, mask, &ours));
+  EXPECT_NEAR(ours.center_m.x(), 0.0, 0.03);
+  EXPECT_NEAR(ours.center_m.y(), 2.0, 0.03);
+  EXPECT_NEAR(ours.center_m.z(), 1.375, 0.03);
+  EXPECT_NEAR(std::max(ours.size_m.x(), ours.size_m.y()), 0.6, 0.06);
+  EXPECT_LT(std::min(ours.size_m.x(), ours.size_m.y()), 0.05);
+  EXPECT_NEAR(ours.size_m.z(), 0.35, 0.05);
+
+  // The same prior without on_wall: the core holds only the wall, and the detection is refused.
+  ClassPrior loose = tv;
+  loose.on_wall = false;
+  OrientedBox theirs;
+  EXPECT_FALSE(runMask(loose, frame, mask, &theirs)) << "the scene does not test the on_wall rule";
 }
 
 TEST(FlatTopOfFusedObjectTest, WhatStandsOnTheTopGoes) {

@@ -188,6 +188,7 @@ TEST(ClassPriorsTest, EachErrorNamesTheEntryAndLeavesThePriorsUnchanged) {
       {"unknown entry key", "classes: {chair: {size: [0.5, 0.5, 0.9]}}", {"chair", "'size'"}},
       {"on_floor not a bool", "classes: {chair: {on_floor: maybe}}", {"chair.on_floor", "maybe"}},
       {"flat_top a list", "classes: {chair: {flat_top: [true]}}", {"chair.flat_top"}},
+      {"on_wall not a bool", "classes: {tv: {on_wall: often}}", {"tv.on_wall", "often"}},
       {"negative amodal depth",
        "classes: {chair: {amodal_depth_m: -0.5}}",
        {"chair.amodal_depth_m", "-0.5"}},
@@ -310,6 +311,7 @@ TEST(ClassPriorsTest, ParsesHowAClassStands) {
                                      "  chair: {size_m: [0.55, 0.55, 0.9], on_floor: true, "
                                      "amodal_depth_m: 0.5}\n"
                                      "  cup: {fusion_distance_m: 0.1, on_floor: false}\n"
+                                     "  clock: {on_wall: true}\n"
                                      "  tv:\n",
                                      &priors)
                   .ok());
@@ -320,6 +322,8 @@ TEST(ClassPriorsTest, ParsesHowAClassStands) {
   EXPECT_FALSE(priors.find("cup")->on_floor);
   EXPECT_FALSE(priors.find("tv")->on_floor);  // not given: false
   EXPECT_FALSE(priors.find("tv")->flat_top);
+  EXPECT_TRUE(priors.find("clock")->on_wall);
+  EXPECT_FALSE(priors.find("tv")->on_wall);  // not given: false
   EXPECT_DOUBLE_EQ(priors.find("chair")->amodal_depth_m, 0.5);
   EXPECT_EQ(priors.find("dining table")->amodal_depth_m, 0.0);  // not given: never completed
 }
@@ -342,6 +346,12 @@ TEST(ClassPriorsConfigFileTest, PackageConfigSaysHowFurnitureStands) {
     ASSERT_NE(priors.find(name), nullptr) << name;
     EXPECT_FALSE(priors.find(name)->on_floor) << name;
     EXPECT_FALSE(priors.find(name)->flat_top) << name;
+  }
+  // Wall monitors and clocks hang on walls; what stands on tables and floors does not.
+  EXPECT_TRUE(priors.find("tv")->on_wall);
+  EXPECT_TRUE(priors.find("clock")->on_wall);
+  for (const char* name : {"cup", "book", "laptop", "chair", "dining table"}) {
+    EXPECT_FALSE(priors.find(name)->on_wall) << name;
   }
 }
 

@@ -93,7 +93,8 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
   // monitors (13, 14) at 0.35 and 0.22 (goals 0.6 and 0.5: not met). The mask borders at depth
   // edges (extractor/max_depth_edge_margin_px) took the mugs from 0.34 and 0.26 and the monitors
   // from 0.28 and 0.17; the views' consensus box (database/view_consensus_m) the mugs from 0.39 and
-  // 0.46 and the books from 0.24 and 0.23. A map that loses any of them fails here.
+  // 0.46 and the books from 0.24 and 0.23. The wall monitors' cut from their wall (class prior
+  // on_wall) took monitor 13 from 0.35 to 0.46. A map that loses any of them fails here.
   ASSERT_GE(matches.annotated.size(), 15u);
   const AnnotatedObjectMatch& daedalus = matches.annotated[8];
   ASSERT_EQ(daedalus.class_name, "book");
@@ -104,7 +105,7 @@ TEST(RedkitchenRealDetectorTest, YoloSegDefaultMapsTheTableChairsAndSmallObjects
     ASSERT_EQ(matches.annotated[mug].class_name, "cup");
     EXPECT_GE(matches.annotated[mug].box_iou, 0.45) << "mug " << mug << "\n" << table;
   }
-  const std::pair<int, double> monitors[] = {{13, 0.3}, {14, 0.2}};
+  const std::pair<int, double> monitors[] = {{13, 0.4}, {14, 0.2}};
   for (const auto& [monitor, min_iou] : monitors) {
     ASSERT_EQ(matches.annotated[monitor].class_name, "tv");
     EXPECT_GE(matches.annotated[monitor].box_iou, min_iou) << "monitor " << monitor << "\n"

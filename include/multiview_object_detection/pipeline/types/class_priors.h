@@ -35,6 +35,10 @@ struct ClassPrior {
   // much thinner than it (only a backrest seen above a table) is completed to it on the side the
   // views never saw through (AmodalCompletion). 0: never completed.
   double amodal_depth_m = 0.0;
+  // on_wall: it hangs flat on a wall (a wall monitor, a clock), a few centimetres proud of it: at
+  // the depths it is seen from, its front and the wall are one plane in depth. A detection whose
+  // core holds only a wall is then the wall's points inside its mask, as a book's is its support's.
+  bool on_wall = false;
 
   // Shapes derived from the fields above (no YAML of their own), for the cut:
   // A class with horizontal surfaces larger than any mask of it covers cleanly (a table's top, a
