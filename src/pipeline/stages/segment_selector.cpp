@@ -122,6 +122,7 @@ struct SegmentSelector::Work {
         x_h(in.gravity.x_h.cast<float>()),
         y_h(in.gravity.y_h.cast<float>()),
         cos_tilt(std::cos(config.support_max_tilt_deg * kDegToRad)),
+        sin_tilt(std::sin(config.support_max_tilt_deg * kDegToRad)),
         on_floor(in.prior != nullptr && in.prior->on_floor),
         own_horizontal(in.prior != nullptr && in.prior->hasLargeHorizontalSurface()),
         lies_flat(in.prior != nullptr && in.prior->liesFlat()),
@@ -146,7 +147,7 @@ struct SegmentSelector::Work {
   bool vertical(int s, double max_rms_m) const {
     if (!(planes[s].rms_m <= max_rms_m)) return false;
     const Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
-    return std::abs(n.dot(up)) <= std::sqrt(std::max(0.0, 1.0 - cos_tilt * cos_tilt));
+    return std::abs(n.dot(up)) <= sin_tilt;
   }
   // A segment's footprint: the convex hull of its points on the horizontal plane.
   std::vector<cv::Point2f> footprintHull(int s) const {
@@ -175,6 +176,7 @@ struct SegmentSelector::Work {
   const Eigen::Vector3f x_h;
   const Eigen::Vector3f y_h;
   const double cos_tilt;
+  const double sin_tilt;
   const bool on_floor;
   const bool own_horizontal;    // a horizontal plane running past is the object's (a table top)
   const bool lies_flat;         // the object lies flat on a support (a book on a table)

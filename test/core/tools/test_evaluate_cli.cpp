@@ -50,7 +50,7 @@ TEST(EvaluateCliTest, APlotRegionIsDrawnAtTheFullSize) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const cv::Mat image = cv::imread(png.string());
   ASSERT_FALSE(image.empty()) << run.err;
-  // 0.6 x 0.3 m: 1600 px along the longer side, and the whole plot is not that wide.
+  // 0.6 x 0.3 m: 1600 px along the longer side, the shorter one in proportion (less).
   EXPECT_EQ(std::max(image.cols, image.rows), 1600);
   EXPECT_LT(std::min(image.cols, image.rows), 1600);
   fs::remove_all(work);
