@@ -1,6 +1,7 @@
 #include "segment_selector_geometry.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 
@@ -134,6 +135,46 @@ int countRingPoints(const SegmentSelector::FrameView& view,
     }
   }
   return ring_points;
+}
+
+std::vector<float> ringHeights(const SegmentSelector::FrameView& view,
+                               const SegmentSelector::DetectionMasks& masks, bool registered,
+                               const Eigen::Vector3f& up_W) {
+  const cv::Rect& crop = masks.crop;
+  const std::pair<size_t, size_t> range =
+      registered ? view.rows(crop.y, crop.y + crop.height)
+                 : std::make_pair(std::size_t{0}, view.points_D.size());
+  std::vector<float> heights_m;
+  for (size_t k = range.first; k < range.second; ++k) {
+    const cv::Point& pixel = view.pixels_color[k];
+    if (!crop.contains(pixel)) continue;
+    if (masks.ring.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
+    heights_m.push_back(up_W.dot(view.points_W[k]));
+  }
+  std::sort(heights_m.begin(), heights_m.end());
+  return heights_m;
+}
+
+std::size_t densestBand(const std::vector<float>& heights_m, float band_m, float lowest_m,
+                        float highest_m, float* mean_m) {
+  std::size_t best_first = 0;
+  std::size_t best_count = 0;
+  std::size_t first =
+      std::lower_bound(heights_m.begin(), heights_m.end(), lowest_m) - heights_m.begin();
+  for (std::size_t end = first; first < heights_m.size() && heights_m[first] <= highest_m;
+       ++first) {
+    end = std::max(end, first);
+    while (end < heights_m.size() && heights_m[end] <= heights_m[first] + band_m) ++end;
+    if (end - first > best_count) {
+      best_count = end - first;
+      best_first = first;
+    }
+  }
+  if (best_count == 0) return 0;
+  double sum_m = 0.0;
+  for (std::size_t k = best_first; k < best_first + best_count; ++k) sum_m += heights_m[k];
+  *mean_m = static_cast<float>(sum_m / static_cast<double>(best_count));
+  return best_count;
 }
 
 }  // namespace segment_selector_geometry

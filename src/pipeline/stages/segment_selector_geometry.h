@@ -78,5 +78,15 @@ int countRingPoints(const SegmentSelector::FrameView& view,
                     const std::vector<Plane>& planes, NearSegments near_segments,
                     double plane_distance_m, std::vector<int>* near, std::vector<int>* on_plane);
 
+// The heights along up_W of the view's points in the detection's ring, ascending.
+std::vector<float> ringHeights(const SegmentSelector::FrameView& view,
+                               const SegmentSelector::DetectionMasks& masks, bool registered,
+                               const Eigen::Vector3f& up_W);
+
+// The band of band_m of sorted heights_m, its lowest height within [lowest_m, highest_m], that
+// holds the most of them: their count (0: none in range) and *mean_m, their mean.
+std::size_t densestBand(const std::vector<float>& heights_m, float band_m, float lowest_m,
+                        float highest_m, float* mean_m);
+
 }  // namespace segment_selector_geometry
 }  // namespace mvod

@@ -287,6 +287,38 @@ TEST_F(SupportSurfacesTest, AMonitorOnTheWallIsTheWallInsideItsMask) {
   EXPECT_FALSE(runMask(loose, frame, mask, &theirs)) << "the scene does not test the on_wall rule";
 }
 
+// A book 4 cm thick on the table, seen with a detector's box (a box-only detection, or a sloppy
+// mask) that takes in the table around it. What stands on a table is seen with the table around it:
+// the ring around the box is mostly table top, and the box's points on it, outside what stands
+// above it, are the table's.
+TEST_F(SupportSurfacesTest, WhatStandsOnTheTableIsCutFromTheTableAroundIt) {
+  test::PartScene scene = scene_;
+  scene.parts.push_back(test::Part{"book", {-0.62, 0.15, 0.76}, {-0.40, 0.31, 0.80}});
+  cv::Rect box;
+  const RgbdFrame frame = scene.render(T_W_D_, "book", &box);
+  ASSERT_GT(box.area(), 1000);
+  box -= cv::Point(25, 25);
+  box += cv::Size(50, 50);
+  const ClassPrior book = sizedPrior("book", Eigen::Vector3d(0.23, 0.16, 0.05), 0.1);
+  OrientedBox ours;
+  ASSERT_TRUE(run(book, config_, box, frame, &ours));
+  EXPECT_NEAR(ours.center_m.x(), -0.51, 0.02);
+  EXPECT_NEAR(ours.center_m.y(), 0.23, 0.02);
+  EXPECT_NEAR(std::max(ours.size_m.x(), ours.size_m.y()), 0.22, 0.03);
+  EXPECT_NEAR(std::min(ours.size_m.x(), ours.size_m.y()), 0.16, 0.03);
+  EXPECT_NEAR(top(ours), 0.80, 0.01);
+  EXPECT_NEAR(ours.size_m.z(), 0.04, 0.015) << "down to the table: its lowest points stay";
+
+  // With a band of 5 cm around the support the whole book lies within it: nothing stands on the
+  // table, and the box's table top stays.
+  ObjectMapper::Config wide_band = config_;
+  wide_band.selection.plane_distance_m = 0.05;
+  OrientedBox theirs;
+  ASSERT_TRUE(run(book, wide_band, box, frame, &theirs));
+  EXPECT_GT(std::max(theirs.size_m.x(), theirs.size_m.y()), 0.3)
+      << "the scene does not test the support";
+}
+
 TEST(FlatTopOfFusedObjectTest, WhatStandsOnTheTopGoes) {
   // A fused table on a 1 cm grid: a 1.4 x 0.8 m top two voxels thick (0.74-0.76 m), four legs, and
   // what single views let through: a cup standing on it (0.76-0.86 m) and a few stray voxels.

@@ -1,10 +1,11 @@
 // Real depth and poses: the 7-Scenes redkitchen frames with box-only detections projected from the
-// hand-annotated table and chairs (test/data/7scenes_redkitchen_annotation). The default cut,
-// fusion and amodal completion against the annotation; the paper's method and the default without
-// completion on the same input, reported beside it.
+// hand-annotated table and chairs (test/data/7scenes_redkitchen_annotation), and its mugs in one
+// test. The default cut, fusion and amodal completion against the annotation; the paper's method
+// and the default without completion on the same input, reported beside it.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -89,7 +90,8 @@ class RedkitchenAnnotationTest : public ::testing::Test {
         std::string(MVOD_SOURCE_DIR) + "/test/data/7scenes_redkitchen_annotation/ground_truth.json";
     ASSERT_TRUE(loadSyntheticGroundTruth(annotation, 0.05, up_, &truth_).ok());
     // The table and the five chairs come first; the smaller things annotated after them (cups,
-    // books, monitors) are the real-detector benchmark's (benchmark/redkitchen_benchmark).
+    // books, monitors) are the real-detector benchmark's (benchmark/redkitchen_benchmark) and, the
+    // mugs, BoxOnlyDetectionsOfTheMugsAreTheMugs's.
     ASSERT_GE(truth_.size(), 6u);
     truth_.resize(6);
     for (size_t i = 0; i < truth_.size(); ++i) {
@@ -226,6 +228,34 @@ TEST_F(RedkitchenAnnotationTest, BoxOnlyDetectionsGiveTheTableAndChairs) {
       EXPECT_TRUE(a->box_completed) << "chair " << i;
       EXPECT_GT(cc.centre_m, 0.15) << "chair " << i;
     }
+  }
+}
+
+// The two mugs from box-only detections, beside the table's and the chairs' as a box detector
+// reports them: each box takes in the table top around its mug, which is the mug's support, not the
+// mug (issue 54). On this input the mugs' boxes reach IoU 0.56 and 0.49; without the cut from the
+// support 0.16 and 0.47 (the white mug's box a strip of table top).
+TEST_F(RedkitchenAnnotationTest, BoxOnlyDetectionsOfTheMugsAreTheMugs) {
+  std::vector<GroundTruthObject> annotated;
+  ASSERT_TRUE(
+      loadSyntheticGroundTruth(std::string(MVOD_SOURCE_DIR) +
+                                   "/test/data/7scenes_redkitchen_annotation/ground_truth.json",
+                               0.05, up_, &annotated)
+          .ok());
+  ASSERT_GE(annotated.size(), 8u);
+  for (size_t i = 6; i < 8; ++i) {
+    ASSERT_EQ(annotated[i].class_name, "cup") << i;
+    truth_.push_back(annotated[i]);
+  }
+  const std::vector<MapObject> ours = run(ObjectMapper::Config());
+  for (size_t i = 6; i < 8; ++i) {
+    double best_iou = 0.0;
+    for (const MapObject& object : ours) {
+      if (object.class_name != "cup") continue;
+      best_iou = std::max(best_iou, orientedBoxIoU(object.box, truth_[i].box, up_));
+    }
+    std::printf("[ redkitchen ] mug %zu: box IoU %.2f\n", i, best_iou);
+    EXPECT_GT(best_iou, 0.4) << "mug " << i;
   }
 }
 

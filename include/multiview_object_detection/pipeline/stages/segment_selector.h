@@ -143,6 +143,7 @@ class SegmentSelector {
     int bounding_segments = 0;  // dropped as walls / surfaces running past the detection
     int resting_segments = 0;   // dropped as standing on another surface (on_floor classes)
     int above_top_points = 0;   // dropped above or beside a flat top (flat_top classes)
+    int support_points = 0;     // dropped as the support around what stands on it
     // A class that lies flat (ClassPrior::liesFlat: a book) whose core held only the support's
     // plane: the object is that plane's points inside the mask, a thin box on the support.
     bool flat_on_support = false;
@@ -186,8 +187,17 @@ class SegmentSelector {
   // flat_top classes: the kept set's main horizontal surface, its plane and footprint.
   bool findFlatTop(const Work& work, Eigen::Vector3f* top_normal_W, Eigen::Vector3f* top_point_W,
                    std::vector<cv::Point2f>* top_hull) const;
-  // The kept segments' points (less what rises above a flat top or lies beside it), ascending.
+  // Classes that stand on a support (not on_floor, on_wall or with large horizontal surfaces of
+  // their own): the height of the horizontal surface around the detection that the kept set
+  // reaches down to; false if none.
+  bool findSupport(const Work& work, float* support_m) const;
+  // Per point: a kept point of the support around what stands on it (empty: none).
+  std::vector<char> onSupport(const Work& work) const;
+  // The kept segments' points (less the support's, and what rises above a flat top or lies
+  // beside it), ascending.
   Status collectKept(const Work& work, Result* result) const;
+  // Fewer points above the support: nothing stands on it, and its points stay.
+  static constexpr std::size_t kMinStandingPoints = 10;
 
   Config config_;
 };
