@@ -310,22 +310,13 @@ void SegmentSelector::markBoundingSurfaces(const FrameView& view, Work* work,
   }
 }
 
-bool SegmentSelector::findSupport(const Work& work, float* support_m) const {
+bool SegmentSelector::findSupport(const Work& work, float lowest_m, float highest_m,
+                                  float* support_m) const {
   // What stands on a table is seen with the table around it: the support is the horizontal
   // surface that runs from the ring into the kept set, the band of 2 plane_distance_m of heights,
   // from the kept set's lowest point up, that holds the most of the ring's points (at least
   // kSupportMinRingShare of them: not the floor beyond the table, nor a wall behind it).
   if (work.ring_heights_m.empty()) return false;
-  float lowest_m = std::numeric_limits<float>::infinity();
-  float highest_m = -lowest_m;
-  for (int s = 0; s < work.num_segments; ++s) {
-    if (!work.kept[s]) continue;
-    for (const int i : work.segments[s]) {
-      const float height_m = work.up.dot(work.points_W[i]);
-      lowest_m = std::min(lowest_m, height_m);
-      highest_m = std::max(highest_m, height_m);
-    }
-  }
   const float band_m = static_cast<float>(config_.plane_distance_m);
   const std::size_t on_band =
       densestBand(work.ring_heights_m, 2.f * band_m, lowest_m - band_m, highest_m, support_m);
@@ -338,31 +329,37 @@ std::vector<char> SegmentSelector::onSupport(const Work& work) const {
   // footprint of what stands above that are the support's, which an imprecise mask, or one LCCP
   // segment with the object, brought in. The footprint keeps the object's lowest points.
   std::vector<char> on_support;
-  float support_m = 0.f;
-  if (!findSupport(work, &support_m)) return on_support;
-  const float band_m = static_cast<float>(config_.plane_distance_m);
-  const float limit_m = support_m + band_m;
-  std::vector<cv::Point2f> standing;
+  if (work.ring_heights_m.empty()) return on_support;
+  std::vector<std::pair<int, float>> kept_heights_m;  // (point, height along up)
+  float lowest_m = std::numeric_limits<float>::infinity();
+  float highest_m = -lowest_m;
   for (int s = 0; s < work.num_segments; ++s) {
     if (!work.kept[s]) continue;
     for (const int i : work.segments[s]) {
-      const Eigen::Vector3f& p_W = work.points_W[i];
-      if (work.up.dot(p_W) > limit_m) standing.emplace_back(work.x_h.dot(p_W), work.y_h.dot(p_W));
+      const float height_m = work.up.dot(work.points_W[i]);
+      kept_heights_m.emplace_back(i, height_m);
+      lowest_m = std::min(lowest_m, height_m);
+      highest_m = std::max(highest_m, height_m);
     }
+  }
+  float support_m = 0.f;
+  if (!findSupport(work, lowest_m, highest_m, &support_m)) return on_support;
+  const float limit_m = support_m + static_cast<float>(config_.plane_distance_m);
+  const auto footprint = [&work](int i) {
+    return cv::Point2f(work.x_h.dot(work.points_W[i]), work.y_h.dot(work.points_W[i]));
+  };
+  std::vector<cv::Point2f> standing;
+  for (const auto& point : kept_heights_m) {
+    if (point.second > limit_m) standing.push_back(footprint(point.first));
   }
   // Nothing stands on it (a magazine within the band): the kept set as it is.
   if (standing.size() < kMinStandingPoints) return on_support;
   std::vector<cv::Point2f> hull;
   cv::convexHull(standing, hull);
   on_support.assign(work.points.size(), 0);
-  for (int s = 0; s < work.num_segments; ++s) {
-    if (!work.kept[s]) continue;
-    for (const int i : work.segments[s]) {
-      const Eigen::Vector3f& p_W = work.points_W[i];
-      if (work.up.dot(p_W) > limit_m) continue;
-      const cv::Point2f q(work.x_h.dot(p_W), work.y_h.dot(p_W));
-      on_support[i] = cv::pointPolygonTest(hull, q, false) < 0;
-    }
+  for (const auto& point : kept_heights_m) {
+    if (point.second > limit_m) continue;
+    on_support[point.first] = cv::pointPolygonTest(hull, footprint(point.first), false) < 0;
   }
   return on_support;
 }

@@ -114,17 +114,8 @@ int countRingPoints(const SegmentSelector::FrameView& view,
                     const SegmentSelector::DetectionMasks& masks, bool registered,
                     const std::vector<Plane>& planes, NearSegments near_segments,
                     double plane_distance_m, std::vector<int>* near, std::vector<int>* on_plane) {
-  const cv::Rect& crop = masks.crop;
-  const cv::Mat& ring_mask = masks.ring;
   int ring_points = 0;
-  // A registered frame's view points lie at their colour pixels: only the crop's rows.
-  const std::pair<std::size_t, std::size_t> range =
-      registered ? view.rows(crop.y, crop.y + crop.height)
-                 : std::make_pair(std::size_t{0}, view.points_D.size());
-  for (size_t k = range.first; k < range.second; ++k) {
-    const cv::Point& pixel = view.pixels_color[k];
-    if (!crop.contains(pixel)) continue;
-    if (ring_mask.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
+  forEachRingPoint(view, masks, registered, [&](std::size_t k) {
     ++ring_points;
     const Eigen::Vector3f& p = view.points_D[k];
     for (const int s : near_segments.at(p)) {
@@ -133,24 +124,16 @@ int countRingPoints(const SegmentSelector::FrameView& view,
         ++(*on_plane)[s];
       }
     }
-  }
+  });
   return ring_points;
 }
 
 std::vector<float> ringHeights(const SegmentSelector::FrameView& view,
                                const SegmentSelector::DetectionMasks& masks, bool registered,
                                const Eigen::Vector3f& up_W) {
-  const cv::Rect& crop = masks.crop;
-  const std::pair<size_t, size_t> range =
-      registered ? view.rows(crop.y, crop.y + crop.height)
-                 : std::make_pair(std::size_t{0}, view.points_D.size());
   std::vector<float> heights_m;
-  for (size_t k = range.first; k < range.second; ++k) {
-    const cv::Point& pixel = view.pixels_color[k];
-    if (!crop.contains(pixel)) continue;
-    if (masks.ring.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
-    heights_m.push_back(up_W.dot(view.points_W[k]));
-  }
+  forEachRingPoint(view, masks, registered,
+                   [&](std::size_t k) { heights_m.push_back(up_W.dot(view.points_W[k])); });
   std::sort(heights_m.begin(), heights_m.end());
   return heights_m;
 }

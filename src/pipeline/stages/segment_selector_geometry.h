@@ -5,8 +5,10 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "multiview_object_detection/pipeline/stages/segment_selector.h"
@@ -70,6 +72,23 @@ class NearSegments {
   std::int64_t key_ = 0;
   bool valid_ = false;
 };
+
+// f(k) for each view point k whose colour pixel lies in the detection's ring. A registered frame's
+// view points lie at their colour pixels: only the crop's rows are looked at.
+template <typename F>
+void forEachRingPoint(const SegmentSelector::FrameView& view,
+                      const SegmentSelector::DetectionMasks& masks, bool registered, F f) {
+  const cv::Rect& crop = masks.crop;
+  const std::pair<std::size_t, std::size_t> range =
+      registered ? view.rows(crop.y, crop.y + crop.height)
+                 : std::make_pair(std::size_t{0}, view.points_D.size());
+  for (std::size_t k = range.first; k < range.second; ++k) {
+    const cv::Point& pixel = view.pixels_color[k];
+    if (!crop.contains(pixel)) continue;
+    if (masks.ring.ptr<uint8_t>(pixel.y - crop.y)[pixel.x - crop.x] == 0) continue;
+    f(k);
+  }
+}
 
 // The view's points in the detection's ring; of them, per segment, those near it (*near) and those
 // also within plane_distance_m of its plane (*on_plane).

@@ -189,8 +189,8 @@ class SegmentSelector {
                    std::vector<cv::Point2f>* top_hull) const;
   // Classes that stand on a support (not on_floor, on_wall or with large horizontal surfaces of
   // their own): the height of the horizontal surface around the detection that the kept set
-  // reaches down to; false if none.
-  bool findSupport(const Work& work, float* support_m) const;
+  // (its heights along up from lowest_m to highest_m) reaches down to; false if none.
+  bool findSupport(const Work& work, float lowest_m, float highest_m, float* support_m) const;
   // Per point: a kept point of the support around what stands on it (empty: none).
   std::vector<char> onSupport(const Work& work) const;
   // The kept segments' points (less the support's, and what rises above a flat top or lies
