@@ -11,6 +11,49 @@
 
 namespace mvod {
 
+namespace {
+
+using multiview_object_detection::GetObjects;
+using multiview_object_detection::MapFile;
+
+// What a service answers when its handler threw: success false and why, where the response has a
+// message (roscpp's own answer to an exception is a failed call the caller reads nothing from).
+// ~get_objects has no message: its call fails, as an empty answer would say "no objects".
+bool answerFailure(const std::string& text, MapFile::Response* response) {
+  response->success = false;
+  response->message = text;
+  return true;
+}
+bool answerFailure(const std::string& text, std_srvs::Trigger::Response* response) {
+  response->success = false;
+  response->message = text;
+  return true;
+}
+bool answerFailure(const std::string& /*text*/, GetObjects::Response* /*response*/) {
+  return false;
+}
+
+// Advertises `handler` so that an exception in it is logged and answered (success false, its text),
+// and the node goes on.
+template <typename Request, typename Response>
+ros::ServiceServer advertiseAnswering(ros::NodeHandle& nh, const std::string& name,
+                                      bool (ObjectDetectionServices::*handler)(Request&, Response&),
+                                      ObjectDetectionServices* services) {
+  const boost::function<bool(Request&, Response&)> answering =
+      [name, handler, services](Request& request, Response& response) {
+        try {
+          return (services->*handler)(request, response);
+        } catch (const std::exception& error) {
+          const std::string text = name + " failed: " + error.what();
+          ROS_ERROR("%s", text.c_str());
+          return answerFailure(text, &response);
+        }
+      };
+  return nh.advertiseService<Request, Response>(name, answering);
+}
+
+}  // namespace
+
 ObjectDetectionServices::ObjectDetectionServices(const ros::NodeHandle& nh_private,
                                                  const MapPathPolicy& map_paths,
                                                  KeyframeWorker* worker, KeyframeBuffer* buffer,
@@ -27,13 +70,14 @@ ObjectDetectionServices::ObjectDetectionServices(const ros::NodeHandle& nh_priva
   ros::NodeHandle read_nh(nh_private);
   read_nh.setCallbackQueue(&read_queue_);
   get_objects_srv_ =
-      read_nh.advertiseService("get_objects", &ObjectDetectionServices::getObjects, this);
-  save_map_srv_ = read_nh.advertiseService("save_map", &ObjectDetectionServices::saveMap, this);
+      advertiseAnswering(read_nh, "get_objects", &ObjectDetectionServices::getObjects, this);
+  save_map_srv_ = advertiseAnswering(read_nh, "save_map", &ObjectDetectionServices::saveMap, this);
   ros::NodeHandle change_nh(nh_private);
   change_nh.setCallbackQueue(&change_queue_);
-  load_map_srv_ = change_nh.advertiseService("load_map", &ObjectDetectionServices::loadMap, this);
-  reset_srv_ = change_nh.advertiseService("reset", &ObjectDetectionServices::reset, this);
-  refine_srv_ = change_nh.advertiseService("refine", &ObjectDetectionServices::refine, this);
+  load_map_srv_ =
+      advertiseAnswering(change_nh, "load_map", &ObjectDetectionServices::loadMap, this);
+  reset_srv_ = advertiseAnswering(change_nh, "reset", &ObjectDetectionServices::reset, this);
+  refine_srv_ = advertiseAnswering(change_nh, "refine", &ObjectDetectionServices::refine, this);
   // Two threads: a long ~save_map does not hold up ~get_objects.
   read_spinner_ = std::make_unique<ros::AsyncSpinner>(2, &read_queue_);
   change_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &change_queue_);

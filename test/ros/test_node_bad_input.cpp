@@ -316,7 +316,7 @@ TEST_F(NodeBadInputTest, ResetClearsThePoseBufferSoARestartedBagIsMapped) {
   }
   ros::WallDuration(0.5).sleep();
   std_srvs::Trigger reset;
-  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/reset", reset));
+  ASSERT_TRUE(callService(std::string(kPoseNode) + "/reset", reset));
   ASSERT_TRUE(reset.response.success);
   const ros::Time stamp = stampAt(40);
   inputs_->publish(stream_->make(1, stamp), true, true, true);
@@ -374,7 +374,7 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
   const std::string service = std::string(kPoseNode) + "/load_map";
   const std::string tag = std::to_string(::getpid());
   GetObjects before;
-  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/get_objects", before));
+  ASSERT_TRUE(callService(std::string(kPoseNode) + "/get_objects", before));
   multiview_object_detection::MapFile srv;
   double seconds = 0.0;
 
@@ -418,7 +418,7 @@ TEST_F(NodeBadInputTest, BadMapFilesAreRefusedAtOnceAndTheMapIsKept) {
 
   // The map is what it was.
   GetObjects after;
-  ASSERT_TRUE(ros::service::call(std::string(kPoseNode) + "/get_objects", after));
+  ASSERT_TRUE(callService(std::string(kPoseNode) + "/get_objects", after));
   EXPECT_EQ(after.response.objects.objects.size(), before.response.objects.objects.size());
 }
 
@@ -491,7 +491,7 @@ TEST_F(NodeBadInputTest, ResetClearsTheTfBufferSoTheSameStampsGetTheirNewPoses) 
   inputs_->publish(stream_->make(0, stamp), false, true, true);
   ASSERT_TRUE(tf_node_->waitForObjectsAt(stamp, 20.0)) << tf_node_->allLogs();
   std_srvs::Trigger reset;
-  ASSERT_TRUE(ros::service::call(std::string(kTfNode) + "/reset", reset));
+  ASSERT_TRUE(callService(std::string(kTfNode) + "/reset", reset));
   ASSERT_TRUE(reset.response.success) << reset.response.message;
   ASSERT_TRUE(tf_node_->waitFor([] { return tf_node_->keyframePoses() == 0; }, 5.0));
   const ros::Time since = ros::Time::now();

@@ -293,7 +293,7 @@ TEST_F(NodeCorrectionsTest, CorrectedPosesRemoveTheDriftsDuplicates) {
   // The refinement merges what the right poses map twice too (a chair whose first views saw only
   // its back).
   std_srvs::Trigger refine;
-  ASSERT_TRUE(ros::service::call(std::string(kNode) + "/refine", refine));
+  ASSERT_TRUE(callService(std::string(kNode) + "/refine", refine));
   const ObjectArray corrected = getObjects(kNode);
   const Match after = matchTruth(stream_->scene(), corrected);
   std::printf("corrected map: %zu objects, %d matching no true object, worst %.3f m\n",
@@ -429,7 +429,7 @@ TEST_F(NodeCorrectionsTest, LongPathsAtTenHertzLeaveTheMapRightAndTheServicesAns
   RecordProperty("ten_paths_of_10000_poses_s", std::to_string(total_s));
   RecordProperty("slowest_get_objects_s", std::to_string(slowest_service_s));
   std_srvs::Trigger refine;
-  ASSERT_TRUE(ros::service::call(std::string(kNode) + "/refine", refine));
+  ASSERT_TRUE(callService(std::string(kNode) + "/refine", refine));
   const Match after = matchTruth(stream_->scene(), getObjects(kNode));
   EXPECT_EQ(after.unmatched, 0) << "the paths left objects mapped twice";
   EXPECT_LT(after.worst_m, 0.1) << "the paths left the map off the truth";

@@ -154,12 +154,12 @@ class NodeSyntheticTest : public ::testing::Test {
     GetObjects srv;
     srv.request.class_name = class_name;
     srv.request.ids = ids;
-    EXPECT_TRUE(ros::service::call(std::string(kNode) + "/get_objects", srv));
+    EXPECT_TRUE(callService(std::string(kNode) + "/get_objects", srv));
     return srv.response.objects;
   }
   static bool trigger(const std::string& name, std::string* message = nullptr) {
     std_srvs::Trigger srv;
-    const bool called = ros::service::call(std::string(kNode) + "/" + name, srv);
+    const bool called = callService(std::string(kNode) + "/" + name, srv);
     EXPECT_TRUE(called) << name;
     if (message != nullptr) *message = srv.response.message;
     return called && srv.response.success;
@@ -167,7 +167,7 @@ class NodeSyntheticTest : public ::testing::Test {
   static MapFile::Response mapFile(const std::string& name, const std::string& path) {
     MapFile srv;
     srv.request.path = path;
-    EXPECT_TRUE(ros::service::call(std::string(kNode) + "/" + name, srv)) << name;
+    EXPECT_TRUE(callService(std::string(kNode) + "/" + name, srv)) << name;
     return srv.response;
   }
   static std::set<int> idsOf(const ObjectArray& objects) {
