@@ -1,36 +1,31 @@
 #include "multiview_object_detection/pipeline/stages/segment_selector.h"
+// SegmentSelector: its Config and the phases of one selection (core, planes, bounding surfaces,
+// seed, growth, the kept points). What the object stands, lies or hangs on:
+// segment_selector_supports.cpp.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
-#include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "multiview_object_detection/pipeline/stages/object_cloud_extractor.h"
 #include "multiview_object_detection/pipeline/utils/voxel_key.h"
 #include "segment_selector_geometry.h"
+#include "segment_selector_work.h"
 
 namespace mvod {
 namespace {
 
 constexpr double kPiOver18 = 3.14159265358979323846 / 18.0;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-// The share of a detection's ring that the support around it holds: the ring of a cup on a table
-// is mostly table top, while a wall, a shelf of books or a cluttered background spreads over many
-// heights. From 0.2 to 0.4 the AP and per-object IoUs of the redkitchen with YOLOv5n-seg, of make
-// demo's room and of the synthetic rooms were the same; at 0.1 the synthetic rooms' books lost
-// (segmentation AP 3.3 -> 3.1), at 0.5 make demo's book (IoU 0.67 -> 0.24).
-constexpr double kSupportMinRingShare = 0.3;
 
 }  // namespace
 
 using segment_selector_geometry::addToCell;
 using segment_selector_geometry::CellSegments;
 using segment_selector_geometry::countRingPoints;
-using segment_selector_geometry::densestBand;
 using segment_selector_geometry::Extent;
 using segment_selector_geometry::fitPlane;
 using segment_selector_geometry::kDirections;
@@ -114,99 +109,6 @@ std::string SegmentSelector::Config::print() const {
       << "support_max_tilt_deg: " << support_max_tilt_deg << "\n";
   return out.str();
 }
-
-// One consistent selection's state: the input, and per segment what the phases of select() find.
-struct SegmentSelector::Work {
-  Work(const Input& in, const DetectionMasks& detection_masks, const Config& config)
-      : input(in),
-        points(*in.points_D),
-        segments(*in.segments),
-        frame(*in.frame),
-        masks(detection_masks),
-        num_segments(static_cast<int>(segments.size())),
-        T_W_D(frame.T_W_D.cast<float>()),
-        R_W_D(T_W_D.linear()),
-        up(in.gravity.up.cast<float>()),
-        x_h(in.gravity.x_h.cast<float>()),
-        y_h(in.gravity.y_h.cast<float>()),
-        cos_tilt(std::cos(config.support_max_tilt_deg * kDegToRad)),
-        sin_tilt(std::sin(config.support_max_tilt_deg * kDegToRad)),
-        on_floor(in.prior != nullptr && in.prior->on_floor),
-        own_horizontal(in.prior != nullptr && in.prior->hasLargeHorizontalSurface()),
-        lies_flat(in.prior != nullptr && in.prior->liesFlat()),
-        on_wall(in.prior != nullptr && in.prior->on_wall),
-        stands_on_support(!on_floor && !own_horizontal && !on_wall),
-        bounding(num_segments, 0),
-        resting(num_segments, 0),
-        kept(num_segments, 0) {}
-
-  // A horizontal planar segment (RMS thickness at most max_rms_m): its plane in the world frame,
-  // normal up.
-  bool horizontal(int s, double max_rms_m, Eigen::Vector3f* normal_W,
-                  Eigen::Vector3f* point_W) const {
-    if (!(planes[s].rms_m <= max_rms_m)) return false;
-    Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
-    if (n.dot(up) < 0.f) n = -n;
-    if (n.dot(up) < cos_tilt) return false;
-    *normal_W = n;
-    *point_W = T_W_D * planes[s].point.cast<float>();
-    return true;
-  }
-  // A vertical planar segment (a wall): its normal within the support tilt of horizontal.
-  bool vertical(int s, double max_rms_m) const {
-    if (!(planes[s].rms_m <= max_rms_m)) return false;
-    const Eigen::Vector3f n = R_W_D * planes[s].normal.cast<float>();
-    return std::abs(n.dot(up)) <= sin_tilt;
-  }
-  // A segment's footprint: the convex hull of its points on the horizontal plane.
-  std::vector<cv::Point2f> footprintHull(int s) const {
-    std::vector<cv::Point2f> footprint;
-    footprint.reserve(segments[s].size());
-    for (const int i : segments[s]) {
-      const Eigen::Vector3f& p_W = points_W[i];
-      footprint.emplace_back(x_h.dot(p_W), y_h.dot(p_W));
-    }
-    std::vector<cv::Point2f> hull;
-    if (!footprint.empty()) cv::convexHull(footprint, hull);
-    return hull;
-  }
-  bool excluded(int s) const { return bounding[s] || resting[s]; }
-
-  const Input& input;
-  const PointCloud& points;
-  const std::vector<std::vector<int>>& segments;
-  const RgbdFrame& frame;
-  const DetectionMasks& masks;
-  const int num_segments;
-  // The gravity frame; horizontal planes in the world frame.
-  const Eigen::Isometry3f T_W_D;
-  const Eigen::Matrix3f R_W_D;
-  const Eigen::Vector3f up;
-  const Eigen::Vector3f x_h;
-  const Eigen::Vector3f y_h;
-  const double cos_tilt;
-  const double sin_tilt;
-  const bool on_floor;
-  const bool own_horizontal;     // a horizontal plane running past is the object's (a table top)
-  const bool lies_flat;          // the object lies flat on a support (a book on a table)
-  const bool on_wall;            // the object hangs flat on a wall (a wall monitor)
-  const bool stands_on_support;  // the object stands on a support's surface (a cup on a table)
-  std::vector<char> in_mask;     // per point: its colour pixel in the detection's mask
-  std::vector<int> core_count;   // per segment: its points in the detection's core
-  std::vector<Plane> planes;     // per segment; rms_m infinite: under 20 points, no plane
-  std::vector<char> bounding;    // walls, surfaces running past the detection
-  std::vector<char> resting;     // standing on a horizontal bounding surface (on_floor classes)
-  PointCloud points_W;           // the points in the world frame
-  std::vector<Extent> extents;   // per segment, in the gravity frame
-  int seed = -1;
-  // lies_flat: the support's segment the object lies on, when the core holds nothing else; the
-  // object is then that segment's points inside the mask.
-  int flat_support = -1;
-  // stands_on_support: the heights along up of the view's points in the ring, ascending.
-  std::vector<float> ring_heights_m;
-  std::vector<char> kept;
-  std::size_t kept_points = 0;
-};
 
 Status SegmentSelector::select(const Input& input, Result* result) const {
   if (result == nullptr || input.points_D == nullptr || input.segments == nullptr) {
@@ -310,60 +212,6 @@ void SegmentSelector::markBoundingSurfaces(const FrameView& view, Work* work,
   }
 }
 
-bool SegmentSelector::findSupport(const Work& work, float lowest_m, float highest_m,
-                                  float* support_m) const {
-  // What stands on a table is seen with the table around it: the support is the horizontal
-  // surface that runs from the ring into the kept set, the band of 2 plane_distance_m of heights,
-  // from the kept set's lowest point up, that holds the most of the ring's points (at least
-  // kSupportMinRingShare of them: not the floor beyond the table, nor a wall behind it).
-  if (work.ring_heights_m.empty()) return false;
-  const float band_m = static_cast<float>(config_.plane_distance_m);
-  const std::size_t on_band =
-      densestBand(work.ring_heights_m, 2.f * band_m, lowest_m - band_m, highest_m, support_m);
-  return on_band > 0 && static_cast<double>(on_band) >=
-                            kSupportMinRingShare * static_cast<double>(work.ring_heights_m.size());
-}
-
-std::vector<char> SegmentSelector::onSupport(const Work& work) const {
-  // The kept points within plane_distance_m above the support (or below it) and outside the
-  // footprint of what stands above that are the support's, which an imprecise mask, or one LCCP
-  // segment with the object, brought in. The footprint keeps the object's lowest points.
-  std::vector<char> on_support;
-  if (work.ring_heights_m.empty()) return on_support;
-  std::vector<std::pair<int, float>> kept_heights_m;  // (point, height along up)
-  float lowest_m = std::numeric_limits<float>::infinity();
-  float highest_m = -lowest_m;
-  for (int s = 0; s < work.num_segments; ++s) {
-    if (!work.kept[s]) continue;
-    for (const int i : work.segments[s]) {
-      const float height_m = work.up.dot(work.points_W[i]);
-      kept_heights_m.emplace_back(i, height_m);
-      lowest_m = std::min(lowest_m, height_m);
-      highest_m = std::max(highest_m, height_m);
-    }
-  }
-  float support_m = 0.f;
-  if (!findSupport(work, lowest_m, highest_m, &support_m)) return on_support;
-  const float limit_m = support_m + static_cast<float>(config_.plane_distance_m);
-  const auto footprint = [&work](int i) {
-    return cv::Point2f(work.x_h.dot(work.points_W[i]), work.y_h.dot(work.points_W[i]));
-  };
-  std::vector<cv::Point2f> standing;
-  for (const auto& point : kept_heights_m) {
-    if (point.second > limit_m) standing.push_back(footprint(point.first));
-  }
-  // Nothing stands on it (a magazine within the band): the kept set as it is.
-  if (standing.size() < kMinStandingPoints) return on_support;
-  std::vector<cv::Point2f> hull;
-  cv::convexHull(standing, hull);
-  on_support.assign(work.points.size(), 0);
-  for (const auto& point : kept_heights_m) {
-    if (point.second > limit_m) continue;
-    on_support[point.first] = cv::pointPolygonTest(hull, footprint(point.first), false) < 0;
-  }
-  return on_support;
-}
-
 void SegmentSelector::computeExtents(Work* work) const {
   // Segments in the gravity frame: the points in the world frame, once; the extents along 18
   // horizontal directions and up.
@@ -376,41 +224,6 @@ void SegmentSelector::computeExtents(Work* work) const {
   }
   directions.push_back(work->up);
   work->extents = segmentExtents(work->points_W, work->segments, directions);
-}
-
-void SegmentSelector::markResting(Work* work, Result* result) const {
-  // on_floor classes: what rests on a horizontal bounding surface (a table top running past the
-  // detection) is something on that surface, not part of the object.
-  const std::vector<std::vector<int>>& segments = work->segments;
-  const float rest_m = static_cast<float>(config_.resting_distance_m);
-  const float edge_m = static_cast<float>(config_.resting_edge_margin_m);
-  for (int b = 0; b < work->num_segments; ++b) {
-    Eigen::Vector3f n_b, p_b;
-    if (!work->bounding[b] || !work->horizontal(b, config_.plane_max_thickness_m, &n_b, &p_b)) {
-      continue;
-    }
-    // The surface's footprint, so that what hides part of it (papers on a table) stands inside.
-    const std::vector<cv::Point2f> hull = work->footprintHull(b);
-    if (hull.size() < 3) continue;
-    for (int s = 0; s < work->num_segments; ++s) {
-      if (s == b || work->bounding[s] || work->resting[s]) continue;
-      // Its lowest point on the surface (heights along the surface's normal).
-      float bottom = std::numeric_limits<float>::infinity();
-      for (const int i : segments[s]) bottom = std::min(bottom, n_b.dot(work->points_W[i] - p_b));
-      if (std::abs(bottom) > rest_m) continue;
-      size_t over = 0;
-      for (const int i : segments[s]) {
-        const Eigen::Vector3f& p_W = work->points_W[i];
-        const cv::Point2f q(work->x_h.dot(p_W), work->y_h.dot(p_W));
-        over += edge_m > 0.f ? cv::pointPolygonTest(hull, q, true) >= edge_m
-                             : cv::pointPolygonTest(hull, q, false) >= 0;
-      }
-      if (over >= config_.resting_min_share * segments[s].size()) {
-        work->resting[s] = 1;
-        ++result->resting_segments;
-      }
-    }
-  }
 }
 
 Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
@@ -443,24 +256,6 @@ Status SegmentSelector::chooseSeed(Work* work, const Result& result) const {
   }
   work->seed = seed;
   return Status::Ok();
-}
-
-bool SegmentSelector::chooseFlatSupport(Work* work) const {
-  // A book on a table is part of the table's plane in depth, a wall monitor of the wall's: the
-  // bounding segment with the most core points that is horizontal (lies_flat) or vertical (on_wall)
-  // is what it lies or hangs on.
-  int support = -1;
-  for (int s = 0; s < work->num_segments; ++s) {
-    Eigen::Vector3f n, p;
-    if (!work->bounding[s] || work->core_count[s] == 0) continue;
-    const bool lies_on =
-        work->lies_flat && work->horizontal(s, config_.plane_max_thickness_m, &n, &p);
-    const bool hangs_on = work->on_wall && work->vertical(s, config_.plane_max_thickness_m);
-    if (!lies_on && !hangs_on) continue;
-    if (support < 0 || work->core_count[s] > work->core_count[support]) support = s;
-  }
-  work->flat_support = support;
-  return support >= 0;
 }
 
 void SegmentSelector::growFromSeed(Work* work) const {
@@ -522,31 +317,6 @@ void SegmentSelector::growFromSeed(Work* work) const {
       grew = true;
     }
   }
-}
-
-bool SegmentSelector::findFlatTop(const Work& work, Eigen::Vector3f* top_normal_W,
-                                  Eigen::Vector3f* top_point_W,
-                                  std::vector<cv::Point2f>* top_hull) const {
-  // flat_top classes: nothing above the main horizontal surface of the kept set (its largest
-  // horizontal planar segment, if large enough; up to twice plane_max_thickness_m thick, as a top
-  // with papers on it is) belongs to the object.
-  const ClassPrior* prior = work.input.prior;
-  if (prior == nullptr || !prior->flat_top || !(config_.top_clearance_m > 0.0)) return false;
-  const std::vector<std::vector<int>>& segments = work.segments;
-  int top = -1;
-  for (int s = 0; s < work.num_segments; ++s) {
-    Eigen::Vector3f n, p;
-    if (!work.kept[s] || segments[s].size() < config_.top_min_share * work.kept_points) continue;
-    if (!work.horizontal(s, 2.0 * config_.plane_max_thickness_m, &n, &p)) continue;
-    if (top < 0 || segments[s].size() > segments[top].size()) {
-      top = s;
-      *top_normal_W = n;
-      *top_point_W = p;
-    }
-  }
-  if (top < 0) return false;
-  *top_hull = work.footprintHull(top);
-  return true;
 }
 
 Status SegmentSelector::collectKept(const Work& work, Result* result) const {
@@ -616,42 +386,6 @@ Status SegmentSelector::collectKept(const Work& work, Result* result) const {
     if (take[i]) result->indices.push_back(static_cast<int>(i));
   }
   return Status::Ok();
-}
-
-bool SegmentSelector::belowFlatTop(const PointCloud& points_W, const Eigen::Vector3d& up_W,
-                                   double clearance_m, double min_share, PointCloud* below_W) {
-  if (points_W.empty() || !(clearance_m >= 0.0) || !(min_share > 0.0) || !up_W.allFinite() ||
-      !(up_W.norm() > 0.0)) {
-    return false;
-  }
-  const Eigen::Vector3f up = up_W.normalized().cast<float>();
-  constexpr float kLayerM = 0.01f;
-  std::vector<float> heights(points_W.size());
-  float lowest = std::numeric_limits<float>::infinity();
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    heights[i] = up.dot(points_W[i]);
-    if (std::isfinite(heights[i])) lowest = std::min(lowest, heights[i]);
-  }
-  if (!std::isfinite(lowest)) return false;
-  // Layers by their index above the lowest point.
-  std::map<long, size_t> layers;
-  for (const float h : heights) {
-    if (std::isfinite(h)) ++layers[static_cast<long>(std::floor((h - lowest) / kLayerM))];
-  }
-  const double needed = min_share * static_cast<double>(points_W.size());
-  long top = -1;
-  for (const auto& layer : layers) {
-    if (static_cast<double>(layer.second) >= needed) top = layer.first;
-  }
-  if (top < 0) return false;
-  const float limit =
-      lowest + static_cast<float>(top + 1) * kLayerM + static_cast<float>(clearance_m);
-  below_W->clear();
-  below_W->reserve(points_W.size());
-  for (size_t i = 0; i < points_W.size(); ++i) {
-    if (heights[i] <= limit) below_W->push_back(points_W[i]);
-  }
-  return !below_W->empty() && below_W->size() < points_W.size();
 }
 
 }  // namespace mvod
