@@ -212,7 +212,7 @@ int loadPriors(Options* options, const char* argv0, mvod::ClassPriors* priors) {
 }
 
 // The mapper's configuration: the method's options, the dataset's gravity when it has one (else
-// estimated from the first frames' dominant plane). Invalid values are usage errors.
+// estimated from the first frames' surfaces). Invalid values are usage errors.
 int mapperConfig(const Options& options, const mvod::DatasetSource& dataset,
                  mvod::ObjectMapper::Config* config) {
   if (options.paper) config->usePaperMethod();

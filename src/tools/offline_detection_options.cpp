@@ -107,7 +107,7 @@ const char* const kUsage =
     "                         default samples surfaces nearer than fx x 5 mm on a coarser grid)\n"
     "  --existence-remove-below L  remove an object once its existence log-odds fall below L\n"
     "                         (default -1; the log-odds lie in [-2, 2])\n"
-    "  --estimate-gravity     estimate gravity from the dominant plane even where the dataset\n"
+    "  --estimate-gravity     estimate gravity from the frame's surfaces even where the dataset\n"
     "                         states it (7-Scenes gravity-direction.txt, SceneNN's y-up world)\n"
     "  --corrected-poses DIR  the SLAM's corrections, as at a loop closure: frame-NNNNNN.pose.txt\n"
     "                         files (the 7-Scenes layout); every keyframe processed before\n"

@@ -77,7 +77,7 @@ class ObjectMapper {
 
   struct Config {
     double min_probability = 0.5;  // λ
-    // World gravity, pointing down. Zero vector = estimate it from the dominant horizontal plane.
+    // World gravity, pointing down. Zero vector = estimate it from the data (GravityEstimator).
     Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
     int min_object_points = 50;  // fewer points after filtering: the detection is dropped
     // Threads for a keyframe's detections (floor cut, filter, LCCP, selection, box); 0 = one per

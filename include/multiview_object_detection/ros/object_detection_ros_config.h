@@ -45,7 +45,7 @@ struct ObjectDetectionRosConfig {
   double pose_max_time_diff_s = 0.05;
 
   // Gravity: "param" (gravity_down_W below), "tf" (-z of gravity_frame in world_frame) or
-  // "estimate" (dominant horizontal plane).
+  // "estimate" (GravityEstimator: the surfaces in view).
   std::string gravity_source = "param";
   Eigen::Vector3d gravity_down_W = Eigen::Vector3d(0, 0, -1);
   std::string gravity_frame = "base_link";

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "multiview_object_detection/pipeline/stages/normal_estimation.h"
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
 
@@ -21,6 +22,11 @@ constexpr int kMinPlanePoints = 10;
 constexpr double kSampleCellVoxels = 6.0;
 constexpr int kRefineRounds = 3;
 constexpr std::uint32_t kRandomSeed = 42;  // deterministic estimates
+// The surfaces' normals: PCA over this many voxels around each.
+constexpr double kNormalRadiusVoxels = 3.0;
+// The angles (degrees) within which a normal counts as along gravity or across it, one round each,
+// narrowing as the estimate settles (Gupta et al. 2013 narrow theirs from 45 to 15 degrees).
+constexpr std::array<double, 5> kSurfaceRoundsDeg = {45.0, 35.0, 25.0, 20.0, 15.0};
 
 using CellKey = std::array<std::int64_t, 3>;
 struct CellKeyHash {
@@ -75,6 +81,47 @@ bool fitPlane(const PointCloud& points, const std::vector<int>& indices, Candida
   plane->normal = normal.normalized().cast<float>();
   plane->offset = static_cast<float>(-normal.normalized().dot(mean));
   return true;
+}
+
+// Gravity as the frame's surfaces agree on it (Gupta, Arbelaez and Malik, CVPR 2013, Sec. 3.1): the
+// direction g nearest to the normals within `d` of it (floor, table and desk tops, shelves) and
+// farthest from those within `d` of perpendicular (walls, cabinet fronts, screens), minimising
+// sum_across (n.g)^2 + sum_along (1 - (n.g)^2): the smallest eigenvector of
+// sum_across n n^T - sum_along n n^T. One plane alone (a keyboard on its feet, a ramp) no longer
+// decides; starting from it, `d` narrows round by round. Returns how many normals lie along the
+// result in the last round (0 when the rounds failed).
+int alignWithSurfaces(const std::vector<Eigen::Vector3f>& normals, Eigen::Vector3d* down) {
+  Eigen::Vector3d g = down->normalized();
+  for (const double d_deg : kSurfaceRoundsDeg) {
+    const double cos_d = std::cos(d_deg * kPi / 180.0);
+    const double sin_d = std::sin(d_deg * kPi / 180.0);
+    Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+    int along = 0;
+    for (const Eigen::Vector3f& normal : normals) {
+      if (!normal.allFinite()) continue;
+      const Eigen::Vector3d n = normal.cast<double>().normalized();
+      const double c = std::abs(n.dot(g));
+      if (c >= cos_d) {
+        M -= n * n.transpose();
+        ++along;
+      } else if (c <= sin_d) {
+        M += n * n.transpose();
+      }
+    }
+    if (along < kMinPlanePoints) return 0;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(M);
+    if (solver.info() != Eigen::Success) return 0;
+    Eigen::Vector3d next = solver.eigenvectors().col(0);  // eigenvalues ascending
+    if (!next.allFinite()) return 0;
+    g = next.dot(g) < 0.0 ? -next : next;
+  }
+  const double cos_last = std::cos(kSurfaceRoundsDeg.back() * kPi / 180.0);
+  int along = 0;
+  for (const Eigen::Vector3f& normal : normals) {
+    along += normal.allFinite() && std::abs(normal.cast<double>().normalized().dot(g)) >= cos_last;
+  }
+  *down = g;
+  return along;
 }
 
 }  // namespace
@@ -189,9 +236,17 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
       kMinPlanePoints, static_cast<int>(std::ceil(config_.min_plane_fraction * num_points)));
   if (best.inliers < min_support) return has_estimate_;
 
-  // Gravity is the plane normal on the side of camera +y (down), expressed in the world frame.
+  // Gravity starts as the plane's normal on the side of camera +y (down), then is what all the
+  // frame's surfaces agree on. A frame whose surfaces do not agree (fewer than min_plane_fraction
+  // of its normals within 15 degrees of the result: the plane was a slanted cut through clutter,
+  // not a surface) or that leaves the cone gives no estimate.
   Eigen::Vector3d down_D = best.normal.cast<double>();
   if (down_D.y() < 0.0) down_D = -down_D;
+  std::vector<int> all(voxels_D.size());
+  for (int i = 0; i < num_points; ++i) all[i] = i;
+  const int along = alignWithSurfaces(
+      estimateCellNormalsAt(voxels_D, all, kNormalRadiusVoxels * config_.voxel_size_m), &down_D);
+  if (along < min_support || !isHorizontal(down_D.cast<float>())) return has_estimate_;
   const Eigen::Vector3d down_W = (T_W_D.linear() * down_D).normalized();
   if (!down_W.allFinite()) return has_estimate_;
   // Keep the best-supported frame's estimate: one clear floor beats many glimpses of a table.

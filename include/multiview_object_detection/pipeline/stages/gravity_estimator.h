@@ -1,5 +1,6 @@
-// Gravity ("down" in the world frame) from the dominant horizontal plane, for when no gravity is
-// configured (ORB-SLAM2's map frame is its first camera's frame, not gravity-aligned).
+// Gravity ("down" in the world frame) from the dominant horizontal plane, then as all the frame's
+// surfaces agree on it (docs/method.md), for when no gravity is configured (ORB-SLAM2's map frame
+// is its first camera's frame, not gravity-aligned).
 #pragma once
 
 #include "multiview_object_detection/pipeline/types/common.h"
