@@ -83,6 +83,17 @@ bool fitPlane(const PointCloud& points, const std::vector<int>& indices, Candida
   return true;
 }
 
+// The unit normals among `normals` (NaN where no normal was estimated).
+std::vector<Eigen::Vector3d> unitNormals(const std::vector<Eigen::Vector3f>& normals) {
+  std::vector<Eigen::Vector3d> unit;
+  unit.reserve(normals.size());
+  for (const Eigen::Vector3f& normal : normals) {
+    if (normal.allFinite() && normal.norm() > 0.f)
+      unit.push_back(normal.cast<double>().normalized());
+  }
+  return unit;
+}
+
 // Gravity as the frame's surfaces agree on it (Gupta, Arbelaez and Malik, CVPR 2013, Sec. 3.1): the
 // direction g nearest to the normals within `d` of it (floor, table and desk tops, shelves) and
 // farthest from those within `d` of perpendicular (walls, cabinet fronts, screens), minimising
@@ -90,38 +101,34 @@ bool fitPlane(const PointCloud& points, const std::vector<int>& indices, Candida
 // sum_across n n^T - sum_along n n^T. One plane alone (a keyboard on its feet, a ramp) no longer
 // decides; starting from it, `d` narrows round by round. Returns how many normals lie along the
 // result in the last round (0 when the rounds failed).
-int alignWithSurfaces(const std::vector<Eigen::Vector3f>& normals, Eigen::Vector3d* down) {
+int alignWithSurfaces(const std::vector<Eigen::Vector3d>& normals, Eigen::Vector3d* down) {
   Eigen::Vector3d g = down->normalized();
+  const auto countAlong = [&normals](const Eigen::Vector3d& axis, double cos_d) {
+    int along = 0;
+    for (const Eigen::Vector3d& n : normals) along += std::abs(n.dot(axis)) >= cos_d;
+    return along;
+  };
   for (const double d_deg : kSurfaceRoundsDeg) {
     const double cos_d = std::cos(d_deg * kPi / 180.0);
     const double sin_d = std::sin(d_deg * kPi / 180.0);
     Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
-    int along = 0;
-    for (const Eigen::Vector3f& normal : normals) {
-      if (!normal.allFinite()) continue;
-      const Eigen::Vector3d n = normal.cast<double>().normalized();
+    for (const Eigen::Vector3d& n : normals) {
       const double c = std::abs(n.dot(g));
       if (c >= cos_d) {
         M -= n * n.transpose();
-        ++along;
       } else if (c <= sin_d) {
         M += n * n.transpose();
       }
     }
-    if (along < kMinPlanePoints) return 0;
+    if (countAlong(g, cos_d) < kMinPlanePoints) return 0;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(M);
     if (solver.info() != Eigen::Success) return 0;
-    Eigen::Vector3d next = solver.eigenvectors().col(0);  // eigenvalues ascending
+    const Eigen::Vector3d next = solver.eigenvectors().col(0);  // eigenvalues ascending
     if (!next.allFinite()) return 0;
     g = next.dot(g) < 0.0 ? -next : next;
   }
-  const double cos_last = std::cos(kSurfaceRoundsDeg.back() * kPi / 180.0);
-  int along = 0;
-  for (const Eigen::Vector3f& normal : normals) {
-    along += normal.allFinite() && std::abs(normal.cast<double>().normalized().dot(g)) >= cos_last;
-  }
   *down = g;
-  return along;
+  return countAlong(g, std::cos(kSurfaceRoundsDeg.back() * kPi / 180.0));
 }
 
 }  // namespace
@@ -245,7 +252,8 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
   std::vector<int> all(voxels_D.size());
   for (int i = 0; i < num_points; ++i) all[i] = i;
   const int along = alignWithSurfaces(
-      estimateCellNormalsAt(voxels_D, all, kNormalRadiusVoxels * config_.voxel_size_m), &down_D);
+      unitNormals(estimateCellNormalsAt(voxels_D, all, kNormalRadiusVoxels * config_.voxel_size_m)),
+      &down_D);
   if (along < min_support || !isHorizontal(down_D.cast<float>())) return has_estimate_;
   const Eigen::Vector3d down_W = (T_W_D.linear() * down_D).normalized();
   if (!down_W.allFinite()) return has_estimate_;
