@@ -51,17 +51,16 @@ constexpr char kOutputFrame[] = "map_gravity_aligned";
 constexpr char kCameraFrame[] = "camera_rgb_optical_frame";
 
 // ros::service::call, tried once more when the call got no answer at all (the master's lookup or
-// the connection failed, as happened once in CI on a loaded machine). What the node answers,
-// refusals included, is returned as it is. A retry is printed, with whether the service was
-// advertised.
+// the connection failed, as happened once in CI on a loaded machine), once the service is
+// advertised again (up to 30 s). What the node answers, refusals included, is returned as it is. A
+// retry is printed, with whether the service was advertised when the call failed.
 template <typename Service>
 bool callService(const std::string& name, Service& srv) {
   if (ros::service::call(name, srv)) return true;
-  std::printf("[callService] %s got no answer (advertised: %s); trying once more in 1 s\n",
-              name.c_str(), ros::service::exists(name, false) ? "yes" : "no");
+  std::printf("[callService] %s got no answer (advertised: %s); trying once more\n", name.c_str(),
+              ros::service::exists(name, false) ? "yes" : "no");
   std::fflush(stdout);
-  ros::Duration(1.0).sleep();
-  return ros::service::call(name, srv);
+  return ros::service::waitForService(name, ros::Duration(30.0)) && ros::service::call(name, srv);
 }
 
 inline geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {

@@ -4,10 +4,13 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <unordered_map>
 
+#include "multiview_object_detection/pipeline/stages/manhattan_frame.h"
 #include "multiview_object_detection/pipeline/stages/normal_estimation.h"
 #include "multiview_object_detection/pipeline/stages/point_cloud_filter.h"
 #include "multiview_object_detection/pipeline/types/parameter_ranges.h"
@@ -81,17 +84,6 @@ bool fitPlane(const PointCloud& points, const std::vector<int>& indices, Candida
   plane->normal = normal.normalized().cast<float>();
   plane->offset = static_cast<float>(-normal.normalized().dot(mean));
   return true;
-}
-
-// The unit normals among `normals` (NaN where no normal was estimated).
-std::vector<Eigen::Vector3d> unitNormals(const std::vector<Eigen::Vector3f>& normals) {
-  std::vector<Eigen::Vector3d> unit;
-  unit.reserve(normals.size());
-  for (const Eigen::Vector3f& normal : normals) {
-    if (normal.allFinite() && normal.norm() > 0.f)
-      unit.push_back(normal.cast<double>().normalized());
-  }
-  return unit;
 }
 
 // Gravity as the frame's surfaces agree on it (Gupta, Arbelaez and Malik, CVPR 2013, Sec. 3.1): the
@@ -250,9 +242,11 @@ bool GravityEstimator::addFrame(const PointCloud& points_D, const Eigen::Isometr
   Eigen::Vector3d down_D = best.normal.cast<double>();
   if (down_D.y() < 0.0) down_D = -down_D;
   std::vector<int> all(voxels_D.size());
-  for (int i = 0; i < num_points; ++i) all[i] = i;
+  std::iota(all.begin(), all.end(), 0);
   const int along = alignWithSurfaces(
-      unitNormals(estimateCellNormalsAt(voxels_D, all, kNormalRadiusVoxels * config_.voxel_size_m)),
+      manhattan::unitNormals(
+          estimateCellNormalsAt(voxels_D, all, kNormalRadiusVoxels * config_.voxel_size_m),
+          std::numeric_limits<int>::max()),
       &down_D);
   if (along < min_support || !isHorizontal(down_D.cast<float>())) return has_estimate_;
   const Eigen::Vector3d down_W = (T_W_D.linear() * down_D).normalized();
