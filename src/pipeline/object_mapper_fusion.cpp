@@ -265,12 +265,27 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
         prior_filter_.atypicalObjects(database_, &verdicts, &report.atypical_reasons);
     report.atypical_too_large = static_cast<int>(
         std::count(verdicts.begin(), verdicts.end(), PriorSizeFilter::Verdict::kTooLarge));
-    for (const int id : report.atypical_ids) database_.remove(id);
+    for (size_t k = 0; k < report.atypical_ids.size(); ++k) {
+      const MapObject* object = database_.find(report.atypical_ids[k]);
+      if (object == nullptr) continue;
+      report.removed.push_back({*object, k < report.atypical_reasons.size()
+                                             ? report.atypical_reasons[k]
+                                             : "atypical size for its class (Eq. 9)"});
+      database_.remove(object->id);
+    }
   }
   if (config_.intersection_filter.enable) {
     std::vector<std::pair<int, int>> duplicates;
     report.intersecting_ids =
         intersection_filter_.intersectingObjects(database_, gravity().up, &duplicates);
+    // As they were, before a merge takes them out.
+    const size_t first_intersecting = report.removed.size();
+    for (const int id : report.intersecting_ids) {
+      const MapObject* object = database_.find(id);
+      if (object != nullptr) {
+        report.removed.push_back({*object, "mostly inside another object (Eq. 10, 11)"});
+      }
+    }
     // Not in the single-frame baseline (Table 2): that would be fusion after all.
     if (config_.intersection_filter.merge_duplicates && config_.database.fusion == "evidence" &&
         !config_.database.disable_fusion) {
@@ -287,6 +302,11 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
         if (deleted.count(duplicate.second) != 0) continue;
         if (database_.mergeInto(duplicate.second, duplicate.first, process)) {
           report.merged_ids.push_back(duplicate);
+          for (size_t k = first_intersecting; k < report.removed.size(); ++k) {
+            if (report.removed[k].object.id != duplicate.first) continue;
+            report.removed[k].reason =
+                "a duplicate, merged into #" + std::to_string(duplicate.second);
+          }
         }
       }
     }

@@ -49,6 +49,22 @@ void KeyframeWorker::refineLocked(const std::string& why) {
              atypical.c_str(), idList(report.intersecting_ids).c_str(),
              merged.empty() ? "" : "; duplicates merged: ", merged.c_str(), report.time_ms);
   }
+  publishRefinementRemovals(report);
+}
+
+// Nothing the refinement removes leaves the map silently: each object goes out on
+// ~removed_objects as it was, with why.
+void KeyframeWorker::publishRefinementRemovals(const ObjectMapper::RefinementReport& report) {
+  if (report.removed.empty()) return;
+  std::vector<MapObject> removed;
+  std::vector<std::string> reasons;
+  for (const ObjectMapper::RemovedObject& entry : report.removed) {
+    removed.push_back(entry.object);
+    reasons.push_back("refinement: " + entry.reason);
+  }
+  publishers_->publishRemoved(removed, reasons,
+                              gravityAlignedPose(mapper_->gravity(), mapper_->floorHeight_m()),
+                              ros::Time::now());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -505,9 +505,8 @@ class KeyframeLoop {
 int finishMap(const Options& options, RunStats stats, size_t num_frames,
               mvod::ObjectMapper* mapper) {
   stats.counts.before_refinement = static_cast<int>(mapper->database().size());
-  const std::vector<mvod::MapObject> before = mvod::databaseObjects(mapper->database());
   const mvod::ObjectMapper::RefinementReport refinement = mapper->refine();
-  if (!options.quiet) printRefinementRemovals(before, refinement);
+  if (!options.quiet) printRefinementRemovals(refinement);
   mvod::MapSummary summary = summarize(stats, num_frames, *mapper, refinement);
   if (options.output_frame == "gravity_aligned") {
     summary.objects_in_gravity_frame = true;

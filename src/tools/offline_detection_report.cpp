@@ -178,28 +178,13 @@ void printTable(const std::vector<mvod::MapObject>& objects, const std::string& 
   std::fflush(stdout);
 }
 
-void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
-                             const mvod::ObjectMapper::RefinementReport& refinement) {
-  const auto line = [&](int id, const std::string& reason) {
-    for (const mvod::MapObject& object : before) {
-      if (object.id != id) continue;
-      const Eigen::Vector3d& size = object.box.size_m;
-      std::fprintf(stderr, "refinement removed #%d %s (%.2f x %.2f x %.2f m, %d views): %s\n", id,
-                   object.class_name.c_str(), size.x(), size.y(), size.z(), object.observations,
-                   reason.c_str());
-    }
-  };
-  for (size_t k = 0; k < refinement.atypical_ids.size(); ++k) {
-    line(refinement.atypical_ids[k], k < refinement.atypical_reasons.size()
-                                         ? refinement.atypical_reasons[k]
-                                         : "atypical size for its class (Eq. 9)");
-  }
-  for (const int id : refinement.intersecting_ids) {
-    std::string reason = "mostly inside another object (Eq. 10, 11)";
-    for (const auto& merged : refinement.merged_ids) {
-      if (merged.first == id) reason = "a duplicate, merged into #" + std::to_string(merged.second);
-    }
-    line(id, reason);
+void printRefinementRemovals(const mvod::ObjectMapper::RefinementReport& refinement) {
+  for (const mvod::ObjectMapper::RemovedObject& entry : refinement.removed) {
+    const mvod::MapObject& object = entry.object;
+    const Eigen::Vector3d& size = object.box.size_m;
+    std::fprintf(stderr, "refinement removed #%d %s (%.2f x %.2f x %.2f m, %d views): %s\n",
+                 object.id, object.class_name.c_str(), size.x(), size.y(), size.z(),
+                 object.observations, entry.reason.c_str());
   }
 }
 

@@ -48,9 +48,8 @@ bool saveClouds(const std::string& dir, const std::vector<mvod::MapObject>& obje
 void printTable(const std::vector<mvod::MapObject>& objects, const std::string& frame);
 
 // What the refinement removed, one line per object with its class, box size and the reason
-// (atypical size, mostly inside another, merged duplicate), from the objects before it.
-void printRefinementRemovals(const std::vector<mvod::MapObject>& before,
-                             const mvod::ObjectMapper::RefinementReport& refinement);
+// (atypical size, mostly inside another, merged duplicate), as it was before it.
+void printRefinementRemovals(const mvod::ObjectMapper::RefinementReport& refinement);
 
 // Frames, keyframes, objects, removals, stage medians and counts, on stderr.
 // The keyframe history's size and how far it degraded under its bound.

@@ -13,6 +13,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -77,12 +78,14 @@ class NodeSyntheticTest : public ::testing::Test {
     image_sub_ = nh_->subscribe(std::string(kNode) + "/detections_image", 10, onImage);
     cloud_sub_ = nh_->subscribe(std::string(kNode) + "/object_cloud", 10, onCloud);
     diagnostics_sub_ = nh_->subscribe("/diagnostics", 100, onDiagnostics);
+    removed_sub_ = nh_->subscribe(std::string(kNode) + "/removed_objects", 100, onRemoved);
     tf_buffer_ = new tf2_ros::Buffer;
     tf_listener_ = new tf2_ros::TransformListener(*tf_buffer_, *nh_);
 
     connected_ = outputs_->waitFor(
         [] {
-          return inputs_->connected() && outputs_->connected() && image_sub_.getNumPublishers() > 0;
+          return inputs_->connected() && outputs_->connected() &&
+                 image_sub_.getNumPublishers() > 0 && removed_sub_.getNumPublishers() > 0;
         },
         30.0);
     if (!connected_) return;
@@ -125,6 +128,7 @@ class NodeSyntheticTest : public ::testing::Test {
     image_sub_.shutdown();
     cloud_sub_.shutdown();
     diagnostics_sub_.shutdown();
+    removed_sub_.shutdown();
     delete tf_listener_;
     delete tf_buffer_;
     delete outputs_;
@@ -143,6 +147,14 @@ class NodeSyntheticTest : public ::testing::Test {
     std::lock_guard<std::mutex> lock(mutex_);
     last_cloud_ = cloud;
     ++clouds_;
+  }
+  static void onRemoved(const ObjectArray& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const Object& object : msg.objects) removed_[object.id] = object.removed_reason;
+  }
+  static std::map<int, std::string> removed() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return removed_;
   }
   static void onDiagnostics(const diagnostic_msgs::DiagnosticArray& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -181,7 +193,7 @@ class NodeSyntheticTest : public ::testing::Test {
   static SyntheticStream* stream_;
   static InputPublisher* inputs_;
   static NodeOutputs* outputs_;
-  static ros::Subscriber image_sub_, cloud_sub_, diagnostics_sub_;
+  static ros::Subscriber image_sub_, cloud_sub_, diagnostics_sub_, removed_sub_;
   static bool connected_;
   static std::vector<FrameMsgs> frames_;
   static std::vector<bool> keyframe_done_;
@@ -193,6 +205,7 @@ class NodeSyntheticTest : public ::testing::Test {
   static sensor_msgs::PointCloud2 last_cloud_;
   static int clouds_;
   static std::vector<diagnostic_msgs::DiagnosticStatus> diagnostics_;
+  static std::map<int, std::string> removed_;  // ~removed_objects: id -> removed_reason
   static tf2_ros::Buffer* tf_buffer_;
   static tf2_ros::TransformListener* tf_listener_;
   static bool has_T_W_O_;
@@ -206,6 +219,7 @@ NodeOutputs* NodeSyntheticTest::outputs_ = nullptr;
 ros::Subscriber NodeSyntheticTest::image_sub_;
 ros::Subscriber NodeSyntheticTest::cloud_sub_;
 ros::Subscriber NodeSyntheticTest::diagnostics_sub_;
+ros::Subscriber NodeSyntheticTest::removed_sub_;
 bool NodeSyntheticTest::connected_ = false;
 std::vector<FrameMsgs> NodeSyntheticTest::frames_;
 std::vector<bool> NodeSyntheticTest::keyframe_done_;
@@ -217,6 +231,7 @@ std::vector<sensor_msgs::Image> NodeSyntheticTest::images_;
 sensor_msgs::PointCloud2 NodeSyntheticTest::last_cloud_;
 int NodeSyntheticTest::clouds_ = 0;
 std::vector<diagnostic_msgs::DiagnosticStatus> NodeSyntheticTest::diagnostics_;
+std::map<int, std::string> NodeSyntheticTest::removed_;
 tf2_ros::Buffer* NodeSyntheticTest::tf_buffer_ = nullptr;
 tf2_ros::TransformListener* NodeSyntheticTest::tf_listener_ = nullptr;
 bool NodeSyntheticTest::has_T_W_O_ = false;
@@ -659,6 +674,30 @@ TEST_F(NodeSyntheticTest, RefineRemovesAtypicalObjectsAndDeletesTheirMarkers) {
   }
   EXPECT_TRUE(outputs_->waitFor([&] { return idsOf(outputs_->lastObjects()) == remaining; }, 5.0))
       << "~objects not republished after ~refine";
+
+  // Nothing leaves silently: each removed object is announced on ~removed_objects with why.
+  std::set<int> gone;
+  for (const Object& object : before.objects) {
+    if (!remaining.count(object.id)) gone.insert(object.id);
+  }
+  EXPECT_TRUE(outputs_->waitFor(
+      [&] {
+        const std::map<int, std::string> announced = removed();
+        return std::all_of(gone.begin(), gone.end(),
+                           [&](int id) { return announced.count(id) != 0; });
+      },
+      5.0))
+      << gone.size() << " objects removed, " << removed().size() << " announced";
+  const std::map<int, std::string> announced = removed();
+  for (const int id : gone) {
+    const auto it = announced.find(id);
+    if (it == announced.end()) continue;
+    EXPECT_EQ(it->second.rfind("refinement: ", 0), 0u) << "#" << id << ": " << it->second;
+    if (atypical.count(id)) {
+      EXPECT_NE(it->second.find("too large for a cup"), std::string::npos)
+          << "#" << id << ": " << it->second;
+    }
+  }
 }
 
 // One name per setting: a dynamic_reconfigure change shows under the YAML name (rosparam get), not

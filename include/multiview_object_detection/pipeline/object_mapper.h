@@ -104,6 +104,13 @@ class ObjectMapper {
     void usePaperMethod();
   };
 
+  // An object of the map that a correction, a new fusion grid or the refinement took out, as it
+  // was, and why (in the user's words).
+  struct RemovedObject {
+    MapObject object;
+    std::string reason;
+  };
+
   struct RefinementReport {
     std::vector<int> atypical_ids;
     // Per atypical_ids: why, in a user's words (PriorSizeFilter::judge); and how many were too
@@ -114,14 +121,11 @@ class ObjectMapper {
     // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
     // (deleted id, id merged into).
     std::vector<std::pair<int, int>> merged_ids;
+    // Every object removed, atypical ones first, as it was before the refinement, with why (the
+    // atypical reason; "mostly inside another object (Eq. 10, 11)"; "a duplicate, merged into
+    // #N"), for those who follow the map (the node's ~removed_objects).
+    std::vector<RemovedObject> removed;
     double time_ms = 0.0;
-  };
-
-  // An object of the map that a correction or a new fusion grid took out, as it was, and why (in
-  // the user's words).
-  struct RemovedObject {
-    MapObject object;
-    std::string reason;
   };
 
   // What one correctPoses() did.

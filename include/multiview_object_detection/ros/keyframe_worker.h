@@ -119,7 +119,8 @@ class KeyframeWorker {
   // says why).
   std::unique_lock<std::timed_mutex> lockMap(double timeout_s, Status* busy) const;
   void refineLocked(const std::string& why);  // needs mapper_mutex_
-  void updateSnapshotLocked();                // needs mapper_mutex_
+  void publishRefinementRemovals(const ObjectMapper::RefinementReport& report);
+  void updateSnapshotLocked();  // needs mapper_mutex_
 
   const RgbdTopics topics_;
   RuntimeConfig* config_;

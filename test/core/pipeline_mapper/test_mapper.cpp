@@ -344,8 +344,16 @@ TEST_F(ObjectMapperTest, RefineRemovesAnAtypicalObject) {
   ASSERT_EQ(mapper.database().size(), 2u);
   const int cup_id = mapper.database().findByClass("cup").front()->id;
   const int chair_id = mapper.database().findByClass("chair").front()->id;
+  const OrientedBox cup_box = mapper.database().find(cup_id)->box;
   const ObjectMapper::RefinementReport refined = mapper.refine();
   EXPECT_EQ(refined.atypical_ids, std::vector<int>{cup_id});
+  // Not silently: the cup is reported as it was, with why.
+  ASSERT_EQ(refined.removed.size(), 1u);
+  EXPECT_EQ(refined.removed[0].object.id, cup_id);
+  EXPECT_EQ(refined.removed[0].object.class_name, "cup");
+  EXPECT_TRUE(refined.removed[0].object.box.center_m.isApprox(cup_box.center_m));
+  EXPECT_EQ(refined.removed[0].reason.rfind("too large for a cup", 0), 0u)
+      << refined.removed[0].reason;
   EXPECT_TRUE(refined.intersecting_ids.empty());
   EXPECT_GE(refined.time_ms, 0.0);
   ASSERT_EQ(mapper.database().size(), 1u);
@@ -395,6 +403,7 @@ TEST_F(ObjectMapperTest, RefineMergesADuplicateIntoTheCopyItKeeps) {
     EXPECT_TRUE(mapper.mutableDatabase().setObjects({copy(1, 8, 0.3), copy(2, 2, 0.0)}).ok());
     const ObjectMapper::RefinementReport refined = mapper.refine();
     EXPECT_EQ(refined.intersecting_ids, std::vector<int>{2});
+    EXPECT_EQ(refined.removed.size(), 1u);
     EXPECT_EQ(mapper.database().size(), 1u);
     const MapObject* kept = mapper.database().find(1);
     EXPECT_NE(kept, nullptr);
@@ -402,11 +411,18 @@ TEST_F(ObjectMapperTest, RefineMergesADuplicateIntoTheCopyItKeeps) {
   };
   const auto merged = run(true);
   EXPECT_EQ(merged.first.merged_ids, (std::vector<std::pair<int, int>>{{2, 1}}));
+  // The duplicate as it was before the merge (legs and all), and where it went.
+  ASSERT_EQ(merged.first.removed.size(), 1u);
+  EXPECT_EQ(merged.first.removed[0].object.id, 2);
+  EXPECT_EQ(merged.first.removed[0].object.observations, 2);
+  EXPECT_EQ(merged.first.removed[0].reason, "a duplicate, merged into #1");
   EXPECT_EQ(merged.second.observations, 10);
   EXPECT_GT(merged.second.box.size_m.z(), 0.85);  // down to the legs' feet
   EXPECT_NEAR(merged.second.box.center_m.z(), 0.45, 0.03);
   const auto deleted = run(false);
   EXPECT_TRUE(deleted.first.merged_ids.empty());
+  ASSERT_EQ(deleted.first.removed.size(), 1u);
+  EXPECT_EQ(deleted.first.removed[0].reason, "mostly inside another object (Eq. 10, 11)");
   EXPECT_EQ(deleted.second.observations, 8);
   EXPECT_NEAR(deleted.second.box.size_m.z(), 0.6, 0.01);  // untouched: no legs
 }
