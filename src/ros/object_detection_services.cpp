@@ -8,6 +8,7 @@
 #include "multiview_object_detection/io/map_folder.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
 #include "multiview_object_detection/ros/map_autosaver.h"
+#include "multiview_object_detection/ros/service_answering.h"
 
 namespace mvod {
 
@@ -16,40 +17,16 @@ namespace {
 using multiview_object_detection::GetObjects;
 using multiview_object_detection::MapFile;
 
-// What a service answers when its handler threw: success false and why, where the response has a
-// message (roscpp's own answer to an exception is a failed call the caller reads nothing from).
-// ~get_objects has no message: its call fails, as an empty answer would say "no objects".
-bool answerFailure(const std::string& text, MapFile::Response* response) {
-  response->success = false;
-  response->message = text;
-  return true;
-}
-bool answerFailure(const std::string& text, std_srvs::Trigger::Response* response) {
-  response->success = false;
-  response->message = text;
-  return true;
-}
-bool answerFailure(const std::string& /*text*/, GetObjects::Response* /*response*/) {
-  return false;
-}
-
-// Advertises `handler` so that an exception in it is logged and answered (success false, its text),
-// and the node goes on.
+// Advertises `handler` so that an exception in it is logged and answered (service_answering.h).
 template <typename Request, typename Response>
 ros::ServiceServer advertiseAnswering(ros::NodeHandle& nh, const std::string& name,
                                       bool (ObjectDetectionServices::*handler)(Request&, Response&),
                                       ObjectDetectionServices* services) {
-  const boost::function<bool(Request&, Response&)> answering =
-      [name, handler, services](Request& request, Response& response) {
-        try {
-          return (services->*handler)(request, response);
-        } catch (const std::exception& error) {
-          const std::string text = name + " failed: " + error.what();
-          ROS_ERROR("%s", text.c_str());
-          return answerFailure(text, &response);
-        }
-      };
-  return nh.advertiseService<Request, Response>(name, answering);
+  const boost::function<bool(Request&, Response&)> call = [handler, services](Request& request,
+                                                                              Response& response) {
+    return (services->*handler)(request, response);
+  };
+  return nh.advertiseService<Request, Response>(name, answering(name, call));
 }
 
 }  // namespace

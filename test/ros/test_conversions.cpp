@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <regex>
 #include <set>
+#include <stdexcept>
 
 #include "multiview_object_detection/ObjectDetectionConfig.h"
 #include "multiview_object_detection/pipeline/types/class_priors.h"
@@ -28,6 +29,7 @@
 #include "multiview_object_detection/ros/reconfigure_names.h"
 #include "multiview_object_detection/ros/rejection_window.h"
 #include "multiview_object_detection/ros/ros_params.h"
+#include "multiview_object_detection/ros/service_answering.h"
 #include "multiview_object_detection/ros/tf_stamp_check.h"
 
 namespace mvod {
@@ -1222,6 +1224,50 @@ TEST(InputMonitorTest, OnABagsClockSilenceThatTheStoppedClockExplainsIsNoError) 
   clock.sim_time = false;
   clock.still_s = 7.0;
   EXPECT_EQ(monitor.reports(at(27.0), clock)[0].level, InputMonitor::kError);
+}
+
+// A service handler that throws (a disk error in ~save_map, a bad_alloc in ~refine) is answered,
+// not left to roscpp: success false with the exception's text where the response has a message;
+// ~get_objects, which has none, fails the call. A handler that returns is passed through.
+TEST(ServiceAnsweringTest, AnExceptionIsAnsweredWithItsText) {
+  using multiview_object_detection::GetObjects;
+  using multiview_object_detection::MapFile;
+  using Trigger = std_srvs::Trigger;
+  const boost::function<bool(MapFile::Request&, MapFile::Response&)> save_map =
+      [](MapFile::Request&, MapFile::Response&) -> bool { throw std::runtime_error("disk gone"); };
+  MapFile::Request map_request;
+  MapFile::Response map_response;
+  map_response.success = true;
+  EXPECT_TRUE(answering("save_map", save_map)(map_request, map_response));
+  EXPECT_FALSE(map_response.success);
+  EXPECT_EQ(map_response.message, "save_map failed: disk gone");
+
+  const boost::function<bool(Trigger::Request&, Trigger::Response&)> refine =
+      [](Trigger::Request&, Trigger::Response&) -> bool { throw std::bad_alloc(); };
+  Trigger::Request trigger_request;
+  Trigger::Response trigger_response;
+  trigger_response.success = true;
+  EXPECT_TRUE(answering("refine", refine)(trigger_request, trigger_response));
+  EXPECT_FALSE(trigger_response.success);
+  EXPECT_EQ(trigger_response.message.rfind("refine failed: ", 0), 0u) << trigger_response.message;
+
+  const boost::function<bool(GetObjects::Request&, GetObjects::Response&)> get_objects =
+      [](GetObjects::Request&, GetObjects::Response&) -> bool {
+    throw std::runtime_error("snapshot gone");
+  };
+  GetObjects::Request objects_request;
+  GetObjects::Response objects_response;
+  EXPECT_FALSE(answering("get_objects", get_objects)(objects_request, objects_response));
+
+  const boost::function<bool(Trigger::Request&, Trigger::Response&)> fine =
+      [](Trigger::Request&, Trigger::Response& response) {
+        response.success = true;
+        response.message = "refined";
+        return true;
+      };
+  EXPECT_TRUE(answering("refine", fine)(trigger_request, trigger_response));
+  EXPECT_TRUE(trigger_response.success);
+  EXPECT_EQ(trigger_response.message, "refined");
 }
 
 }  // namespace mvod
