@@ -266,26 +266,17 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
     report.atypical_too_large = static_cast<int>(
         std::count(verdicts.begin(), verdicts.end(), PriorSizeFilter::Verdict::kTooLarge));
     for (size_t k = 0; k < report.atypical_ids.size(); ++k) {
-      const MapObject* object = database_.find(report.atypical_ids[k]);
-      if (object == nullptr) continue;
-      report.removed.push_back({*object, k < report.atypical_reasons.size()
-                                             ? report.atypical_reasons[k]
-                                             : "atypical size for its class (Eq. 9)"});
-      database_.remove(object->id);
+      RemovedObject removed;
+      if (!database_.remove(report.atypical_ids[k], &removed.object)) continue;
+      removed.reason = k < report.atypical_reasons.size() ? report.atypical_reasons[k]
+                                                          : "atypical size for its class (Eq. 9)";
+      report.removed.push_back(std::move(removed));
     }
   }
   if (config_.intersection_filter.enable) {
     std::vector<std::pair<int, int>> duplicates;
     report.intersecting_ids =
         intersection_filter_.intersectingObjects(database_, gravity().up, &duplicates);
-    // As they were, before a merge takes them out.
-    const size_t first_intersecting = report.removed.size();
-    for (const int id : report.intersecting_ids) {
-      const MapObject* object = database_.find(id);
-      if (object != nullptr) {
-        report.removed.push_back({*object, "mostly inside another object (Eq. 10, 11)"});
-      }
-    }
     // Not in the single-frame baseline (Table 2): that would be fusion after all.
     if (config_.intersection_filter.merge_duplicates && config_.database.fusion == "evidence" &&
         !config_.database.disable_fusion) {
@@ -300,17 +291,22 @@ ObjectMapper::RefinementReport ObjectMapper::refineDatabase() {
       for (const auto& duplicate : duplicates) {
         // Into an object that stays only (a chain: what it was merged into may go too).
         if (deleted.count(duplicate.second) != 0) continue;
+        const MapObject* from = database_.find(duplicate.first);
+        if (from == nullptr) continue;
+        RemovedObject removed{
+            *from, "a duplicate, merged into #" + std::to_string(duplicate.second)};  // as it was
         if (database_.mergeInto(duplicate.second, duplicate.first, process)) {
           report.merged_ids.push_back(duplicate);
-          for (size_t k = first_intersecting; k < report.removed.size(); ++k) {
-            if (report.removed[k].object.id != duplicate.first) continue;
-            report.removed[k].reason =
-                "a duplicate, merged into #" + std::to_string(duplicate.second);
-          }
+          report.removed.push_back(std::move(removed));
         }
       }
     }
-    for (const int id : report.intersecting_ids) database_.remove(id);
+    for (const int id : report.intersecting_ids) {
+      RemovedObject removed;
+      if (!database_.remove(id, &removed.object)) continue;  // merged above
+      removed.reason = "mostly inside another object (Eq. 10, 11)";
+      report.removed.push_back(std::move(removed));
+    }
   }
   report.time_ms = msSince(start);
   return report;

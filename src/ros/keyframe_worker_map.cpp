@@ -25,7 +25,7 @@ std::string idList(const std::vector<int>& ids) {
 }  // namespace
 
 void KeyframeWorker::refineLocked(const std::string& why) {
-  const ObjectMapper::RefinementReport report = mapper_->refine();
+  ObjectMapper::RefinementReport report = mapper_->refine();
   removed_atypical_ += static_cast<int>(report.atypical_ids.size());
   removed_intersecting_ += static_cast<int>(report.intersecting_ids.size());
   stats_->update([this, &report](ObjectDetectionStatistics& stats) {
@@ -49,17 +49,17 @@ void KeyframeWorker::refineLocked(const std::string& why) {
              atypical.c_str(), idList(report.intersecting_ids).c_str(),
              merged.empty() ? "" : "; duplicates merged: ", merged.c_str(), report.time_ms);
   }
-  publishRefinementRemovals(report);
+  publishRefinementRemovals(&report);
 }
 
 // Nothing the refinement removes leaves the map silently: each object goes out on
 // ~removed_objects as it was, with why.
-void KeyframeWorker::publishRefinementRemovals(const ObjectMapper::RefinementReport& report) {
-  if (report.removed.empty()) return;
+void KeyframeWorker::publishRefinementRemovals(ObjectMapper::RefinementReport* report) {
+  if (report->removed.empty()) return;
   std::vector<MapObject> removed;
   std::vector<std::string> reasons;
-  for (const ObjectMapper::RemovedObject& entry : report.removed) {
-    removed.push_back(entry.object);
+  for (ObjectMapper::RemovedObject& entry : report->removed) {
+    removed.push_back(std::move(entry.object));
     reasons.push_back("refinement: " + entry.reason);
   }
   publishers_->publishRemoved(removed, reasons,

@@ -121,9 +121,10 @@ class ObjectMapper {
     // Of intersecting_ids: the duplicates merged into another object (merge_duplicates), as
     // (deleted id, id merged into).
     std::vector<std::pair<int, int>> merged_ids;
-    // Every object removed, atypical ones first, as it was before the refinement, with why (the
-    // atypical reason; "mostly inside another object (Eq. 10, 11)"; "a duplicate, merged into
-    // #N"), for those who follow the map (the node's ~removed_objects).
+    // Every object removed (atypical ones, merged duplicates, the other intersecting ones), as it
+    // was before the refinement, with why (the atypical reason; "a duplicate, merged into #N";
+    // "mostly inside another object (Eq. 10, 11)"), for those who follow the map (the node's
+    // ~removed_objects).
     std::vector<RemovedObject> removed;
     double time_ms = 0.0;
   };

@@ -118,9 +118,9 @@ class KeyframeWorker {
   // The map's lock, waiting at most timeout_s (< 0: unbounded); not owned when that passed (*busy
   // says why).
   std::unique_lock<std::timed_mutex> lockMap(double timeout_s, Status* busy) const;
-  void refineLocked(const std::string& why);  // needs mapper_mutex_
-  void publishRefinementRemovals(const ObjectMapper::RefinementReport& report);
-  void updateSnapshotLocked();  // needs mapper_mutex_
+  void refineLocked(const std::string& why);                               // needs mapper_mutex_
+  void publishRefinementRemovals(ObjectMapper::RefinementReport* report);  // moves its objects
+  void updateSnapshotLocked();                                             // needs mapper_mutex_
 
   const RgbdTopics topics_;
   RuntimeConfig* config_;

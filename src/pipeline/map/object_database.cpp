@@ -419,7 +419,7 @@ std::vector<const MapObject*> ObjectDatabase::findByClass(const std::string& cla
   return found;
 }
 
-bool ObjectDatabase::remove(int id) {
+bool ObjectDatabase::remove(int id, MapObject* taken) {
   pending_rebox_.erase(std::remove(pending_rebox_.begin(), pending_rebox_.end(), id),
                        pending_rebox_.end());
   pending_depth_views_.erase(id);
@@ -429,7 +429,11 @@ bool ObjectDatabase::remove(int id) {
   fused_this_keyframe_.erase(
       std::remove(fused_this_keyframe_.begin(), fused_this_keyframe_.end(), id),
       fused_this_keyframe_.end());
-  return objects_.erase(id) > 0;
+  const auto it = objects_.find(id);
+  if (it == objects_.end()) return false;
+  if (taken != nullptr) *taken = std::move(it->second);
+  objects_.erase(it);
+  return true;
 }
 
 void ObjectDatabase::clear() {

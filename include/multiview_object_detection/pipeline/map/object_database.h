@@ -236,7 +236,8 @@ class ObjectDatabase {
   const std::map<int, MapObject>& objects() const { return objects_; }
   const MapObject* find(int id) const;
   std::vector<const MapObject*> findByClass(const std::string& class_name) const;
-  bool remove(int id);
+  // `taken`, when given, receives the object (moved out, not copied).
+  bool remove(int id, MapObject* taken = nullptr);
   // Removes every object. Ids are still never reused: next_id_ keeps counting.
   void clear();
   // Replaces the content (map loading); next ids continue after the largest loaded id. Refuses
